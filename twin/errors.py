@@ -1,0 +1,28 @@
+"""Exceptions raised by the twin: each names what was wrong and what is allowed."""
+
+
+class TwinError(Exception):
+    """Base class of every error the twin raises on bad input or failed computation."""
+
+
+class UnknownPlatformError(TwinError, KeyError):
+    """A platform or configuration name that the twin does not know."""
+
+    def __str__(self) -> str:  # KeyError would quote the message
+        return str(self.args[0]) if self.args else ""
+
+
+class ModelFileError(TwinError):
+    """A model folder or file is missing or malformed."""
+
+
+class PoseError(TwinError, ValueError):
+    """A pose array that is malformed: wrong shape or not finite."""
+
+
+class OutOfStrokeError(TwinError, ValueError):
+    """A pose or set of leg lengths that needs an actuator beyond its stroke."""
+
+
+class ForwardKinematicsError(TwinError, ArithmeticError):
+    """Newton-Raphson forward kinematics did not converge within its iteration budget."""

@@ -1,0 +1,112 @@
+"""Frames and rotations of the thesis (Appendix A), and the one place MuJoCo frames enter.
+
+The thesis' frames are x forward, y right, z down (Appendix A.1). MuJoCo's world is z up; the
+models put their base and cabin bodies in thesis orientation by a 180 degree rotation about x
+(:data:`MJ_FROM_THESIS_QUAT`), so that all model-local coordinates are thesis coordinates. The
+functions here are vectorised over any leading axes.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+#: Quaternion (w, x, y, z) of the thesis base/cabin frame expressed in MuJoCo's z-up world:
+#: a half turn about x maps (x fwd, y right, z down) onto (x fwd, y left, z up).
+MJ_FROM_THESIS_QUAT = (0.0, 1.0, 0.0, 0.0)
+
+#: Rotation matrix of :data:`MJ_FROM_THESIS_QUAT` (its own inverse).
+MJ_FROM_THESIS = np.diag([1.0, -1.0, -1.0])
+
+DOF_NAMES = ("surge", "sway", "heave", "roll", "pitch", "yaw")
+"""Names of the six pose degrees of freedom, in the order of Eq A.1."""
+
+
+def rotation_matrix(angles: ArrayLike) -> NDArray[np.float64]:
+    """Return T_c^b of Eq A.2 for Euler angles (roll, pitch, yaw) in radians.
+
+    Parameters
+    ----------
+    angles : array_like, shape (..., 3)
+        Roll phi, pitch theta, yaw psi [rad].
+
+    Returns
+    -------
+    ndarray, shape (..., 3, 3)
+        Rotation from the cabin frame to the base frame.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> T = rotation_matrix([0.0, np.pi / 2, 0.0])
+    >>> np.round(T @ [1.0, 0.0, 0.0], 12)  # nose up: x_c points up (-z_b)
+    array([ 0.,  0., -1.])
+    """
+    a = np.asarray(angles, dtype=float)
+    cf, sf = np.cos(a[..., 0]), np.sin(a[..., 0])
+    ct, st = np.cos(a[..., 1]), np.sin(a[..., 1])
+    cp, sp = np.cos(a[..., 2]), np.sin(a[..., 2])
+    T = np.empty((*a.shape[:-1], 3, 3))
+    T[..., 0, 0] = ct * cp
+    T[..., 0, 1] = sf * st * cp - cf * sp
+    T[..., 0, 2] = cf * st * cp + sf * sp
+    T[..., 1, 0] = ct * sp
+    T[..., 1, 1] = sf * st * sp + cf * cp
+    T[..., 1, 2] = cf * st * sp - sf * cp
+    T[..., 2, 0] = -st
+    T[..., 2, 1] = sf * ct
+    T[..., 2, 2] = cf * ct
+    return T
+
+
+def euler_rate_matrix(angles: ArrayLike) -> NDArray[np.float64]:
+    """Return R of Eq A.4, mapping Euler-angle rates to the angular velocity in F^b.
+
+    Parameters
+    ----------
+    angles : array_like, shape (..., 3)
+        Roll, pitch, yaw [rad].
+
+    Returns
+    -------
+    ndarray, shape (..., 3, 3)
+        ``omega_b = R @ [phi_dot, theta_dot, psi_dot]``.
+    """
+    a = np.asarray(angles, dtype=float)
+    ct, st = np.cos(a[..., 1]), np.sin(a[..., 1])
+    cp, sp = np.cos(a[..., 2]), np.sin(a[..., 2])
+    R = np.zeros((*a.shape[:-1], 3, 3))
+    R[..., 0, 0] = ct * cp
+    R[..., 0, 1] = -sp
+    R[..., 1, 0] = ct * sp
+    R[..., 1, 1] = cp
+    R[..., 2, 0] = -st
+    R[..., 2, 2] = 1.0
+    return R
+
+
+def euler_rate_matrix_dot(angles: ArrayLike, rates: ArrayLike) -> NDArray[np.float64]:
+    """Return the time derivative of R (Eq A.4) along Euler-angle rates.
+
+    Parameters
+    ----------
+    angles, rates : array_like, shape (..., 3)
+        Euler angles [rad] and their rates [rad/s].
+
+    Returns
+    -------
+    ndarray, shape (..., 3, 3)
+        dR/dt, so that ``omega_dot = R @ eta_ddot + Rdot @ eta_dot``.
+    """
+    a = np.asarray(angles, dtype=float)
+    r = np.asarray(rates, dtype=float)
+    ct, st = np.cos(a[..., 1]), np.sin(a[..., 1])
+    cp, sp = np.cos(a[..., 2]), np.sin(a[..., 2])
+    td, pd = r[..., 1], r[..., 2]
+    Rd = np.zeros((*a.shape[:-1], 3, 3))
+    Rd[..., 0, 0] = -st * cp * td - ct * sp * pd
+    Rd[..., 0, 1] = -cp * pd
+    Rd[..., 1, 0] = -st * sp * td + ct * cp * pd
+    Rd[..., 1, 1] = -sp * pd
+    Rd[..., 2, 0] = -ct * td
+    return Rd

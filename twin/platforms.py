@@ -1,0 +1,159 @@
+"""The platforms the twin knows: where their models live and their non-physical facts.
+
+Physical facts (geometry, inertia, gains, stroke) live in each model's MJCF and are read from
+the compiled model (:mod:`twin.geometry`). Non-physical facts (actuator velocity and
+acceleration limits, platform filter, delay, IMU rates) live in ``platform.toml`` beside it.
+
+The models folder is the repository's ``models/``; set ``TWIN_MODELS_DIR`` to use another.
+"""
+
+from __future__ import annotations
+
+import os
+import tomllib
+from dataclasses import dataclass
+from functools import cache
+from pathlib import Path
+
+import mujoco
+
+from twin.errors import ModelFileError, UnknownPlatformError
+
+#: Platform name -> model folder name.
+PLATFORMS: dict[str, str] = {"mpi": "mpi_stewart", "srs": "simona_srs"}
+
+
+def models_root() -> Path:
+    """Return the folder holding one sub-folder per platform model."""
+    env = os.environ.get("TWIN_MODELS_DIR")
+    root = Path(env) if env else Path(__file__).resolve().parent.parent / "models"
+    if not root.is_dir():
+        raise ModelFileError(
+            f"models folder not found at {root}: install the twin from its repository "
+            "(pip install -e .) or set TWIN_MODELS_DIR"
+        )
+    return root
+
+
+def check_platform(name: str) -> str:
+    """Return ``name`` if it is a known platform, else raise :class:`UnknownPlatformError`."""
+    if name not in PLATFORMS:
+        known = ", ".join(PLATFORMS)
+        raise UnknownPlatformError(f"unknown platform '{name}' (known platforms: {known})")
+    return name
+
+
+def model_dir(name: str) -> Path:
+    """Return the model folder of platform ``name``."""
+    return models_root() / PLATFORMS[check_platform(name)]
+
+
+def model_path(name: str, scene: bool = False) -> Path:
+    """Return the path of the platform's model XML (or of its ``scene.xml``)."""
+    folder = model_dir(name)
+    return folder / ("scene.xml" if scene else f"{PLATFORMS[name]}.xml")
+
+
+@cache
+def _load_model_cached(path: str) -> mujoco.MjModel:
+    return mujoco.MjModel.from_xml_path(path)
+
+
+def load_model(name: str, scene: bool = False) -> mujoco.MjModel:
+    """Compile the platform's MJCF (cached; treat the returned model as read-only).
+
+    Parameters
+    ----------
+    name : str
+        Platform name, ``"mpi"`` or ``"srs"``.
+    scene : bool
+        Compile ``scene.xml`` (model plus floor and light) instead of the bare model.
+
+    Returns
+    -------
+    mujoco.MjModel
+    """
+    path = model_path(name, scene)
+    if not path.is_file():
+        raise ModelFileError(f"model file missing: {path} (regenerate with `make models`)")
+    try:
+        return _load_model_cached(str(path))
+    except ValueError as e:
+        raise ModelFileError(f"{path}: MuJoCo could not compile it: {e}") from None
+
+
+@dataclass(frozen=True)
+class PlatformFacts:
+    """Non-physical facts of a platform (from ``platform.toml``).
+
+    Attributes
+    ----------
+    name : str
+        Platform name.
+    command_rate_hz : float
+        Rate of the pose commands.
+    max_velocity, max_acceleration : float
+        Actuator velocity [m/s] and acceleration [m/s^2] limits (Table 5.1).
+    filter_break_hz : float
+        Platform-filter break frequency (Eq 5.1); 0 means no filter.
+    delay_s : float
+        Motion-system time delay [s].
+    noise : bool
+        Whether the Eq 5.10 motion-noise model applies.
+    imu_rate_hz, imu_accel_range, imu_gyro_range_deg_s : float
+        IMU sample rate and saturation limits.
+    """
+
+    name: str
+    command_rate_hz: float
+    max_velocity: float
+    max_acceleration: float
+    filter_break_hz: float
+    delay_s: float
+    noise: bool
+    imu_rate_hz: float
+    imu_accel_range: float
+    imu_gyro_range_deg_s: float
+
+
+def load_facts(name: str) -> PlatformFacts:
+    """Read the platform's ``platform.toml``.
+
+    Raises
+    ------
+    UnknownPlatformError
+        For an unknown platform name.
+    ModelFileError
+        If the file is missing or a value is missing or malformed.
+    """
+    path = model_dir(name) / "platform.toml"
+    try:
+        doc = tomllib.loads(path.read_text())
+    except FileNotFoundError:
+        raise ModelFileError(f"{path}: missing") from None
+    except tomllib.TOMLDecodeError as e:
+        raise ModelFileError(f"{path}: not valid TOML ({e})") from None
+
+    def get(section: str, key: str) -> float:
+        try:
+            value = doc[section][key]
+        except KeyError:
+            raise ModelFileError(f"{path}: missing [{section}] {key}") from None
+        if isinstance(value, bool):
+            return value
+        if not isinstance(value, int | float) or value < 0:
+            raise ModelFileError(f"{path}: [{section}] {key} must be a number >= 0")
+        return float(value)
+
+    return PlatformFacts(
+        name=name,
+        command_rate_hz=get("platform", "command_rate_hz"),
+        max_velocity=get("actuator_limits", "max_velocity"),
+        max_acceleration=get("actuator_limits", "max_acceleration"),
+        filter_break_hz=get("motion_system", "filter_break_hz"),
+        delay_s=get("motion_system", "delay_s"),
+        noise=bool(get("motion_system", "noise")),
+        imu_rate_hz=get("imu", "rate_hz"),
+        imu_accel_range=get("imu", "accel_range"),
+        imu_gyro_range_deg_s=get("imu", "gyro_range_deg_s"),
+    )
