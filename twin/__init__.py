@@ -11,6 +11,7 @@ Examples
 >>> ws = kinematics.workspace(geo)
 >>> round(ws["heave"].max - ws["heave"].min, 3)
 0.501
+
 """
 
 __version__ = "0.1.0"

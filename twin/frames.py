@@ -41,6 +41,7 @@ def rotation_matrix(angles: ArrayLike) -> NDArray[np.float64]:
     >>> T = rotation_matrix([0.0, np.pi / 2, 0.0])
     >>> np.round(T @ [1.0, 0.0, 0.0], 12)  # nose up: x_c points up (-z_b)
     array([ 0.,  0., -1.])
+
     """
     a = np.asarray(angles, dtype=float)
     cf, sf = np.cos(a[..., 0]), np.sin(a[..., 0])
@@ -71,6 +72,7 @@ def euler_rate_matrix(angles: ArrayLike) -> NDArray[np.float64]:
     -------
     ndarray, shape (..., 3, 3)
         ``omega_b = R @ [phi_dot, theta_dot, psi_dot]``.
+
     """
     a = np.asarray(angles, dtype=float)
     ct, st = np.cos(a[..., 1]), np.sin(a[..., 1])
@@ -97,6 +99,7 @@ def euler_rate_matrix_dot(angles: ArrayLike, rates: ArrayLike) -> NDArray[np.flo
     -------
     ndarray, shape (..., 3, 3)
         dR/dt, so that ``omega_dot = R @ eta_ddot + Rdot @ eta_dot``.
+
     """
     a = np.asarray(angles, dtype=float)
     r = np.asarray(rates, dtype=float)

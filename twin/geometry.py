@@ -36,6 +36,7 @@ class Geometry:
         UGP position c^b at the neutral pose [m] (z down, so its z is minus the height).
     leg_min, leg_max : ndarray, shape (6,)
         Shortest and longest leg length the stroke allows [m].
+
     """
 
     name: str
@@ -93,6 +94,7 @@ def geometry_from_model(model: mujoco.MjModel, name: str = "") -> Geometry:
     ------
     ModelFileError
         If the model lacks a body, site or joint the twin needs, or its frames differ.
+
     """
     for body in ("base", "cabin"):
         try:
@@ -142,5 +144,6 @@ def load_geometry(platform: str) -> Geometry:
     >>> geo = load_geometry("mpi")
     >>> round(geo.neutral_height, 3)
     1.209
+
     """
     return geometry_from_model(load_model(platform), name=platform)

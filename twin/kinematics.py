@@ -13,6 +13,7 @@ Examples
 >>> fk = forward(geo, inverse(geo, pose))
 >>> bool(np.allclose(fk.pose, pose, atol=1e-7)), fk.iterations <= 5
 (True, True)
+
 """
 
 from __future__ import annotations
@@ -47,6 +48,7 @@ def as_pose(pose: ArrayLike, name: str = "pose") -> FloatArray:
     ------
     PoseError
         If the last axis is not 6 long or any value is NaN or infinite.
+
     """
     try:
         p = np.asarray(pose, dtype=float)
@@ -121,6 +123,7 @@ def inverse(geo: Geometry, pose: ArrayLike, check: bool = True) -> FloatArray:
     -------
     ndarray, shape (..., 6)
         Leg lengths [m].
+
     """
     lengths = np.linalg.norm(leg_vectors(geo, pose), axis=-1)
     if check:
@@ -134,11 +137,14 @@ def jacobian(geo: Geometry, pose: ArrayLike) -> FloatArray:
     Parameters
     ----------
     geo : Geometry
+        The platform.
     pose : array_like, shape (..., 6)
+        Pose offsets from neutral (m, rad).
 
     Returns
     -------
     ndarray, shape (..., 6, 6)
+
     """
     p = as_pose(pose)
     L = leg_vectors(geo, p)
@@ -164,6 +170,7 @@ class ForwardResult:
         Iterations each sample needed.
     residual : float
         Largest leg-length error left [m].
+
     """
 
     pose: FloatArray
@@ -184,6 +191,7 @@ def forward(
     Parameters
     ----------
     geo : Geometry
+        The platform.
     lengths : array_like, shape (..., 6)
         Measured leg lengths [m].
     initial : array_like, shape (..., 6) or (6,), optional
@@ -204,6 +212,7 @@ def forward(
     ForwardKinematicsError
         If some sample does not converge within ``max_iter`` (e.g. inconsistent lengths) or
         meets a singular Jacobian.
+
     """
     q = _as_lengths(lengths)
     check_stroke(geo, q, what="leg lengths")
@@ -249,6 +258,7 @@ def leg_rates(
     Parameters
     ----------
     geo : Geometry
+        The platform.
     pose, pose_rate : array_like, shape (..., 6)
         Pose and its time derivative (Euler-angle rates for the rotations).
     pose_acc : array_like, shape (..., 6), optional
@@ -258,6 +268,7 @@ def leg_rates(
     -------
     lengths, velocities, accelerations : ndarray, shape (..., 6)
         ``accelerations`` is None if ``pose_acc`` was not given.
+
     """
     p = as_pose(pose)
     pd = np.broadcast_to(as_pose(pose_rate, "pose_rate"), p.shape)
@@ -295,6 +306,7 @@ class ActuatorTrajectory:
         Time [s].
     lengths, velocities, accelerations : ndarray, shape (n, 6)
         Per leg [m, m/s, m/s^2].
+
     """
 
     t: FloatArray
@@ -313,6 +325,7 @@ class ActuatorTrajectory:
             For the stroke limits.
         max_velocity, max_acceleration : float
             Actuator limits [m/s, m/s^2] (Table 5.1; ``twin.platforms.load_facts``).
+
         """
         out = []
         checks = (
@@ -350,14 +363,20 @@ def actuator_trajectory(
     Parameters
     ----------
     geo : Geometry
+        The platform.
     t : array_like, shape (n,)
         Strictly increasing sample times [s].
     pose : array_like, shape (n, 6)
-    pose_rate, pose_acc : array_like, shape (n, 6), optional
+        Pose offsets from neutral (m, rad).
+    pose_rate : array_like, shape (n, 6), optional
+        First time derivative of ``pose``.
+    pose_acc : array_like, shape (n, 6), optional
+        Second time derivative of ``pose``.
 
     Returns
     -------
     ActuatorTrajectory
+
     """
     tt = np.asarray(t, dtype=float)
     p = as_pose(pose)
@@ -385,6 +404,7 @@ class DofRange:
         The leg (1-6) whose stroke ends each side.
     min_end, max_end : str
         Which end of that leg's stroke: ``"short"`` or ``"long"``.
+
     """
 
     dof: str
@@ -443,11 +463,13 @@ def workspace(geo: Geometry) -> dict[str, DofRange]:
     Parameters
     ----------
     geo : Geometry
+        The platform.
 
     Returns
     -------
     dict of str to DofRange
         Keyed ``surge, sway, heave, roll, pitch, yaw``; translations in m, rotations in rad.
+
     """
     out = {}
     reach = 4.0 * float(np.max(geo.stroke))

@@ -132,6 +132,7 @@ def read_build_parameters(path: Path) -> BuildParameters:
     ------
     ModelFileError
         If the file is missing, not TOML, or a value is missing or malformed.
+
     """
     try:
         doc = tomllib.loads(path.read_text())
@@ -246,6 +247,7 @@ def build_spec(p: BuildParameters) -> mujoco.MjSpec:
         A spec with the base, cabin, six legs, loop closures, the PD actuators of Eq 5.9
         (a position actuator with gain K_p and a velocity actuator with gain K_d per leg), IMU
         and pose sensors, and a ``home`` keyframe at the neutral pose.
+
     """
     spec = mujoco.MjSpec()
     spec.modelname = p.name
@@ -374,7 +376,9 @@ def build_spec(p: BuildParameters) -> mujoco.MjSpec:
         tendon = spec.add_tendon(name=f"leg{j + 1}_axis", group=5)
         tendon.wrap_site(f"base_gimbal_{j + 1}")
         tendon.wrap_site(f"cabin_gimbal_{j + 1}")
-    strokes = [(round(float(n) - p.stroke / 2, 9), round(float(n) + p.stroke / 2, 9)) for n in neutral]
+    strokes = [
+        (round(float(n) - p.stroke / 2, 9), round(float(n) + p.stroke / 2, 9)) for n in neutral
+    ]
     for j in range(N_LEGS):  # Eq 5.9, proportional part: K_p (l_ref - l)
         act = spec.add_actuator(name=f"leg{j + 1}_position", target=f"leg{j + 1}_axis",
                                 trntype=mujoco.mjtTrn.mjTRN_TENDON)  # fmt: skip
@@ -419,7 +423,8 @@ SCENE_TEMPLATE = """<mujoco model="{name} scene">
   </visual>
 
   <asset>
-    <texture type="skybox" builtin="gradient" rgb1="0.3 0.5 0.7" rgb2="0 0 0" width="512" height="3072"/>
+    <texture type="skybox" builtin="gradient" rgb1="0.3 0.5 0.7" rgb2="0 0 0" width="512"
+      height="3072"/>
     <texture type="2d" name="groundplane" builtin="checker" mark="edge" rgb1="0.2 0.3 0.4"
       rgb2="0.1 0.2 0.3" markrgb="0.8 0.8 0.8" width="300" height="300"/>
     <material name="groundplane" texture="groundplane" texuniform="true" texrepeat="5 5"
@@ -441,11 +446,13 @@ def render(p: BuildParameters) -> dict[str, str]:
     Parameters
     ----------
     p : BuildParameters
+        The platform's parameter table.
 
     Returns
     -------
     dict
         ``{"<name>.xml": text, "scene.xml": text}``.
+
     """
     model_xml = build_spec(p).to_xml()
     scene = SCENE_TEMPLATE.format(
@@ -471,6 +478,7 @@ def write_model(platform: str) -> list[Path]:
     -------
     list of Path
         The files written.
+
     """
     folder = model_dir(platform)
     params = read_build_parameters(folder / "build.toml")

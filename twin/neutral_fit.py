@@ -24,7 +24,7 @@ from twin.workspace_report import relative_errors
 
 
 def geometry_at_height(p: BuildParameters, height: float) -> Geometry:
-    """The geometry of ``p`` with its neutral UGP ``height`` above the base and stroke centred."""
+    """Return the geometry of ``p`` with the UGP ``height`` above the base, stroke centred."""
     ugp = np.array([0.0, 0.0, -height])
     neutral = np.linalg.norm(ugp + p.cabin_gimbals - p.base_gimbals, axis=1)
     return Geometry(
@@ -47,6 +47,7 @@ class HeightFit:
         Fitted neutral UGP height above the base plane [m].
     errors : dict
         Relative error of each Table 5.1 figure at that height.
+
     """
 
     height: float
@@ -71,6 +72,7 @@ def fit_neutral_height(
         Which Table 5.1 column to fit (``"mpi"`` or ``"srs"``).
     bounds : tuple of float
         Search interval for the height [m].
+
     """
 
     def cost(h: float) -> float:

@@ -72,6 +72,7 @@ def load_model(name: str, scene: bool = False) -> mujoco.MjModel:
     Returns
     -------
     mujoco.MjModel
+
     """
     path = model_path(name, scene)
     if not path.is_file():
@@ -102,6 +103,7 @@ class PlatformFacts:
         Whether the Eq 5.10 motion-noise model applies.
     imu_rate_hz, imu_accel_range, imu_gyro_range_deg_s : float
         IMU sample rate and saturation limits.
+
     """
 
     name: str
@@ -125,6 +127,7 @@ def load_facts(name: str) -> PlatformFacts:
         For an unknown platform name.
     ModelFileError
         If the file is missing or a value is missing or malformed.
+
     """
     path = model_dir(name) / "platform.toml"
     try:

@@ -30,7 +30,7 @@ def relative_errors(ws: dict[str, DofRange], platform: str) -> dict[str, float]:
 
 
 def to_json_dict(ws: dict[str, DofRange]) -> dict[str, dict[str, float | str | int]]:
-    """The CLI's JSON form: per DOF ``min``, ``max`` and ``unit`` (m or deg), limiting legs."""
+    """Return the CLI JSON: per DOF ``min``, ``max``, ``unit`` (m or deg), limiting legs."""
     out: dict[str, dict[str, float | str | int]] = {}
     for dof, r in ws.items():
         scale = float(np.degrees(1.0)) if r.rotational else 1.0
@@ -45,7 +45,7 @@ def to_json_dict(ws: dict[str, DofRange]) -> dict[str, dict[str, float | str | i
 
 
 def format_table(ws: dict[str, DofRange], platform: str, title: str = "") -> str:
-    """A plain-text table of the workspace beside Table 5.1 (errors on magnitudes)."""
+    """Return a plain-text table of the workspace beside Table 5.1 (errors on magnitudes)."""
     ref = table_5_1_targets(platform)
     err = {k: v * 100 for k, v in relative_errors(ws, platform).items()}
     lines = [title or f"Workspace of '{platform}' (App. B.3) vs thesis Table 5.1"]
@@ -60,7 +60,8 @@ def format_table(ws: dict[str, DofRange], platform: str, title: str = "") -> str
             )
         else:
             lines.append(
-                f"{dof:<7}{r.min * 1000:>8.1f} mm{r.max * 1000:>+9.1f} mm{r.span * 1000:>8.1f} mm   "
+                f"{dof:<7}{r.min * 1000:>8.1f} mm{r.max * 1000:>+9.1f} mm"
+                f"{r.span * 1000:>8.1f} mm   "
                 f"{f'{ref[dof]:.0f} mm':<16}{err[dof]:+.2f} %"
             )
     return "\n".join(lines)
