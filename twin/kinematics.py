@@ -97,13 +97,16 @@ def check_stroke(geo: Geometry, lengths: FloatArray, what: str = "pose") -> None
         )
 
 
+def _cabin_gimbals_in_base(geo: Geometry, p: FloatArray) -> FloatArray:
+    """T_c^b a_j^c: cabin gimbals rotated into base axes, shape (..., 6, 3)."""
+    return np.einsum("...ij,kj->...ki", rotation_matrix(p[..., 3:]), geo.cabin_gimbals)
+
+
 def leg_vectors(geo: Geometry, pose: ArrayLike) -> FloatArray:
     """Leg vectors l_j^b = c^b + T_c^b a_j^c - b_j^b of Eq A.5, shape (..., 6, 3)."""
     p = as_pose(pose)
     c = geo.neutral_ugp + p[..., :3]
-    T = rotation_matrix(p[..., 3:])
-    a_b = np.einsum("...ij,kj->...ki", T, geo.cabin_gimbals)
-    return c[..., None, :] + a_b - geo.base_gimbals
+    return c[..., None, :] + _cabin_gimbals_in_base(geo, p) - geo.base_gimbals
 
 
 def inverse(geo: Geometry, pose: ArrayLike, check: bool = True) -> FloatArray:
@@ -149,8 +152,7 @@ def jacobian(geo: Geometry, pose: ArrayLike) -> FloatArray:
     p = as_pose(pose)
     L = leg_vectors(geo, p)
     n = L / np.linalg.norm(L, axis=-1, keepdims=True)
-    T = rotation_matrix(p[..., 3:])
-    a_b = np.einsum("...ij,kj->...ki", T, geo.cabin_gimbals)
+    a_b = _cabin_gimbals_in_base(geo, p)
     R = euler_rate_matrix(p[..., 3:])
     rot = np.einsum("...kj,...ji->...ki", np.cross(a_b, n), R)
     return np.concatenate([n, rot], axis=-1)
@@ -272,8 +274,7 @@ def leg_rates(
     """
     p = as_pose(pose)
     pd = np.broadcast_to(as_pose(pose_rate, "pose_rate"), p.shape)
-    T = rotation_matrix(p[..., 3:])
-    a_b = np.einsum("...ij,kj->...ki", T, geo.cabin_gimbals)
+    a_b = _cabin_gimbals_in_base(geo, p)
     L = (geo.neutral_ugp + p[..., :3])[..., None, :] + a_b - geo.base_gimbals
     length = np.linalg.norm(L, axis=-1)
     n = L / length[..., None]

@@ -25,7 +25,6 @@ from __future__ import annotations
 
 import argparse
 import sys
-import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -35,7 +34,7 @@ from numpy.typing import NDArray
 
 from twin.errors import ModelFileError
 from twin.frames import MJ_FROM_THESIS, MJ_FROM_THESIS_QUAT
-from twin.platforms import PLATFORMS, model_dir
+from twin.platforms import PLATFORMS, model_dir, read_toml
 
 N_LEGS = 6
 
@@ -134,12 +133,7 @@ def read_build_parameters(path: Path) -> BuildParameters:
         If the file is missing, not TOML, or a value is missing or malformed.
 
     """
-    try:
-        doc = tomllib.loads(path.read_text())
-    except FileNotFoundError:
-        raise ModelFileError(f"{path}: no such build file") from None
-    except tomllib.TOMLDecodeError as e:
-        raise ModelFileError(f"{path}: not valid TOML ({e})") from None
+    doc = read_toml(path)
     where = str(path)
 
     def section(name: str) -> dict:

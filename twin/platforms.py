@@ -35,6 +35,16 @@ def models_root() -> Path:
     return root
 
 
+def read_toml(path: Path) -> dict:
+    """Read a TOML file, raising :class:`ModelFileError` naming the file if missing or invalid."""
+    try:
+        return tomllib.loads(path.read_text())
+    except FileNotFoundError:
+        raise ModelFileError(f"{path}: no such file") from None
+    except tomllib.TOMLDecodeError as e:
+        raise ModelFileError(f"{path}: not valid TOML ({e})") from None
+
+
 def check_platform(name: str) -> str:
     """Return ``name`` if it is a known platform, else raise :class:`UnknownPlatformError`."""
     if name not in PLATFORMS:
@@ -130,12 +140,7 @@ def load_facts(name: str) -> PlatformFacts:
 
     """
     path = model_dir(name) / "platform.toml"
-    try:
-        doc = tomllib.loads(path.read_text())
-    except FileNotFoundError:
-        raise ModelFileError(f"{path}: missing") from None
-    except tomllib.TOMLDecodeError as e:
-        raise ModelFileError(f"{path}: not valid TOML ({e})") from None
+    doc = read_toml(path)
 
     def get(section: str, key: str) -> float:
         try:
