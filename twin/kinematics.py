@@ -329,22 +329,22 @@ class ActuatorTrajectory:
 
         """
         out = []
-        checks = (
-            ("stroke (short end)", geo.leg_min - self.lengths, geo.leg_min, "m"),
-            ("stroke (long end)", self.lengths - geo.leg_max, geo.leg_max, "m"),
-            ("velocity", np.abs(self.velocities) - max_velocity, None, "m/s"),
-            ("acceleration", np.abs(self.accelerations) - max_acceleration, None, "m/s^2"),
-        )
-        values = (self.lengths, self.lengths, np.abs(self.velocities), np.abs(self.accelerations))
-        limits = (geo.leg_min, geo.leg_max, max_velocity, max_acceleration)
-        for (label, excess, _, unit), value, limit in zip(checks, values, limits, strict=True):
-            if np.any(excess > 1e-12):
+        speed, accel = np.abs(self.velocities), np.abs(self.accelerations)
+        checks = (  # label, value, excess over the limit, limit per leg, unit
+            ("stroke (short end)", self.lengths, geo.leg_min - self.lengths, geo.leg_min, "m"),
+            ("stroke (long end)", self.lengths, self.lengths - geo.leg_max, geo.leg_max, "m"),
+            ("velocity", speed, speed - max_velocity, np.full(6, max_velocity), "m/s"),
+            ("acceleration", accel, accel - max_acceleration, np.full(6, max_acceleration),
+             "m/s^2"),
+        )  # fmt: skip
+        for label, value, excess, limit, unit in checks:
+            broken = excess > 1e-12
+            if broken.any():
                 i, leg = np.unravel_index(np.argmax(excess), excess.shape)
-                lim = np.broadcast_to(limit, (6,))[leg]
                 out.append(
                     f"{label} limit broken by leg {leg + 1} at t = {self.t[i]:.3f} s: "
-                    f"{value[i, leg]:.4g} {unit} against a limit of {lim:.4g} {unit} "
-                    f"({int(np.any(excess > 1e-12, axis=1).sum())} sample(s))"
+                    f"{value[i, leg]:.4g} {unit} against a limit of {limit[leg]:.4g} {unit} "
+                    f"({int(broken.any(axis=1).sum())} sample(s))"
                 )
         return out
 
