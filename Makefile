@@ -31,6 +31,7 @@ models: $(STAMP)
 
 bench: $(STAMP)
 	$(BIN)/python bench/kinematics_throughput.py
+	$(BIN)/python bench/twin_throughput.py
 
 clean:
 	rm -rf $(VENV) .pytest_cache .ruff_cache build *.egg-info

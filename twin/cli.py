@@ -14,6 +14,7 @@ from typing import NoReturn
 
 from twin import __version__
 from twin.errors import TwinError
+from twin.frames import DOF_NAMES
 
 EXIT_USAGE = 2
 
@@ -40,6 +41,115 @@ def _cmd_workspace(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_simulate(args: argparse.Namespace) -> int:
+    from twin.simulate_cli import run_to_folder
+
+    connect = None if args.connect is None else args.connect
+    run_to_folder(args.config, args.signal, args.model, args.seed, args.out, args.rrd, connect,
+                  "strict" if args.strict else "limit", args.resonance, args.overwrite,
+                  args.quiet)  # fmt: skip
+    return 0
+
+
+def _progress(message: str) -> None:
+    print(f"  {message}", file=sys.stderr)
+
+
+def _cmd_compare(args: argparse.Namespace) -> int:
+    from twin.compare import compare
+
+    cmp = compare(args.config, dofs=args.dofs or DOF_NAMES, progress=_progress)
+    if args.plot:
+        cmp.plot(args.plot)
+    print(cmp.to_json() if args.json else cmp.format_table())
+    return 0
+
+
+def _cmd_dynamics(args: argparse.Namespace) -> int:
+    from twin.compare import platform_dynamics
+    from twin.platforms import check_platform
+
+    check_platform(args.platform)
+    dyn = platform_dynamics(args.platform, dofs=args.dofs or DOF_NAMES, progress=_progress)
+    print(json.dumps(dyn.table(), indent=2) if args.json else dyn.format_table())
+    return 0
+
+
+def _add_simulate(sub: argparse._SubParsersAction) -> None:
+    from twin.chain.config import config_names
+    from twin.signals import BUILTIN_HELP
+
+    p = sub.add_parser(
+        "simulate",
+        help="run a configuration on a signal; write a twin-run/1 folder",
+        description="Drive a motion-system configuration (filter, delay, noise in front of the "
+        "full MuJoCo or the reduced platform) with pose commands and write the run in the "
+        "twin-run/1 format (meta.json, commands.csv, imu.csv, actuators.csv).",
+    )
+    p.add_argument("config", metavar="CONFIG", help="one of " + ", ".join(config_names()))
+    p.add_argument(
+        "--signal",
+        required=True,
+        metavar="FILE_OR_NAME",
+        help=f"a commands.csv (any rate) or a built-in: {BUILTIN_HELP}",
+    )
+    p.add_argument(
+        "--model",
+        choices=("full", "reduced"),
+        default="full",
+        help="full rigid-body MuJoCo platform (default) or reduced Eq 5.11",
+    )
+    p.add_argument("--seed", type=int, default=0, help="seed for noise and IMU (default 0)")
+    p.add_argument(
+        "--out", metavar="DIR", help="run folder (default out/CONFIG-MODEL-SIGNAL-seedN)"
+    )
+    p.add_argument("--overwrite", action="store_true", help="replace an existing run folder")
+    view = p.add_mutually_exclusive_group()
+    view.add_argument("--rrd", metavar="FILE", help="also save a Rerun recording")
+    view.add_argument(
+        "--connect",
+        nargs="?",
+        const="",
+        metavar="URL",
+        help="stream live to a running Rerun viewer (default URL if omitted)",
+    )
+    p.add_argument(
+        "--strict",
+        action="store_true",
+        help="reject commands beyond an actuator limit instead of limiting them",
+    )
+    p.add_argument(
+        "--resonance", action="store_true", help="add the SRS resonance terms of Eq 5.12/5.13"
+    )
+    p.add_argument("--quiet", action="store_true", help="no progress or summary")
+    p.set_defaults(func=_cmd_simulate)
+
+
+def _add_analysis(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "compare",
+        help="full vs reduced model: describing functions per DOF (§5.5)",
+        description="Drive the full and the reduced model of a configuration with the same "
+        "multi-sines (Table 5.2, plus 4.5-10 Hz) in each DOF and print gain and phase "
+        "differences, the equivalent delay and the time-domain RMS difference.",
+    )
+    p.add_argument("config", metavar="CONFIG", help="e.g. mpi, srs, condition-8")
+    p.add_argument("--dofs", nargs="+", choices=DOF_NAMES, help="DOFs (default all six)")
+    p.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    p.add_argument("--plot", metavar="PNG", help="save a Bode plot")
+    p.set_defaults(func=_cmd_compare)
+    d = sub.add_parser(
+        "dynamics",
+        help="the full model's own lag per DOF beside Table 5.5",
+        description="Fit a first-order lag plus delay to the full model's describing functions "
+        "(no filter, delay or noise; thesis §5.5.1) and compare with Table 5.5.",
+    )
+    d.add_argument("platform", metavar="PLATFORM", help="mpi or srs")
+    d.add_argument("--dofs", nargs="+", choices=DOF_NAMES, help="DOFs (default all six)")
+    d.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    d.set_defaults(func=_cmd_dynamics)
+
+
 def build_parser() -> argparse.ArgumentParser:
     """Return the parser of the ``twin`` command."""
     parser = _Parser(prog="twin", description="Digital twin of flight-simulator motion systems.")
@@ -54,6 +164,8 @@ def build_parser() -> argparse.ArgumentParser:
     ws.add_argument("platform", metavar="PLATFORM", help="mpi or srs")
     ws.add_argument("--json", action="store_true", help="print JSON (m and deg) instead")
     ws.set_defaults(func=_cmd_workspace)
+    _add_simulate(sub)
+    _add_analysis(sub)
     return parser
 
 

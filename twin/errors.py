@@ -26,3 +26,15 @@ class OutOfStrokeError(TwinError, ValueError):
 
 class ForwardKinematicsError(TwinError, ArithmeticError):
     """Newton-Raphson forward kinematics did not converge within its iteration budget."""
+
+
+class SignalError(TwinError, ValueError):
+    """A time signal that is malformed: wrong shape, rate, or not finite."""
+
+
+class ActuatorLimitError(TwinError, ValueError):
+    """Commands that need an actuator beyond its stroke, velocity or acceleration (strict mode)."""
+
+
+class RunFormatError(TwinError, ValueError):
+    """A recorded-run folder that does not follow the ``twin-run/1`` format."""

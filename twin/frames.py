@@ -113,3 +113,60 @@ def euler_rate_matrix_dot(angles: ArrayLike, rates: ArrayLike) -> NDArray[np.flo
     Rd[..., 1, 1] = -sp * pd
     Rd[..., 2, 0] = -ct * td
     return Rd
+
+
+def euler_from_matrix(T: ArrayLike) -> NDArray[np.float64]:
+    """Return the Euler angles (roll, pitch, yaw) of a rotation T_c^b (inverse of Eq A.2).
+
+    Parameters
+    ----------
+    T : array_like, shape (..., 3, 3)
+        Rotation from the cabin frame to the base frame.
+
+    Returns
+    -------
+    ndarray, shape (..., 3)
+        Roll, pitch, yaw [rad], pitch in [-pi/2, pi/2].
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> angles = np.array([0.1, -0.2, 0.3])
+    >>> bool(np.allclose(euler_from_matrix(rotation_matrix(angles)), angles))
+    True
+
+    """
+    m = np.asarray(T, dtype=float)
+    roll = np.arctan2(m[..., 2, 1], m[..., 2, 2])
+    pitch = -np.arcsin(np.clip(m[..., 2, 0], -1.0, 1.0))
+    yaw = np.arctan2(m[..., 1, 0], m[..., 0, 0])
+    return np.stack([roll, pitch, yaw], axis=-1)
+
+
+def matrix_from_quat(q: ArrayLike) -> NDArray[np.float64]:
+    """Return the rotation matrices of unit quaternions (w, x, y, z), MuJoCo's order.
+
+    Parameters
+    ----------
+    q : array_like, shape (..., 4)
+        Quaternions; they are normalised here.
+
+    Returns
+    -------
+    ndarray, shape (..., 3, 3)
+
+    """
+    a = np.asarray(q, dtype=float)
+    a = a / np.linalg.norm(a, axis=-1, keepdims=True)
+    w, x, y, z = a[..., 0], a[..., 1], a[..., 2], a[..., 3]
+    m = np.empty((*a.shape[:-1], 3, 3))
+    m[..., 0, 0] = 1 - 2 * (y * y + z * z)
+    m[..., 0, 1] = 2 * (x * y - w * z)
+    m[..., 0, 2] = 2 * (x * z + w * y)
+    m[..., 1, 0] = 2 * (x * y + w * z)
+    m[..., 1, 1] = 1 - 2 * (x * x + z * z)
+    m[..., 1, 2] = 2 * (y * z - w * x)
+    m[..., 2, 0] = 2 * (x * z - w * y)
+    m[..., 2, 1] = 2 * (y * z + w * x)
+    m[..., 2, 2] = 1 - 2 * (x * x + y * y)
+    return m

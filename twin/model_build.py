@@ -396,6 +396,11 @@ def build_spec(p: BuildParameters) -> mujoco.MjSpec:
     ):  # expressed in the base frame site, i.e. in thesis base-frame coordinates
         spec.add_sensor(name=name, type=kind, objtype=site, objname="ugp", reftype=site,
                         refname="base_frame")  # fmt: skip
+    for name, kind in (  # world (z-up) axes: MuJoCo has no reference frame for these
+        ("ugp_linear_acceleration", sens.mjSENS_FRAMELINACC),
+        ("ugp_angular_acceleration", sens.mjSENS_FRAMEANGACC),
+    ):
+        spec.add_sensor(name=name, type=kind, objtype=site, objname="ugp")
     for j in range(N_LEGS):
         spec.add_sensor(name=f"leg{j + 1}_length", type=sens.mjSENS_JOINTPOS,
                         objtype=mujoco.mjtObj.mjOBJ_JOINT, objname=f"leg{j + 1}")  # fmt: skip

@@ -113,6 +113,9 @@ class PlatformFacts:
         Whether the Eq 5.10 motion-noise model applies.
     imu_rate_hz, imu_accel_range, imu_gyro_range_deg_s : float
         IMU sample rate and saturation limits.
+    equivalent_delay_s : tuple of float
+        The full MuJoCo model's own lag per DOF [s] (its fitted first-order time constant,
+        Table 5.5), which the full model's delay block leaves out (``twin.chain.config``).
 
     """
 
@@ -126,6 +129,7 @@ class PlatformFacts:
     imu_rate_hz: float
     imu_accel_range: float
     imu_gyro_range_deg_s: float
+    equivalent_delay_s: tuple[float, ...]
 
 
 def load_facts(name: str) -> PlatformFacts:
@@ -164,4 +168,18 @@ def load_facts(name: str) -> PlatformFacts:
         imu_rate_hz=get("imu", "rate_hz"),
         imu_accel_range=get("imu", "accel_range"),
         imu_gyro_range_deg_s=get("imu", "gyro_range_deg_s"),
+        equivalent_delay_s=_six(doc, path, "full_model", "equivalent_delay_s"),
     )
+
+
+def _six(doc: dict, path: Path, section: str, key: str) -> tuple[float, ...]:
+    """Read a list of six numbers >= 0 from a TOML document."""
+    value = doc.get(section, {}).get(key)
+    if (
+        not isinstance(value, list)
+        or len(value) != 6
+        or not all(isinstance(v, int | float) and not isinstance(v, bool) and v >= 0
+                   for v in value)
+    ):  # fmt: skip
+        raise ModelFileError(f"{path}: [{section}] {key} must be a list of six numbers >= 0")
+    return tuple(float(v) for v in value)

@@ -49,3 +49,63 @@ def table_5_1_targets(platform: str) -> dict[str, float]:
         else:
             out[dof] = value
     return out
+
+
+#: Table 5.2: multi-sine describing-function signals. Per signal: frequencies [Hz],
+#: translational amplitudes [m/s^2] and rotational amplitudes [deg/s^2], all in acceleration.
+TABLE_5_2 = MappingProxyType(
+    {
+        1: MappingProxyType(
+            {
+                "frequency_hz": (0.10, 0.25, 0.65, 0.85, 3.35),
+                "translation_m_s2": (0.009, 0.047, 0.123, 0.160, 0.200),
+                "rotation_deg_s2": (0.974, 5.329, 13.866, 18.163, 57.296),
+            }
+        ),
+        2: MappingProxyType(
+            {
+                "frequency_hz": (0.20, 0.45, 1.35, 2.30, 5.50, 7.10),
+                "translation_m_s2": (0.035, 0.085, 0.200, 0.200, 0.200, 0.200),
+                "rotation_deg_s2": (3.953, 9.626, 27.789, 46.983, 57.296, 57.296),
+            }
+        ),
+    }
+)
+
+#: Table 5.5: first-order time constant t_m [s] and break frequency f_m [Hz] fitted to the
+#: describing functions of the full MPI model (no platform filter), per DOF.
+TABLE_5_5 = MappingProxyType(
+    {
+        "surge": (0.00560, 28.42),
+        "sway": (0.00561, 28.37),
+        "heave": (0.00081, 196.49),
+        "roll": (0.01243, 12.80),
+        "pitch": (0.01242, 12.81),
+        "yaw": (0.01398, 11.38),
+    }
+)
+
+#: Table 6.3: the eight experimental conditions: (platform filter break frequency [Hz] or
+#: None, total motion-system time delay [s], MPI noise model on).
+TABLE_6_3 = MappingProxyType(
+    {
+        1: (None, 0.025, False),
+        2: (None, 0.025, True),
+        3: (None, 0.035, False),
+        4: (None, 0.035, True),
+        5: (1.0, 0.025, False),
+        6: (1.0, 0.025, True),
+        7: (1.0, 0.035, False),
+        8: (1.0, 0.035, True),
+    }
+)
+
+#: Eq 5.10: heave motion-noise shaping filter, gain and time constants [s]:
+#: 0.084 (1 + 0.022 s) / ((1 + 0.009 s)(1 + 0.008 s)).
+EQ_5_10 = MappingProxyType({"gain": 0.084, "zero_s": 0.022, "poles_s": (0.009, 0.008)})
+
+#: §5.4.4: standard deviation of Eq 5.10 applied to unit-variance white noise [m/s^2].
+NOISE_SIGMA = 4.230e-2
+
+#: Eq 5.12 and 5.13: SRS resonance terms H = 1 + T s, T [s], per DOF (heave, pitch).
+EQ_5_12_13 = MappingProxyType({"heave": 0.023, "pitch": 0.027})

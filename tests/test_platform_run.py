@@ -1,0 +1,114 @@
+"""Full and reduced platforms: IMU at rest, lever arm, determinism, limits."""
+
+import numpy as np
+import pytest
+
+from twin.chain.imu import ImuSpec, postprocess, specific_force
+from twin.chain.simulate import prepare, simulate
+from twin.errors import ActuatorLimitError, SignalError
+from twin.frames import rotation_matrix
+from twin.signals import builtin_signal, describing_signal, rest
+from twin.trajectory import Trajectory
+
+
+@pytest.mark.parametrize("model", ["full", "reduced"])
+def test_imu_at_rest_reads_minus_g(model):
+    sim = simulate("mpi-2008", rest(3.0), model, imu=ImuSpec().ideal())
+    acc = sim.imu.accel[len(sim.imu.t) // 3 :]
+    assert acc[:, 2].mean() == pytest.approx(-9.81, abs=2e-3)
+    assert np.abs(acc[:, :2]).max() < 2e-3
+    assert np.abs(sim.imu.gyro).max() < 1e-3
+    assert sim.imu.rate_hz == pytest.approx(819.2)
+
+
+def test_default_imu_noise_and_bias_are_applied():
+    sim = simulate("srs", rest(5.0), "reduced", seed=2)
+    acc = sim.imu.accel
+    assert acc[:, 2].std() == pytest.approx(0.035 * 9.81, rel=0.1)  # ADIS16355 35 mg rms
+    assert acc[:, 2].mean() == pytest.approx(-9.81, abs=0.05)
+
+
+def test_lever_arm_matches_finite_differences_and_mujoco_at_the_ugp():
+    sig = describing_signal(2, "pitch")
+    r = simulate("mpi-2008", sig.commands, "full").response
+    # at the UGP (the model's imu site) MuJoCo's own accelerometer agrees to round-off
+    assert np.abs(specific_force(r, np.zeros(3)) - r.sensor_accelerometer).max() < 1e-9
+    assert np.abs(r.omega - r.sensor_gyro).max() < 1e-9
+    # off the UGP: the second difference of the mount point's path is the ground truth
+    mount = np.array([0.4, -0.3, -0.5])  # cabin frame, m
+    T = rotation_matrix(r.pose[:, 3:])
+    path = r.pose[:, :3] + T @ mount
+    a = (path[2:] - 2 * path[1:-1] + path[:-2]) / (r.t[1] - r.t[0]) ** 2
+    truth = np.einsum("nji,nj->ni", T[1:-1], a - [0.0, 0.0, 9.81])
+    f = specific_force(r, mount)[1:-1]
+    assert np.sqrt(np.mean((f - truth)[1000:] ** 2)) < 0.01
+    assert np.abs(f - specific_force(r, np.zeros(3))[1:-1]).max() > 0.1  # the arm matters
+
+
+def test_seeded_runs_are_bit_identical_and_chunking_does_not_matter():
+    cmd = describing_signal(2, "heave").commands
+    a = simulate("mpi", cmd, "full", seed=5)
+    b = simulate("mpi", cmd, "full", seed=5)
+    c = simulate("mpi", cmd, "full", seed=6)
+    assert np.array_equal(a.imu.accel, b.imu.accel)
+    assert np.array_equal(a.response.pose, b.response.pose)
+    assert not np.array_equal(a.imu.accel, c.imu.accel)
+    run = prepare("mpi", cmd, "full", seed=5)
+    chunks = list(run.platform.run(run.platform_input, run.noise, chunk_s=3.3))
+    pose = np.concatenate([ch.pose for ch in chunks])
+    assert np.array_equal(pose, a.response.pose)
+
+
+def _too_fast(rate_hz=100.0):
+    t = np.arange(0, 6.0, 1 / rate_hz)
+    v = np.zeros((t.size, 6))
+    v[:, 2] = -0.15 * np.sin(2 * np.pi * 2.0 * t) * np.clip(t - 1, 0, 1)  # 0.15 m at 2 Hz
+    return Trajectory(rate_hz, v)
+
+
+def test_actuator_limits_are_counted_and_applied():
+    sim = simulate("mpi-2008", _too_fast(), "full")
+    assert sim.limits.samples["velocity"] > 0 and sim.limits.samples["acceleration"] > 0
+    assert "leg" in sim.limits.first
+    legs = sim.response.legs
+    dt = sim.response.t[1] - sim.response.t[0]
+    v = np.diff(legs, axis=0) / dt
+    assert np.abs(v).max() < 0.3 * 1.1  # Table 5.1 0.3 m/s, with PD tracking error
+    quiet = simulate("mpi-2008", describing_signal(1, "heave").commands, "full")
+    assert quiet.limits.total == 0
+
+
+def test_strict_mode_rejects_commands_beyond_limits():
+    with pytest.raises(ActuatorLimitError, match=r"velocity|acceleration"):
+        simulate("mpi-2008", _too_fast(), "full", limit_mode="strict")
+
+
+def test_imu_saturates_and_counts():
+    spec = ImuSpec(accel_range=9.0).ideal()
+    sim = simulate("srs", rest(1.0), "reduced", imu=spec)
+    assert sim.imu.saturated == len(sim.imu.t)
+    assert np.abs(sim.imu.accel).max() == pytest.approx(9.0)
+
+
+def test_postprocess_differentiates_rates_like_appendix_c():
+    # App. C.2.3: S-G (order 9, 69 points) differentiator + 201-tap 15 Hz FIR, 100 Hz out
+    sig = describing_signal(2, "pitch")  # up to 7.1 Hz: inside the filters' flat band
+    sim = simulate("srs", sig.commands, "reduced", imu=ImuSpec().ideal())
+    out = postprocess(sim.imu)
+    assert out.t[1] - out.t[0] == pytest.approx(0.01)
+    r = sim.response
+    inside = (out.t > sig.window[0]) & (out.t < sig.window[1])
+    for got, true in (
+        (out.angular_acceleration[:, 1], r.omega_dot[:, 1]),
+        (out.gyro[:, 1], r.omega[:, 1]),
+        (out.accel[:, 0], specific_force(r, np.zeros(3))[:, 0]),
+    ):
+        ref = np.interp(out.t, r.t, true)[inside]
+        err = got[inside] - ref
+        assert np.sqrt(np.mean(err**2)) < 0.02 * np.sqrt(np.mean(ref**2))
+
+
+def test_builtin_signal_names():
+    assert builtin_signal("rest-2").duration == pytest.approx(2.0)
+    with pytest.raises(SignalError, match="built-in signals are"):
+        builtin_signal("multisine1-wobble")

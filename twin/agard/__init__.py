@@ -1,0 +1,1 @@
+"""AGARD-AR-144 measurements (describing functions first; more come with issue 4)."""

@@ -1,0 +1,209 @@
+"""Named motion-system configurations: which blocks sit in front of which platform.
+
+A configuration is the reduced model of Eq 5.11 made of blocks: platform filter (Eq 5.1),
+pure delay, optional SRS resonance (Eq 5.12, 5.13), optional heave noise (Eq 5.10), in front
+of a platform (the MPI or the SRS MJCF).
+
+``delay_s`` is the *total* motion-system delay as measured on the real machine, from command
+to measured response (35 ms on the MPI, §5.5.2; 25 ms on the SRS, §6.2.2). The measured figure
+already contains the platform's own dynamic lag, so:
+
+* the reduced platform (a rigid cabin that follows its input exactly) gets the whole
+  ``delay_s`` as a delay block;
+* the full MuJoCo platform lags by itself: its delay block is ``delay_s`` minus the
+  platform's equivalent delay per DOF (its fitted first-order time constant t_m, Table 5.5,
+  stored in ``platform.toml`` ``[full_model] equivalent_delay_s``), so that both reproduce the
+  measured delay.
+
+The eight conditions of Table 6.3 are the MPI blocks in front of the SRS platform; their
+delays are the totals of Table 6.3 (25 ms is the SRS alone, condition 1).
+
+Examples
+--------
+>>> ms = motion_system("condition-6")
+>>> ms.platform, ms.filter_break_hz, ms.delay_s, ms.noise
+('srs', 1.0, 0.025, True)
+
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from twin.chain.delay import Delay
+from twin.chain.filter import PlatformFilter
+from twin.chain.noise import MotionNoise
+from twin.chain.resonance import Resonance
+from twin.errors import SignalError, UnknownPlatformError
+from twin.platforms import PLATFORMS, load_facts
+from twin.thesis import TABLE_6_3
+
+Block = PlatformFilter | Delay | Resonance
+
+
+@dataclass(frozen=True)
+class MotionSystem:
+    """A motion-system configuration.
+
+    Attributes
+    ----------
+    name : str
+        Configuration name.
+    platform : str
+        Platform model it drives, ``"mpi"`` or ``"srs"``.
+    filter_break_hz : float or None
+        Platform-filter break frequency (Eq 5.1), None for no filter.
+    delay_s : float
+        Total motion-system delay [s] (see module docstring).
+    noise : bool
+        Whether the Eq 5.10 heave noise is added.
+    noise_highpass_hz : float
+        Noise spectrum removed below this frequency [Hz] (§5.4.4).
+    resonance : bool
+        Whether the SRS resonance terms (Eq 5.12, 5.13) are applied.
+    description : str
+        Where the configuration comes from.
+
+    """
+
+    name: str
+    platform: str
+    filter_break_hz: float | None
+    delay_s: float
+    noise: bool
+    noise_highpass_hz: float = 1.0
+    resonance: bool = False
+    description: str = ""
+
+    def __post_init__(self) -> None:
+        """Check the values."""
+        if self.platform not in PLATFORMS:
+            raise UnknownPlatformError(
+                f"unknown platform {self.platform!r}; expected one of {', '.join(PLATFORMS)}"
+            )
+        if self.filter_break_hz is not None:
+            PlatformFilter(self.filter_break_hz)
+        Delay(self.delay_s)
+        if self.noise:
+            MotionNoise(highpass_hz=self.noise_highpass_hz)
+
+    def replace(self, **changes: object) -> MotionSystem:
+        """Return a copy with some fields changed (and the name marked as modified)."""
+        changes.setdefault("name", f"{self.name}+custom")
+        return dataclasses.replace(self, **changes)  # type: ignore[arg-type]
+
+    def blocks(self, platform_lag_s: ArrayLike = 0.0) -> list[Block]:
+        """Return the command blocks, in order, for a platform with the given own lag.
+
+        Parameters
+        ----------
+        platform_lag_s : float or array_like of 6
+            The platform's own equivalent delay per DOF [s]; subtracted from ``delay_s``
+            (never below zero).
+
+        """
+        out: list[Block] = []
+        if self.filter_break_hz is not None:
+            out.append(PlatformFilter(self.filter_break_hz))
+        lag = np.broadcast_to(np.asarray(platform_lag_s, dtype=float), (6,))
+        delay = np.maximum(self.delay_s - lag, 0.0)
+        if np.any(delay > 0):
+            out.append(Delay(tuple(float(d) for d in delay)))
+        if self.resonance:
+            out.append(Resonance())
+        return out
+
+    def noise_block(self, imu_rate_hz: float = 819.2) -> MotionNoise | None:
+        """Return the heave-noise generator, or None if this configuration has no noise."""
+        return MotionNoise(imu_rate_hz, self.noise_highpass_hz) if self.noise else None
+
+    def frequency_response(self, f: ArrayLike) -> NDArray[np.complex128]:
+        """Return the reduced model (Eq 5.11 and the optional resonance) at ``f`` [Hz].
+
+        Returns
+        -------
+        ndarray, shape (len(f), 6)
+
+        """
+        h = np.ones((np.size(f), 6), dtype=complex)
+        for block in self.blocks():
+            h = h * block.frequency_response(f)
+        return h
+
+    def to_meta(self) -> dict[str, object]:
+        """Return the ``platform_config`` entry of a run's ``meta.json``."""
+        return {
+            "name": self.name,
+            "filter_break_hz": self.filter_break_hz,
+            "delay_s": self.delay_s,
+            "noise": self.noise,
+            "noise_highpass_hz": self.noise_highpass_hz,
+            "resonance": self.resonance,
+        }
+
+
+def _from_facts(platform: str, name: str, description: str) -> MotionSystem:
+    facts = load_facts(platform)
+    return MotionSystem(
+        name=name,
+        platform=platform,
+        filter_break_hz=facts.filter_break_hz or None,
+        delay_s=facts.delay_s,
+        noise=facts.noise,
+        description=description,
+    )
+
+
+def _condition(n: int) -> MotionSystem:
+    fb, delay, noise = TABLE_6_3[n]
+    return MotionSystem(
+        name=f"condition-{n}",
+        platform="srs",
+        filter_break_hz=fb,
+        delay_s=delay,
+        noise=noise,
+        description=f"Table 6.3 condition {n}: the MPI blocks simulated on the SRS",
+    )
+
+
+def config_names() -> list[str]:
+    """Return every configuration name :func:`motion_system` accepts."""
+    return ["mpi", "mpi-2008", "srs", *(f"condition-{n}" for n in TABLE_6_3)]
+
+
+def motion_system(name: str) -> MotionSystem:
+    """Return a named configuration.
+
+    ``mpi`` (1 Hz filter, 35 ms, noise; §5.5), ``mpi-2008`` (1 Hz, 100 ms, no noise: the MPI
+    before its software update, Ch 3), ``srs`` (no filter, 25 ms; §6.2.2) and
+    ``condition-1`` ... ``condition-8`` (Table 6.3).
+
+    Raises
+    ------
+    UnknownPlatformError
+        For an unknown name (the message lists the known ones).
+
+    """
+    if name == "mpi":
+        return _from_facts("mpi", "mpi", "MPI Stewart platform, reduced model Eq 5.11 (§5.5)")
+    if name == "srs":
+        return _from_facts("srs", "srs", "SIMONA Research Simulator baseline (§5.6.1, §6.2.2)")
+    if name == "mpi-2008":
+        base = _from_facts("mpi", "mpi-2008", "MPI platform before the 2009 software update (Ch 3)")
+        return dataclasses.replace(base, delay_s=0.100, noise=False)
+    if name.startswith("condition-") and name[10:].isdigit() and int(name[10:]) in TABLE_6_3:
+        return _condition(int(name[10:]))
+    raise UnknownPlatformError(
+        f"unknown configuration {name!r}; expected one of {', '.join(config_names())}"
+    )
+
+
+def check_delay(value: float) -> float:
+    """Validate a user-given delay [s] (finite, >= 0)."""
+    if not np.isfinite(value) or value < 0:
+        raise SignalError(f"delay must be a finite number of seconds >= 0; got {value}")
+    return float(value)

@@ -1,0 +1,225 @@
+"""Actuator limits on leg-length references: counted, then limited or rejected.
+
+The real machines cannot follow a reference beyond their stroke, velocity or acceleration
+(Table 5.1). The twin checks the leg references at the physics rate, counts every sample that
+breaks a limit, and either limits the reference (``mode="limit"``: clip to the stroke,
+rate- and acceleration-limit with a braking curve, then rejoin the reference as soon as it is
+feasible again) or raises :class:`twin.errors.ActuatorLimitError` (``mode="strict"``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+from twin.errors import ActuatorLimitError
+
+FloatArray = NDArray[np.float64]
+MODES = ("limit", "strict")
+_KINDS = ("stroke", "velocity", "acceleration")
+
+
+@dataclass
+class LimitReport:
+    """How many physics samples of the leg references broke each limit.
+
+    Attributes
+    ----------
+    mode : str
+        ``"limit"`` or ``"strict"``.
+    samples : dict of str to int
+        Samples (any leg) beyond the stroke, velocity and acceleration limits.
+    first : str or None
+        Description of the first violation.
+    rate_hz : float
+        Rate at which samples were counted.
+
+    """
+
+    mode: str
+    rate_hz: float
+    samples: dict[str, int] = field(default_factory=lambda: dict.fromkeys(_KINDS, 0))
+    first: str | None = None
+
+    @property
+    def total(self) -> int:
+        """Samples with any violation counted (a sample may count under several limits)."""
+        return sum(self.samples.values())
+
+    def to_dict(self) -> dict[str, object]:
+        """JSON-ready summary."""
+        return {"mode": self.mode, "rate_hz": self.rate_hz, "samples": dict(self.samples),
+                "first": self.first}  # fmt: skip
+
+    def summary(self) -> str:
+        """One line for a report."""
+        if not self.total:
+            return "actuator limits: none reached"
+        parts = ", ".join(f"{k} {v} samples" for k, v in self.samples.items() if v)
+        return f"actuator limits LIMITED: {parts}; first: {self.first}"
+
+
+@dataclass
+class LimiterState:
+    """Leg reference carried between chunks.
+
+    Last length [m], velocity [m/s], and whether the limiter is still off the reference.
+    """
+
+    length: FloatArray
+    velocity: FloatArray
+    active: bool = False
+
+
+@dataclass(frozen=True)
+class ActuatorLimits:
+    """Stroke, velocity and acceleration limits of the six legs.
+
+    Attributes
+    ----------
+    leg_min, leg_max : ndarray, shape (6,)
+        Stroke ends [m].
+    max_velocity, max_acceleration : float
+        [m/s, m/s^2].
+    mode : str
+        ``"limit"`` or ``"strict"``.
+
+    """
+
+    leg_min: FloatArray
+    leg_max: FloatArray
+    max_velocity: float
+    max_acceleration: float
+    mode: str = "limit"
+
+    def __post_init__(self) -> None:
+        """Check the mode."""
+        if self.mode not in MODES:
+            raise ValueError(f"limit mode must be one of {MODES}; got {self.mode!r}")
+
+    def check(
+        self,
+        t: FloatArray,
+        lengths: FloatArray,
+        velocities: FloatArray,
+        accelerations: FloatArray,
+        report: LimitReport,
+    ) -> NDArray[np.bool_]:
+        """Count the samples that break a limit; raise in strict mode.
+
+        Parameters
+        ----------
+        t : ndarray, shape (n,)
+            Times [s].
+        lengths, velocities, accelerations : ndarray, shape (n, 6)
+            Reference leg lengths, velocities, accelerations.
+        report : LimitReport
+            Counts, updated in place.
+
+        Returns
+        -------
+        ndarray of bool, shape (n,)
+            Samples with any violation.
+
+        Raises
+        ------
+        ActuatorLimitError
+            In strict mode, if any sample breaks a limit.
+
+        """
+        eps = 1e-9
+        broken = {
+            "stroke": (lengths < self.leg_min - eps) | (lengths > self.leg_max + eps),
+            "velocity": np.abs(velocities) > self.max_velocity * (1 + 1e-9),
+            "acceleration": np.abs(accelerations) > self.max_acceleration * (1 + 1e-9),
+        }
+        any_row = np.zeros(len(t), dtype=bool)
+        for kind, b in broken.items():
+            rows = b.any(axis=1)
+            report.samples[kind] += int(rows.sum())
+            if rows.any() and report.first is None:
+                i = int(np.argmax(rows))
+                leg = int(np.argmax(b[i]))
+                report.first = (
+                    f"{kind} limit, leg {leg + 1}, t = {t[i]:.3f} s "
+                    f"(length {lengths[i, leg]:.4f} m, velocity {velocities[i, leg]:.3f} m/s, "
+                    f"acceleration {accelerations[i, leg]:.3f} m/s^2)"
+                )
+            any_row |= rows
+        if any_row.any() and self.mode == "strict":
+            raise ActuatorLimitError(
+                f"commands break an actuator limit ({report.first}); limits are stroke "
+                f"[{self.leg_min.min():.3f}, {self.leg_max.max():.3f}] m, velocity "
+                f"{self.max_velocity} m/s, acceleration {self.max_acceleration} m/s^2 "
+                "(use limit mode 'limit' to have them limited and counted)"
+            )
+        return any_row
+
+    def apply(
+        self,
+        t: FloatArray,
+        lengths: FloatArray,
+        velocities: FloatArray,
+        accelerations: FloatArray,
+        state: LimiterState,
+        report: LimitReport,
+    ) -> tuple[FloatArray, FloatArray]:
+        """Check and limit one chunk of references (arguments as :meth:`check`).
+
+        Parameters
+        ----------
+        t, lengths, velocities, accelerations, report
+            As for :meth:`check`.
+        state : LimiterState
+            Limited reference at the previous sample; updated in place.
+
+        Returns
+        -------
+        lengths, velocities : ndarray, shape (n, 6)
+            The references to send to the legs.
+
+        """
+        any_row = self.check(t, lengths, velocities, accelerations, report)
+        if not any_row.any() and not state.active:
+            state.length, state.velocity = lengths[-1].copy(), velocities[-1].copy()
+            return lengths, velocities
+        return self._limit(t, lengths, velocities, any_row, state)
+
+    def _limit(
+        self,
+        t: FloatArray,
+        x: FloatArray,
+        xd: FloatArray,
+        broken: NDArray[np.bool_],
+        state: LimiterState,
+    ) -> tuple[FloatArray, FloatArray]:
+        """Sequential limiter, run only from a violation until the reference is rejoined."""
+        dt = float(t[1] - t[0]) if len(t) > 1 else 1e-3
+        a, vmax = self.max_acceleration, self.max_velocity
+        y, yd = x.copy(), xd.copy()
+        pos, vel = state.length.copy(), state.velocity.copy()
+        k, n = 0, len(t)
+        active = state.active  # the chunk may start off the reference
+        while k < n:
+            if not active:
+                nxt = np.flatnonzero(broken[k:])
+                if nxt.size == 0:
+                    break
+                k += int(nxt[0])
+                pos, vel = (y[k - 1], yd[k - 1]) if k > 0 else (pos, vel)
+                active = True
+            e = x[k] - pos
+            correction = np.sign(e) * np.minimum(np.abs(e) / dt, np.sqrt(2 * a * np.abs(e)))
+            v = np.clip(xd[k] + correction, vel - a * dt, vel + a * dt)
+            v = np.clip(v, -vmax, vmax)
+            new = np.clip(pos + v * dt, self.leg_min, self.leg_max)
+            v = (new - pos) / dt
+            y[k], yd[k] = new, v
+            pos, vel = new, v
+            if np.all(np.abs(x[k] - new) < 1e-7) and np.all(np.abs(xd[k] - v) <= a * dt):
+                active = False
+            k += 1
+        state.length, state.velocity, state.active = y[-1].copy(), yd[-1].copy(), active
+        return y, yd

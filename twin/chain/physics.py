@@ -1,0 +1,177 @@
+"""The full rigid-body platform: the MJCF model stepped by MuJoCo (Fig 5.4).
+
+Pose commands (any rate) are evaluated at the physics rate (1 kHz, the model's timestep, as
+the thesis simulated its model, §5.5.1) from their cubic spline, turned into leg length and
+leg velocity references by the exact inverse kinematics (App. A), checked against the
+actuator limits (counted; limited or rejected), and fed to the PD of Eq 5.9 on each leg
+(position and velocity actuators in the MJCF) with the K_s static-force feedback (cabin
+gravity compensation in the MJCF). Physics runs in chunks through :func:`mujoco.rollout`
+(the C side does every step; Python only prepares each chunk's references); the warm start
+is carried between chunks, so results do not depend on the chunk size.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+
+import mujoco
+import numpy as np
+from mujoco import rollout
+from numpy.typing import NDArray
+
+from twin.chain.limits import ActuatorLimits, LimiterState, LimitReport
+from twin.chain.noise import NoiseRealisation
+from twin.chain.response import PlatformResponse
+from twin.frames import MJ_FROM_THESIS, euler_from_matrix, matrix_from_quat
+from twin.geometry import load_geometry
+from twin.kinematics import leg_rates
+from twin.platforms import load_facts, load_model
+from twin.trajectory import Trajectory
+
+FloatArray = NDArray[np.float64]
+_STATE = mujoco.mjtState.mjSTATE_FULLPHYSICS
+
+#: Default chunk length [s]: memory stays bounded for runs of any length.
+CHUNK_S = 10.0
+
+
+def reference_motion(
+    commands: Trajectory, t: FloatArray, noise: NoiseRealisation | None
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """Pose, pose rate and pose acceleration references at times ``t`` (noise added in heave).
+
+    Parameters
+    ----------
+    commands : Trajectory
+        Pose commands after the motion-system blocks.
+    t : ndarray
+        Times [s].
+    noise : NoiseRealisation or None
+        Heave noise (position, velocity, acceleration), interpolated linearly.
+
+    """
+    pose, rate, acc = commands.at(t), commands.at(t, 1), commands.at(t, 2)
+    if noise is not None:
+        tn = commands.t0 + noise.t
+        pose[:, 2] += np.interp(t, tn, noise.position)
+        rate[:, 2] += np.interp(t, tn, noise.velocity)
+        acc[:, 2] += np.interp(t, tn, noise.acceleration)
+    return pose, rate, acc
+
+
+def physics_grid(commands: Trajectory, rate_hz: float) -> FloatArray:
+    """Return the times at which a platform running at ``rate_hz`` samples the commands' span."""
+    n = int(np.floor(commands.duration * rate_hz + 1e-9)) + 1
+    return commands.t0 + np.arange(n) / rate_hz
+
+
+class FullPlatform:
+    """The MuJoCo model of a platform behind the platform interface.
+
+    Parameters
+    ----------
+    platform : str
+        ``"mpi"`` or ``"srs"``.
+    limit_mode : str
+        ``"limit"`` (limit and count) or ``"strict"`` (raise on any limit).
+
+    Attributes
+    ----------
+    model : mujoco.MjModel
+        A private copy of the compiled model (edit it, e.g. the ``imu`` site, freely).
+    rate_hz : float
+        Physics rate [Hz].
+    own_lag_s : ndarray, shape (6,)
+        The model's equivalent delay per DOF (``platform.toml`` ``[full_model]``).
+
+    """
+
+    kind = "full"
+
+    def __init__(self, platform: str, limit_mode: str = "limit") -> None:
+        self.platform = platform
+        self.model = load_model(platform).__copy__()
+        self.geometry = load_geometry(platform)
+        facts = load_facts(platform)
+        self.limits = ActuatorLimits(
+            self.geometry.leg_min, self.geometry.leg_max, facts.max_velocity,
+            facts.max_acceleration, limit_mode,
+        )  # fmt: skip
+        self.own_lag_s = np.array(facts.equivalent_delay_s)
+        self.rate_hz = 1.0 / self.model.opt.timestep
+        self._adr = {
+            name: slice(self.model.sensor(name).adr[0],
+                        self.model.sensor(name).adr[0] + self.model.sensor(name).dim[0])
+            for name in ("ugp_position", "ugp_orientation", "ugp_velocity",
+                         "ugp_angular_velocity", "ugp_linear_acceleration",
+                         "ugp_angular_acceleration", "imu_accelerometer", "imu_gyro")
+        }  # fmt: skip
+        self._legs = [self.model.sensor(f"leg{j + 1}_length").adr[0] for j in range(6)]
+
+    def run(
+        self,
+        commands: Trajectory,
+        noise: NoiseRealisation | None = None,
+        report: LimitReport | None = None,
+        chunk_s: float = CHUNK_S,
+    ) -> Iterator[PlatformResponse]:
+        """Simulate, yielding the response chunk by chunk.
+
+        The platform starts at rest at the neutral pose (keyframe ``home``).
+
+        Parameters
+        ----------
+        commands : Trajectory
+            Pose commands (after the motion-system blocks).
+        noise : NoiseRealisation, optional
+            Heave noise added to the reference.
+        report : LimitReport, optional
+            Filled with the actuator-limit counts.
+        chunk_s : float
+            Chunk length [s].
+
+        """
+        model = self.model
+        data = mujoco.MjData(model)
+        mujoco.mj_resetDataKeyframe(model, data, model.key("home").id)
+        state = np.empty(mujoco.mj_stateSize(model, _STATE))
+        mujoco.mj_getState(model, data, state, _STATE)
+        warm = data.qacc_warmstart.copy()
+        report = report if report is not None else LimitReport(self.limits.mode, self.rate_hz)
+        neutral = self.geometry.neutral_lengths
+        limiter = LimiterState(neutral.copy(), np.zeros(6))
+        t_all = physics_grid(commands, self.rate_hz)
+        step = max(1, round(chunk_s * self.rate_hz))
+        for k0 in range(0, t_all.size, step):
+            t = t_all[k0 : k0 + step]
+            pose, rate, acc = reference_motion(commands, t, noise)
+            lengths, velocities, accelerations = leg_rates(self.geometry, pose, rate, acc)
+            lengths, velocities = self.limits.apply(
+                t, lengths, velocities, accelerations, limiter, report
+            )
+            ctrl = np.hstack([lengths, velocities])[None]
+            states, sens = rollout.rollout(model, data, state, ctrl, initial_warmstart=warm[None])
+            state, warm = states[0, -1], data.qacc_warmstart.copy()
+            yield self._response(t, pose, sens[0])
+
+    def _response(self, t: FloatArray, command: FloatArray, s: FloatArray) -> PlatformResponse:
+        """Turn sensor rows (sensors at the start of each step, i.e. at ``t``) into a response."""
+        a = self._adr
+        T = matrix_from_quat(s[:, a["ugp_orientation"]])
+        gravity = self.model.opt.gravity
+        acc_base = (s[:, a["ugp_linear_acceleration"]] + gravity) @ MJ_FROM_THESIS.T
+        alpha_base = s[:, a["ugp_angular_acceleration"]] @ MJ_FROM_THESIS.T
+        position = s[:, a["ugp_position"]] - self.geometry.neutral_ugp
+        pose = np.hstack([position, euler_from_matrix(T)])
+        return PlatformResponse(
+            t=t,
+            command=command,
+            pose=pose,
+            velocity=s[:, a["ugp_velocity"]].copy(),
+            acceleration=acc_base,
+            omega=np.einsum("nji,nj->ni", T, s[:, a["ugp_angular_velocity"]]),
+            omega_dot=np.einsum("nji,nj->ni", T, alpha_base),
+            legs=s[:, self._legs].copy(),
+            sensor_accelerometer=s[:, a["imu_accelerometer"]].copy(),
+            sensor_gyro=s[:, a["imu_gyro"]].copy(),
+        )

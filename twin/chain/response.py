@@ -1,0 +1,112 @@
+"""The result type every platform returns: cabin motion sampled at the platform rate."""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from dataclasses import dataclass, fields
+
+import numpy as np
+from numpy.typing import NDArray
+
+from twin.chain.limits import LimitReport
+from twin.frames import euler_rate_matrix, euler_rate_matrix_dot, rotation_matrix
+
+FloatArray = NDArray[np.float64]
+
+#: Gravity vector in the thesis base frame (z down) [m/s^2].
+GRAVITY_BASE = np.array([0.0, 0.0, 9.81])
+
+
+@dataclass(frozen=True, eq=False)
+class PlatformResponse:
+    """Cabin motion of a platform run (full or reduced), uniformly sampled.
+
+    Attributes
+    ----------
+    t : ndarray, shape (n,)
+        Time [s].
+    command : ndarray, shape (n, 6)
+        The platform's input: the pose reference after the motion-system blocks and noise.
+    pose : ndarray, shape (n, 6)
+        UGP pose offsets from neutral (m, rad), thesis base frame.
+    velocity, acceleration : ndarray, shape (n, 3)
+        UGP linear velocity and acceleration (gravity not included), base-frame axes.
+    omega, omega_dot : ndarray, shape (n, 3)
+        Angular velocity (p, q, r) and its derivative, cabin axes.
+    legs : ndarray, shape (n, 6)
+        Leg lengths [m].
+    sensor_accelerometer, sensor_gyro : ndarray, shape (n, 3), or None
+        MuJoCo's own accelerometer and gyro at the model's ``imu`` site (full model only),
+        thesis cabin axes; a cross-check of :func:`twin.chain.imu.specific_force`.
+
+    """
+
+    t: FloatArray
+    command: FloatArray
+    pose: FloatArray
+    velocity: FloatArray
+    acceleration: FloatArray
+    omega: FloatArray
+    omega_dot: FloatArray
+    legs: FloatArray
+    sensor_accelerometer: FloatArray | None = None
+    sensor_gyro: FloatArray | None = None
+
+    @property
+    def rate_hz(self) -> float:
+        """Sample rate [Hz]."""
+        return 1.0 / float(self.t[1] - self.t[0])
+
+    @classmethod
+    def concatenate(cls, parts: Iterable[PlatformResponse]) -> PlatformResponse:
+        """Join consecutive chunks of one run."""
+        chunks = list(parts)
+        out = {}
+        for f in fields(cls):
+            arrays = [getattr(c, f.name) for c in chunks]
+            out[f.name] = None if arrays[0] is None else np.concatenate(arrays)
+        return cls(**out)
+
+
+@dataclass
+class RunResult:
+    """A platform run: the response plus what happened to the commands on the way.
+
+    Attributes
+    ----------
+    response : PlatformResponse
+        Cabin motion at the platform rate.
+    limits : LimitReport
+        Actuator-limit counts.
+    notes : list of str
+        Anything the user should know (e.g. a delay shorter than the platform's own lag).
+
+    """
+
+    response: PlatformResponse
+    limits: LimitReport
+    notes: list[str]
+
+
+def rigid_motion(pose: FloatArray, rate: FloatArray, acc: FloatArray) -> tuple[FloatArray, ...]:
+    """Cabin velocities and accelerations of a pose trajectory with exact derivatives.
+
+    Parameters
+    ----------
+    pose, rate, acc : ndarray, shape (n, 6)
+        Pose offsets and their first and second time derivatives (Euler-angle rates).
+
+    Returns
+    -------
+    velocity, acceleration, omega, omega_dot : ndarray, shape (n, 3)
+        Linear (base axes) and angular (cabin axes, Eq A.4) motion.
+
+    """
+    T = rotation_matrix(pose[:, 3:])
+    omega_b = np.einsum("nij,nj->ni", euler_rate_matrix(pose[:, 3:]), rate[:, 3:])
+    omega_dot_b = np.einsum("nij,nj->ni", euler_rate_matrix(pose[:, 3:]), acc[:, 3:])
+    omega_dot_b += np.einsum("nij,nj->ni", euler_rate_matrix_dot(pose[:, 3:], rate[:, 3:]),
+                             rate[:, 3:])  # fmt: skip
+    omega = np.einsum("nji,nj->ni", T, omega_b)
+    omega_dot = np.einsum("nji,nj->ni", T, omega_dot_b)
+    return rate[:, :3].copy(), acc[:, :3].copy(), omega, omega_dot

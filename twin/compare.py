@@ -1,0 +1,332 @@
+"""Full versus reduced platform: describing functions, Table 5.5 fits, differences (§5.5).
+
+Two questions a motion-system engineer asks first:
+
+1. *What are the platform's own dynamics?* :func:`platform_dynamics` drives the full MuJoCo
+   model alone (no filter, no delay, no noise; §5.5.1) with the multi-sines of Table 5.2 in
+   each DOF, and fits a first-order lag plus delay per DOF (Table 5.5).
+2. *How far is the reduced model from the full one?* :func:`compare` drives both through the
+   same configuration blocks with the same commands (noise off: the describing function is
+   of the deterministic part) and reports gain and phase differences per DOF and frequency,
+   the phase difference as an equivalent delay, and the time-domain RMS difference.
+
+Examples
+--------
+>>> cmp = compare("mpi", dofs=("heave",), signals=(1,))  # doctest: +SKIP
+>>> print(cmp.format_table())  # doctest: +SKIP
+
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+from twin.agard.describing_function import LagDelayFit, describing_function, fit_lag_delay
+from twin.chain.config import MotionSystem, motion_system
+from twin.chain.simulate import Platform, make_platform, simulate
+from twin.errors import SignalError
+from twin.frames import DOF_NAMES
+from twin.signals import describing_signal
+from twin.thesis import TABLE_5_5
+
+FloatArray = NDArray[np.float64]
+ComplexArray = NDArray[np.complex128]
+Progress = Callable[[str], None]
+
+
+def _check_dofs(dofs: Sequence[str]) -> tuple[str, ...]:
+    bad = [d for d in dofs if d not in DOF_NAMES]
+    if bad or not dofs:
+        raise SignalError(f"unknown DOF(s) {bad}; choose from {', '.join(DOF_NAMES)}")
+    return tuple(dofs)
+
+
+@dataclass(frozen=True, eq=False)
+class DofResponse:
+    """Describing functions of one DOF: from the commands to the cabin pose.
+
+    Attributes
+    ----------
+    dof : str
+        Degree of freedom.
+    frequencies_hz : ndarray
+        Excited frequencies (sorted).
+    full, reduced : ndarray of complex or None
+        Describing function of each model (None if not run).
+    rms_difference : float
+        RMS of (full - reduced) pose in this DOF over the analysis windows, relative to the
+        RMS of the command (NaN if only one model ran).
+
+    """
+
+    dof: str
+    frequencies_hz: FloatArray
+    full: ComplexArray | None
+    reduced: ComplexArray | None
+    rms_difference: float = float("nan")
+
+    @property
+    def gain_difference_db(self) -> FloatArray:
+        """20 log10 |H_full / H_reduced| [dB]."""
+        return 20 * np.log10(np.abs(self.full / self.reduced))
+
+    @property
+    def phase_difference_deg(self) -> FloatArray:
+        """Phase of H_full / H_reduced [deg] (negative: the full model lags)."""
+        return np.angle(self.full / self.reduced, deg=True)
+
+    @property
+    def equivalent_delay_s(self) -> FloatArray:
+        """The phase difference as a delay, -phase / (360 f) [s] (positive: full lags)."""
+        return -self.phase_difference_deg / (360.0 * self.frequencies_hz)
+
+
+def _drive(
+    config: MotionSystem, platform: Platform, dof: str, signals: Sequence[int]
+) -> tuple[FloatArray, ComplexArray, list[tuple[FloatArray, FloatArray, FloatArray]]]:
+    """Run the multi-sines in one DOF; return frequencies, DF, and (t, cmd, pose) windows."""
+    k = DOF_NAMES.index(dof)
+    freqs, dfs, windows = [], [], []
+    for number in signals:
+        sig = describing_signal(number, dof)
+        sim = simulate(config, sig.commands, platform.kind, platform=platform)
+        r = sim.response
+        command = sig.commands.at(r.t)[:, k]
+        freqs.append(sig.frequencies_hz)
+        dfs.append(describing_function(r.t, command, r.pose[:, k], sig.frequencies_hz,
+                                       sig.window))  # fmt: skip
+        sel = (r.t >= sig.window[0]) & (r.t < sig.window[1])
+        windows.append((r.t[sel], command[sel], r.pose[sel, k]))
+    f = np.concatenate(freqs)
+    order = np.argsort(f)
+    return f[order], np.concatenate(dfs)[order], windows
+
+
+@dataclass(frozen=True, eq=False)
+class PlatformDynamics:
+    """Per-DOF lag-plus-delay fits of the full model alone (Table 5.5).
+
+    Attributes
+    ----------
+    platform : str
+        ``"mpi"`` or ``"srs"``.
+    responses : dict of str to DofResponse
+        Describing functions (``full`` only).
+    fits : dict of str to LagDelayFit
+        Fitted t_m and tau per DOF.
+
+    """
+
+    platform: str
+    responses: dict[str, DofResponse]
+    fits: dict[str, LagDelayFit]
+
+    def table(self) -> list[dict[str, float | str | None]]:
+        """Rows: DOF, fitted t_m, f_m, tau, and (MPI) Table 5.5 with the relative error."""
+        rows = []
+        for dof, fit in self.fits.items():
+            ref = TABLE_5_5.get(dof) if self.platform == "mpi" else None
+            rows.append({
+                "dof": dof, "t_m_s": fit.t_m, "f_m_hz": fit.f_m, "tau_s": fit.tau,
+                "thesis_t_m_s": ref[0] if ref else None,
+                "thesis_f_m_hz": ref[1] if ref else None,
+                "t_m_error": fit.t_m / ref[0] - 1 if ref else None,
+            })  # fmt: skip
+        return rows
+
+    def format_table(self) -> str:
+        """Plain-text Table 5.5 comparison."""
+        out = [f"{self.platform}: full model alone, first-order lag + delay per DOF (Table 5.5)",
+               f"{'dof':6} {'t_m [s]':>9} {'f_m [Hz]':>9} {'tau [ms]':>9} "
+               f"{'thesis t_m':>11} {'thesis f_m':>11} {'t_m err':>8}"]  # fmt: skip
+        for r in self.table():
+            ref = (f"{r['thesis_t_m_s']:>11.5f} {r['thesis_f_m_hz']:>11.2f} "
+                   f"{r['t_m_error'] * 100:>+7.1f}%") if r["thesis_t_m_s"] else ""  # fmt: skip
+            out.append(f"{r['dof']:6} {r['t_m_s']:>9.5f} {r['f_m_hz']:>9.2f} "
+                       f"{r['tau_s'] * 1e3:>9.2f} {ref}")  # fmt: skip
+        return "\n".join(out)
+
+
+def platform_dynamics(
+    platform: str = "mpi",
+    dofs: Sequence[str] = DOF_NAMES,
+    signals: Sequence[int] = (1, 2),
+    progress: Progress | None = None,
+) -> PlatformDynamics:
+    """Fit lag plus delay to the full model's describing functions per DOF (§5.5.1).
+
+    Parameters
+    ----------
+    platform : str
+        ``"mpi"`` or ``"srs"``.
+    dofs : sequence of str
+        DOFs to drive, one at a time.
+    signals : sequence of int
+        Multi-sine signals (1, 2: Table 5.2; 3: to 10 Hz).
+    progress : callable, optional
+        Called with a message before each DOF.
+
+    """
+    alone = MotionSystem(
+        "platform-alone", platform, None, 0.0, False,
+        description="the full model without filter, delay or noise (§5.5.1)",
+    )  # fmt: skip
+    plat = make_platform(platform, "full")
+    responses, fits = {}, {}
+    for dof in _check_dofs(dofs):
+        if progress:
+            progress(f"{platform} full model alone: {dof}")
+        f, h, _ = _drive(alone, plat, dof, signals)
+        responses[dof] = DofResponse(dof, f, h, None)
+        fits[dof] = fit_lag_delay(f, h)
+    return PlatformDynamics(platform, responses, fits)
+
+
+@dataclass(frozen=True, eq=False)
+class Comparison:
+    """Full versus reduced model of one configuration.
+
+    Attributes
+    ----------
+    config : MotionSystem
+        The configuration (noise off).
+    dofs : dict of str to DofResponse
+        Per-DOF describing functions of both models.
+    analytic : dict of str to ndarray
+        The reduced model's analytic response (Eq 5.11) at each DOF's frequencies.
+    notes : list of str
+        Anything worth knowing about the runs.
+
+    """
+
+    config: MotionSystem
+    dofs: dict[str, DofResponse]
+    analytic: dict[str, ComplexArray]
+    notes: list[str] = field(default_factory=list)
+
+    def worst(self, max_hz: float = np.inf) -> dict[str, tuple[float, float]]:
+        """Largest |gain difference| [dB] and |phase difference| [deg] per DOF up to max_hz."""
+        out = {}
+        for dof, r in self.dofs.items():
+            sel = r.frequencies_hz <= max_hz + 1e-9
+            out[dof] = (float(np.abs(r.gain_difference_db[sel]).max()),
+                        float(np.abs(r.phase_difference_deg[sel]).max()))  # fmt: skip
+        return out
+
+    def to_dict(self) -> dict[str, object]:
+        """JSON-ready result."""
+        return {
+            "config": self.config.to_meta(),
+            "platform": self.config.platform,
+            "dofs": {
+                dof: {
+                    "frequency_hz": r.frequencies_hz.tolist(),
+                    "full_gain_db": (20 * np.log10(np.abs(r.full))).tolist(),
+                    "full_phase_deg": np.angle(r.full, deg=True).tolist(),
+                    "reduced_gain_db": (20 * np.log10(np.abs(r.reduced))).tolist(),
+                    "reduced_phase_deg": np.angle(r.reduced, deg=True).tolist(),
+                    "gain_difference_db": r.gain_difference_db.tolist(),
+                    "phase_difference_deg": r.phase_difference_deg.tolist(),
+                    "equivalent_delay_ms": (r.equivalent_delay_s * 1e3).tolist(),
+                    "rms_difference": r.rms_difference,
+                }
+                for dof, r in self.dofs.items()
+            },
+            "notes": self.notes,
+        }
+
+    def to_json(self) -> str:
+        """Return the result as JSON text."""
+        return json.dumps(self.to_dict(), indent=2)
+
+    def format_table(self) -> str:
+        """Plain-text table: per DOF and frequency, full minus reduced."""
+        out = [f"full vs reduced, configuration {self.config.name} (platform "
+               f"{self.config.platform}; noise off for the describing functions)",
+               f"{'dof':6} {'f [Hz]':>7} {'full dB':>8} {'full deg':>9} {'red. dB':>8} "
+               f"{'red. deg':>9} {'diff dB':>8} {'diff deg':>9} {'eq. delay ms':>13}"]  # fmt: skip
+        for dof, r in self.dofs.items():
+            for i, f in enumerate(r.frequencies_hz):
+                out.append(
+                    f"{dof:6} {f:>7.2f} {20 * np.log10(abs(r.full[i])):>8.2f} "
+                    f"{np.angle(r.full[i], deg=True):>9.1f} "
+                    f"{20 * np.log10(abs(r.reduced[i])):>8.2f} "
+                    f"{np.angle(r.reduced[i], deg=True):>9.1f} {r.gain_difference_db[i]:>+8.2f} "
+                    f"{r.phase_difference_deg[i]:>+9.2f} {r.equivalent_delay_s[i] * 1e3:>+13.2f}"
+                )
+            out.append(f"{dof:6} time domain: RMS(full - reduced) = "
+                       f"{r.rms_difference * 100:.2f} % of RMS(command)")  # fmt: skip
+        out.extend(f"note: {n}" for n in self.notes)
+        return "\n".join(out)
+
+    def plot(self, path: str | None = None):
+        """Bode plot per DOF: full, reduced and analytic Eq 5.11; saved to ``path`` if given."""
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        n = len(self.dofs)
+        fig, axes = plt.subplots(2, n, figsize=(3.2 * n, 5.5), squeeze=False, sharex=True)
+        for j, (dof, r) in enumerate(self.dofs.items()):
+            f = r.frequencies_hz
+            fa = np.geomspace(f.min(), max(f.max(), 10.0), 200)
+            ha = self.config.frequency_response(fa)[:, DOF_NAMES.index(dof)]
+            axes[0, j].semilogx(fa, 20 * np.log10(np.abs(ha)), "k-", lw=0.8, label="Eq 5.11")
+            axes[1, j].semilogx(fa, np.degrees(np.unwrap(np.angle(ha))), "k-", lw=0.8)
+            for h, style, label in ((r.full, "o", "full"), (r.reduced, "x", "reduced")):
+                axes[0, j].semilogx(f, 20 * np.log10(np.abs(h)), style, label=label)
+                axes[1, j].semilogx(f, np.degrees(np.unwrap(np.angle(h))), style)
+            axes[0, j].set_title(dof)
+            axes[1, j].set_xlabel("frequency [Hz]")
+        axes[0, 0].set_ylabel("gain [dB]")
+        axes[1, 0].set_ylabel("phase [deg]")
+        axes[0, 0].legend(fontsize=8)
+        fig.suptitle(f"{self.config.name}: full vs reduced describing functions")
+        fig.tight_layout()
+        if path:
+            fig.savefig(path, dpi=120)
+        return fig
+
+
+def compare(
+    config: MotionSystem | str,
+    dofs: Sequence[str] = DOF_NAMES,
+    signals: Sequence[int] = (1, 2, 3),
+    progress: Progress | None = None,
+) -> Comparison:
+    """Drive full and reduced model of a configuration with the same multi-sines.
+
+    Parameters
+    ----------
+    config : MotionSystem or str
+        Configuration (its noise is switched off for the describing functions).
+    dofs : sequence of str
+        DOFs to drive, one at a time.
+    signals : sequence of int
+        Multi-sines: 1, 2 (Table 5.2) and 3 (4.5-10 Hz).
+    progress : callable, optional
+        Called with a message before each run.
+
+    """
+    ms = motion_system(config) if isinstance(config, str) else config
+    ms_quiet = ms.replace(name=ms.name, noise=False)
+    full, reduced = make_platform(ms.platform, "full"), make_platform(ms.platform, "reduced")
+    out, analytic = {}, {}
+    for dof in _check_dofs(dofs):
+        if progress:
+            progress(f"{ms.name}: {dof}, full and reduced")
+        f, h_full, w_full = _drive(ms_quiet, full, dof, signals)
+        _, h_red, w_red = _drive(ms_quiet, reduced, dof, signals)
+        diff = np.concatenate([a[2] - b[2] for a, b in zip(w_full, w_red, strict=True)])
+        cmd = np.concatenate([a[1] for a in w_full])
+        rms = float(np.sqrt(np.mean(diff**2)) / np.sqrt(np.mean(cmd**2)))
+        out[dof] = DofResponse(dof, f, h_full, h_red, rms)
+        analytic[dof] = ms_quiet.frequency_response(f)[:, DOF_NAMES.index(dof)]
+    notes = [] if not ms.noise else ["the configuration's noise was off for these runs"]
+    return Comparison(ms_quiet, out, analytic, notes)

@@ -1,0 +1,248 @@
+"""The recorded-run format ``twin-run/1``: one folder per run, simulated or measured.
+
+Layout::
+
+    RUN/meta.json        format, platform, platform_config, command_rate_hz, imu, notes
+    RUN/commands.csv     t,x,y,z,roll,pitch,yaw   UGP pose set-points, offsets from neutral,
+                         thesis base frame (x fwd, y right, z down), m and rad
+    RUN/imu.csv          t,ax,ay,az,p,q,r         specific force [m/s^2] (at rest az = -9.81),
+                         angular rate [rad/s], cabin axes
+    RUN/actuators.csv    t,l1,l2,l3,l4,l5,l6     optional: leg lengths [m]
+
+``meta.json`` holds ``format`` ("twin-run/1"), ``platform`` ("mpi" or "srs"),
+``platform_config`` ({"filter_break_hz": number or null, "delay_s": number, "noise": bool},
+more keys allowed), ``command_rate_hz``, ``imu`` ({"position_m": [x, y, z] in the cabin frame,
+"rate_hz"}) and free ``notes``; a simulator may add keys (``model``, ``seed``, ``limits``).
+Times are seconds, uniformly sampled, strictly increasing. :class:`RunWriter` writes a run
+into a temporary folder and renames it when complete, so a failed run leaves nothing.
+"""
+
+from __future__ import annotations
+
+import json
+import shutil
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+from types import TracebackType
+
+import numpy as np
+from numpy.typing import NDArray
+
+from twin.errors import RunFormatError, SignalError
+from twin.platforms import PLATFORMS
+from twin.trajectory import Trajectory, uniform_rate
+
+FloatArray = NDArray[np.float64]
+FORMAT = "twin-run/1"
+HEADERS = {
+    "commands.csv": ("t", "x", "y", "z", "roll", "pitch", "yaw"),
+    "imu.csv": ("t", "ax", "ay", "az", "p", "q", "r"),
+    "actuators.csv": ("t", "l1", "l2", "l3", "l4", "l5", "l6"),
+}
+#: Allowed relative difference between a file's sample rate and the rate in meta.json.
+RATE_TOLERANCE = 0.005
+
+
+@dataclass(frozen=True, eq=False)
+class RecordedRun:
+    """A run read from disk.
+
+    Attributes
+    ----------
+    path : Path
+        The folder.
+    meta : dict
+        Contents of ``meta.json``.
+    commands : Trajectory
+        Pose commands.
+    imu_t : ndarray, shape (n,)
+        IMU sample times [s].
+    imu : ndarray, shape (n, 6)
+        ax, ay, az [m/s^2], p, q, r [rad/s].
+    actuators : ndarray, shape (m, 7) or None
+        t, l1..l6, if recorded.
+
+    """
+
+    path: Path
+    meta: dict
+    commands: Trajectory
+    imu_t: FloatArray
+    imu: FloatArray
+    actuators: FloatArray | None
+
+
+def _read_csv(path: Path) -> FloatArray:
+    """Read one CSV of the format, checking header, numbers, finiteness and time."""
+    name = path.name
+    if not path.is_file():
+        raise RunFormatError(f"{path.parent}: missing {name}")
+    with path.open() as fh:
+        header = tuple(c.strip() for c in fh.readline().strip().split(","))
+        if header != HEADERS[name]:
+            raise RunFormatError(
+                f"{name}: header must be {','.join(HEADERS[name])}; got {','.join(header)}"
+            )
+        try:
+            data = np.loadtxt(fh, delimiter=",", ndmin=2)
+        except ValueError as e:
+            raise RunFormatError(f"{name}: not a table of numbers ({e})") from None
+    if data.shape[0] < 2 or data.shape[1] != len(header):
+        raise RunFormatError(f"{name}: needs at least 2 rows of {len(header)} numbers")
+    bad = ~np.isfinite(data)
+    if bad.any():
+        row, col = np.argwhere(bad)[0]
+        raise RunFormatError(
+            f"{name}: row {row + 1} (line {row + 2}): {header[col]} is {data[row, col]}; "
+            "all values must be finite"
+        )
+    try:
+        uniform_rate(data[:, 0], name)
+    except SignalError as e:
+        raise RunFormatError(str(e)) from None
+    return data
+
+
+def _check_rate(name: str, t: FloatArray, expected: float) -> None:
+    rate = uniform_rate(t, name)
+    if abs(rate / expected - 1) > RATE_TOLERANCE:
+        raise RunFormatError(f"{name}: sampled at {rate:.6g} Hz but meta.json says {expected:g} Hz")
+
+
+def _check_meta(meta: object, path: Path) -> dict:
+    where = f"{path}/meta.json"
+    if not isinstance(meta, dict):
+        raise RunFormatError(f"{where}: must hold a JSON object")
+    if meta.get("format") != FORMAT:
+        raise RunFormatError(f"{where}: format must be {FORMAT!r}; got {meta.get('format')!r}")
+    if meta.get("platform") not in PLATFORMS:
+        raise RunFormatError(
+            f"{where}: platform must be one of {', '.join(PLATFORMS)}; got {meta.get('platform')!r}"
+        )
+    cfg = meta.get("platform_config")
+    if not isinstance(cfg, dict) or not {"filter_break_hz", "delay_s", "noise"} <= cfg.keys():
+        raise RunFormatError(
+            f"{where}: platform_config must hold filter_break_hz, delay_s and noise"
+        )
+    rate = meta.get("command_rate_hz")
+    if not isinstance(rate, int | float) or rate <= 0:
+        raise RunFormatError(f"{where}: command_rate_hz must be a number > 0; got {rate!r}")
+    imu = meta.get("imu")
+    if (
+        not isinstance(imu, dict)
+        or not isinstance(imu.get("rate_hz"), int | float)
+        or imu["rate_hz"] <= 0
+        or not isinstance(imu.get("position_m"), list)
+        or len(imu["position_m"]) != 3
+    ):
+        raise RunFormatError(f"{where}: imu must hold position_m [x, y, z] and rate_hz > 0")
+    return meta
+
+
+def read_run(folder: str | Path) -> RecordedRun:
+    """Read and validate a ``twin-run/1`` folder.
+
+    Raises
+    ------
+    RunFormatError
+        Naming the file (and row) that is wrong: missing file, wrong header, a value that is
+        not a finite number, time not uniform and strictly increasing, or a rate that does not
+        match ``meta.json``.
+
+    """
+    path = Path(folder)
+    if not path.is_dir():
+        raise RunFormatError(f"{path}: not a run folder (expected a directory)")
+    meta_path = path / "meta.json"
+    if not meta_path.is_file():
+        raise RunFormatError(f"{path}: missing meta.json")
+    try:
+        meta = _check_meta(json.loads(meta_path.read_text()), path)
+    except json.JSONDecodeError as e:
+        raise RunFormatError(f"{meta_path}: not valid JSON ({e})") from None
+    cmd = _read_csv(path / "commands.csv")
+    _check_rate("commands.csv", cmd[:, 0], float(meta["command_rate_hz"]))
+    imu = _read_csv(path / "imu.csv")
+    _check_rate("imu.csv", imu[:, 0], float(meta["imu"]["rate_hz"]))
+    act = None
+    if (path / "actuators.csv").exists():
+        act = _read_csv(path / "actuators.csv")
+    commands = _trajectory(cmd)
+    return RecordedRun(path, meta, commands, imu[:, 0], imu[:, 1:], act)
+
+
+def read_commands(path: str | Path) -> Trajectory:
+    """Read a ``commands.csv`` on its own (any rate, taken from its time column)."""
+    p = Path(path)
+    if not p.is_file():
+        raise RunFormatError(f"{p}: no such commands file")
+    if p.name != "commands.csv":
+        raise RunFormatError(f"{p}: a commands file must be named commands.csv (twin-run/1)")
+    return _trajectory(_read_csv(p))
+
+
+def _trajectory(cmd: FloatArray) -> Trajectory:
+    return Trajectory(uniform_rate(cmd[:, 0]), cmd[:, 1:], float(cmd[0, 0]))
+
+
+def _write_rows(fh, t: FloatArray, values: FloatArray) -> None:
+    np.savetxt(fh, np.column_stack([t, values]), delimiter=",", fmt="%.10g")
+
+
+class RunWriter:
+    """Write a run folder incrementally; it appears under its name only when complete.
+
+    Use as a context manager: on an exception the temporary folder is removed.
+
+    Parameters
+    ----------
+    folder : str or Path
+        Destination; must not exist yet (or ``overwrite=True``).
+    meta : dict
+        ``meta.json`` contents (checked against the format).
+    overwrite : bool
+        Replace an existing folder.
+
+    """
+
+    def __init__(self, folder: str | Path, meta: dict, overwrite: bool = False) -> None:
+        self.folder = Path(folder)
+        if self.folder.exists() and not overwrite:
+            raise RunFormatError(f"{self.folder}: already exists (choose another --out)")
+        self.meta = dict(meta, format=FORMAT)
+        _check_meta(self.meta, self.folder)
+        self.folder.parent.mkdir(parents=True, exist_ok=True)
+        self.tmp = Path(tempfile.mkdtemp(prefix=f".{self.folder.name}.", dir=self.folder.parent))
+        self.tmp.chmod(0o755)
+        self._files = {}
+        for name, header in HEADERS.items():
+            fh = (self.tmp / name).open("w")
+            fh.write(",".join(header) + "\n")
+            self._files[name] = fh
+        self.overwrite = overwrite
+
+    def write(self, name: str, t: FloatArray, values: FloatArray) -> None:
+        """Append rows to ``commands.csv``, ``imu.csv`` or ``actuators.csv``."""
+        _write_rows(self._files[name], t, values)
+
+    def __enter__(self) -> RunWriter:
+        """Enter the context."""
+        return self
+
+    def __exit__(
+        self,
+        kind: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        """Finish (rename into place) or, on an exception, remove everything."""
+        for fh in self._files.values():
+            fh.close()
+        if kind is not None:
+            shutil.rmtree(self.tmp, ignore_errors=True)
+            return
+        (self.tmp / "meta.json").write_text(json.dumps(self.meta, indent=2) + "\n")
+        if self.overwrite and self.folder.exists():
+            shutil.rmtree(self.folder)
+        self.tmp.rename(self.folder)

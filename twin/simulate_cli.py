@@ -1,0 +1,116 @@
+"""``twin simulate``: run a configuration on a signal and write a ``twin-run/1`` folder."""
+
+from __future__ import annotations
+
+import sys
+import time
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from twin.chain.config import motion_system
+from twin.chain.simulate import Run, prepare
+from twin.runs import RunWriter, read_commands
+from twin.signals import builtin_signal
+from twin.trajectory import Trajectory
+
+if TYPE_CHECKING:
+    from twin.record import Recorder
+
+
+def load_signal(spec: str, rate_hz: float = 100.0) -> Trajectory:
+    """Return commands from a ``commands.csv`` path (or a run folder) or a built-in name."""
+    path = Path(spec)
+    if path.is_dir():
+        path = path / "commands.csv"
+    if path.suffix == ".csv" or path.exists():
+        return read_commands(path)
+    return builtin_signal(spec, rate_hz)
+
+
+def _legs_at(t_cmd: np.ndarray, t: np.ndarray, legs: np.ndarray) -> np.ndarray:
+    return np.column_stack([np.interp(t_cmd, t, legs[:, j]) for j in range(6)])
+
+
+def run_to_folder(
+    config: str,
+    signal: str,
+    model: str = "full",
+    seed: int = 0,
+    out: str | Path | None = None,
+    rrd: str | None = None,
+    connect: str | None = None,
+    limit_mode: str = "limit",
+    resonance: bool = False,
+    overwrite: bool = False,
+    quiet: bool = False,
+) -> Path:
+    """Simulate and write the run folder (see ``twin simulate --help``); return its path."""
+    commands = load_signal(signal)
+    ms = motion_system(config)
+    if resonance:
+        ms = ms.replace(name=f"{ms.name}+resonance", resonance=True)
+    run = prepare(ms, commands, model, seed, limit_mode=limit_mode)
+    name = Path(signal).stem if Path(signal).exists() else signal
+    folder = Path(out) if out else Path("out") / f"{run.config.name}-{model}-{name}-seed{seed}"
+    meta = {
+        "platform": run.config.platform,
+        "platform_config": run.config.to_meta(),
+        "command_rate_hz": commands.rate_hz,
+        "imu": {"position_m": list(run.imu_spec.position_m), "rate_hz": run.imu_spec.rate_hz},
+        "notes": f"simulated by twin ({model} model) from signal {signal!r}",
+        "model": model,
+        "seed": seed,
+    }
+    recorder = None
+    if rrd is not None or connect is not None:
+        from twin.record import Recorder
+
+        recorder = Recorder(run.platform.geometry, folder.name, rrd=rrd, connect=connect)
+    start = time.perf_counter()
+    try:
+        _write(run, commands, meta, folder, overwrite, recorder, quiet)
+    except BaseException:
+        if recorder is not None:
+            recorder.abort()
+        raise
+    if recorder is not None:
+        recorder.close()
+    wall = time.perf_counter() - start
+    if not quiet:
+        print(file=sys.stderr)
+        print(f"wrote {folder} ({commands.duration:.1f} s simulated in {wall:.1f} s, "
+              f"{commands.duration / wall:.0f}x real time)")  # fmt: skip
+        print(run.limits.summary())
+        for note in run.notes:
+            print(f"note: {note}")
+    return folder
+
+
+def _write(
+    run: Run,
+    commands: Trajectory,
+    meta: dict,
+    folder: Path,
+    overwrite: bool,
+    recorder: Recorder | None,
+    quiet: bool,
+) -> None:
+    """Stream the run's chunks into the run folder (and the recorder)."""
+    t_cmd = commands.t
+    with RunWriter(folder, meta, overwrite=overwrite) as writer:
+        writer.write("commands.csv", t_cmd, commands.values)
+        for response, imu in run.chunks():
+            end = response.t[-1] + 0.5 / response.rate_hz
+            sel = (t_cmd >= response.t[0] - 1e-9) & (t_cmd < end)
+            writer.write("actuators.csv", t_cmd[sel], _legs_at(t_cmd[sel], response.t,
+                                                              response.legs))  # fmt: skip
+            writer.write("imu.csv", imu.t, np.hstack([imu.accel, imu.gyro]))
+            if recorder is not None:
+                recorder.log(response, imu)
+            if not quiet:
+                print(f"\r  simulated {response.t[-1] - commands.t0:7.1f} / "
+                      f"{commands.duration:.1f} s", end="", file=sys.stderr)  # fmt: skip
+        writer.meta["limits"] = run.limits.to_dict()
+        writer.meta["run_notes"] = run.notes

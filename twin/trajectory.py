@@ -1,0 +1,187 @@
+"""Uniformly sampled multichannel signals: the currency passed between the chain's blocks.
+
+A :class:`Trajectory` is a uniformly sampled signal of shape ``(n, k)`` with a start time and
+a rate, usually the six UGP pose offsets of Eq A.1 (surge, sway, heave [m], roll, pitch,
+yaw [rad], thesis base frame). It can be evaluated between its samples with a cubic spline,
+which also gives consistent first and second derivatives.
+
+Examples
+--------
+>>> import numpy as np
+>>> tr = Trajectory(rate_hz=100.0, values=np.zeros((201, 6)))
+>>> tr.duration, tr.t[-1]
+(2.0, 2.0)
+
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from functools import cached_property
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy.interpolate import CubicSpline
+
+from twin.errors import SignalError
+from twin.frames import DOF_NAMES
+
+FloatArray = NDArray[np.float64]
+
+
+@dataclass(frozen=True, eq=False)
+class Trajectory:
+    """A uniformly sampled signal.
+
+    Attributes
+    ----------
+    rate_hz : float
+        Sample rate [Hz].
+    values : ndarray, shape (n, k)
+        Samples; for a pose, the offsets from neutral (m, rad).
+    t0 : float
+        Time of the first sample [s].
+    names : tuple of str
+        Channel names (``k`` of them); the six DOF names by default.
+
+    """
+
+    rate_hz: float
+    values: FloatArray
+    t0: float = 0.0
+    names: tuple[str, ...] = field(default=DOF_NAMES)
+
+    def __post_init__(self) -> None:
+        """Validate rate, shape and finiteness."""
+        if not np.isfinite(self.rate_hz) or self.rate_hz <= 0:
+            raise SignalError(f"sample rate must be a positive number of Hz; got {self.rate_hz}")
+        v = np.asarray(self.values, dtype=float)
+        if v.ndim != 2 or v.shape[1] != len(self.names) or v.shape[0] < 2:
+            raise SignalError(
+                f"values must have shape (n >= 2, {len(self.names)}) for channels "
+                f"{', '.join(self.names)}; got {v.shape}"
+            )
+        bad = ~np.isfinite(v)
+        if bad.any():
+            row, col = np.argwhere(bad)[0]
+            raise SignalError(
+                f"{self.names[col]} is not finite at sample {row} (t = "
+                f"{self.t0 + row / self.rate_hz:.4f} s); all samples must be finite numbers"
+            )
+        if not np.isfinite(self.t0):
+            raise SignalError(f"t0 must be finite; got {self.t0}")
+        object.__setattr__(self, "values", v)
+
+    @property
+    def n(self) -> int:
+        """Number of samples."""
+        return self.values.shape[0]
+
+    @property
+    def dt(self) -> float:
+        """Sample period [s]."""
+        return 1.0 / self.rate_hz
+
+    @property
+    def t(self) -> FloatArray:
+        """Sample times [s]."""
+        return self.t0 + np.arange(self.n) / self.rate_hz
+
+    @property
+    def duration(self) -> float:
+        """Time from the first to the last sample [s]."""
+        return (self.n - 1) / self.rate_hz
+
+    def replace(self, values: ArrayLike) -> Trajectory:
+        """Return a trajectory on the same time grid with other values."""
+        return Trajectory(self.rate_hz, np.asarray(values, dtype=float), self.t0, self.names)
+
+    @cached_property
+    def spline(self) -> CubicSpline:
+        """Cubic spline through the samples (not-a-knot ends)."""
+        return CubicSpline(self.t, self.values, axis=0)
+
+    def at(self, t: ArrayLike, derivative: int = 0) -> FloatArray:
+        """Evaluate the signal (or a derivative) at arbitrary times.
+
+        Times before the first sample hold the first value, times after the last hold the
+        last value (derivatives are zero there).
+
+        Parameters
+        ----------
+        t : array_like, shape (m,)
+            Times [s].
+        derivative : int
+            0, 1 or 2.
+
+        Returns
+        -------
+        ndarray, shape (m, k)
+
+        """
+        tt = np.asarray(t, dtype=float)
+        t_end = self.t0 + self.duration
+        inside = np.clip(tt, self.t0, t_end)
+        out = self.spline(inside, derivative)
+        if derivative:
+            out[(tt < self.t0) | (tt > t_end)] = 0.0
+        return out
+
+    def resample(self, rate_hz: float, t0: float | None = None, n: int | None = None) -> Trajectory:
+        """Evaluate on another uniform grid (cubic spline).
+
+        Parameters
+        ----------
+        rate_hz : float
+            New rate [Hz].
+        t0 : float, optional
+            First sample time; this trajectory's by default.
+        n : int, optional
+            Number of samples; by default as many as fit in this trajectory's span.
+
+        """
+        start = self.t0 if t0 is None else t0
+        if n is None:
+            n = int(np.floor((self.t0 + self.duration - start) * rate_hz + 1e-9)) + 1
+        times = start + np.arange(n) / rate_hz
+        return Trajectory(rate_hz, self.at(times), start, self.names)
+
+
+def uniform_rate(t: ArrayLike, what: str = "time column", tol: float = 0.01) -> float:
+    """Return the sample rate of a uniform time grid, or raise naming the first bad row.
+
+    Parameters
+    ----------
+    t : array_like, shape (n,)
+        Sample times [s].
+    what : str
+        Name used in error messages (e.g. a file name).
+    tol : float
+        Allowed deviation of any time from the uniform grid, as a fraction of the step (so
+        times written with limited decimals still pass).
+
+    Raises
+    ------
+    SignalError
+        If fewer than 2 samples, a non-finite or non-increasing time, or non-uniform steps.
+
+    """
+    tt = np.asarray(t, dtype=float)
+    if tt.ndim != 1 or tt.size < 2:
+        raise SignalError(f"{what}: needs at least 2 samples")
+    if not np.all(np.isfinite(tt)):
+        raise SignalError(f"{what}: time is not finite at row {int(np.argmin(np.isfinite(tt)))}")
+    d = np.diff(tt)
+    if np.any(d <= 0):
+        raise SignalError(
+            f"{what}: time must increase strictly; row {int(np.argmax(d <= 0)) + 1} does not"
+        )
+    step = (tt[-1] - tt[0]) / (tt.size - 1)
+    off = np.abs(tt - (tt[0] + np.arange(tt.size) * step)) > tol * step
+    if off.any():
+        row = int(np.argmax(off))
+        raise SignalError(
+            f"{what}: time steps must be uniform (mean {step:.6g} s); row {row} is at "
+            f"{tt[row]:.6g} s, {tt[row] - tt[0] - row * step:+.3g} s off the grid"
+        )
+    return 1.0 / step
