@@ -15,6 +15,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from twin.errors import ActuatorLimitError
+from twin.geometry import Geometry
+from twin.platforms import PlatformFacts
 
 FloatArray = NDArray[np.float64]
 MODES = ("limit", "strict")
@@ -98,6 +100,12 @@ class ActuatorLimits:
         """Check the mode."""
         if self.mode not in MODES:
             raise ValueError(f"limit mode must be one of {MODES}; got {self.mode!r}")
+
+    @classmethod
+    def of(cls, geometry: Geometry, facts: PlatformFacts, mode: str = "limit") -> ActuatorLimits:
+        """Return the limits of a platform: stroke from its geometry, the rest from its facts."""
+        return cls(geometry.leg_min, geometry.leg_max, facts.max_velocity,
+                   facts.max_acceleration, mode)  # fmt: skip
 
     def check(
         self,

@@ -93,10 +93,7 @@ class FullPlatform:
         self.model = load_model(platform).__copy__()
         self.geometry = load_geometry(platform)
         facts = load_facts(platform)
-        self.limits = ActuatorLimits(
-            self.geometry.leg_min, self.geometry.leg_max, facts.max_velocity,
-            facts.max_acceleration, limit_mode,
-        )  # fmt: skip
+        self.limits = ActuatorLimits.of(self.geometry, facts, limit_mode)
         self.own_lag_s = np.array(facts.equivalent_delay_s)
         self.rate_hz = 1.0 / self.model.opt.timestep
         self._adr = {

@@ -46,11 +46,7 @@ class ReducedPlatform:
     def __init__(self, platform: str, rate_hz: float | None = None, limit_mode: str = "limit"):
         self.platform = platform
         self.geometry = load_geometry(platform)
-        facts = load_facts(platform)
-        self.limits = ActuatorLimits(
-            self.geometry.leg_min, self.geometry.leg_max, facts.max_velocity,
-            facts.max_acceleration, limit_mode,
-        )  # fmt: skip
+        self.limits = ActuatorLimits.of(self.geometry, load_facts(platform), limit_mode)
         self.own_lag_s = np.zeros(6)
         self.rate_hz = rate_hz or 1.0 / load_model(platform).opt.timestep
 
