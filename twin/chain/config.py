@@ -38,7 +38,7 @@ from twin.chain.delay import Delay
 from twin.chain.filter import PlatformFilter
 from twin.chain.noise import MotionNoise
 from twin.chain.resonance import Resonance
-from twin.errors import SignalError, UnknownPlatformError
+from twin.errors import UnknownPlatformError
 from twin.platforms import PLATFORMS, load_facts
 from twin.thesis import TABLE_6_3
 
@@ -200,10 +200,3 @@ def motion_system(name: str) -> MotionSystem:
     raise UnknownPlatformError(
         f"unknown configuration {name!r}; expected one of {', '.join(config_names())}"
     )
-
-
-def check_delay(value: float) -> float:
-    """Validate a user-given delay [s] (finite, >= 0)."""
-    if not np.isfinite(value) or value < 0:
-        raise SignalError(f"delay must be a finite number of seconds >= 0; got {value}")
-    return float(value)

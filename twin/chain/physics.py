@@ -13,6 +13,7 @@ is carried between chunks, so results do not depend on the chunk size.
 from __future__ import annotations
 
 from collections.abc import Iterator
+from dataclasses import dataclass
 
 import mujoco
 import numpy as np
@@ -23,7 +24,7 @@ from twin.chain.limits import ActuatorLimits, LimiterState, LimitReport
 from twin.chain.noise import NoiseRealisation
 from twin.chain.response import PlatformResponse
 from twin.frames import MJ_FROM_THESIS, euler_from_matrix, matrix_from_quat
-from twin.geometry import load_geometry
+from twin.geometry import Geometry, load_geometry
 from twin.kinematics import leg_rates
 from twin.platforms import load_facts, load_model
 from twin.trajectory import Trajectory
@@ -57,6 +58,47 @@ def reference_motion(
         rate[:, 2] += np.interp(t, tn, noise.velocity)
         acc[:, 2] += np.interp(t, tn, noise.acceleration)
     return pose, rate, acc
+
+
+@dataclass(frozen=True, eq=False)
+class ReferenceChunk:
+    """Pose and leg references for one chunk of a run, at the platform rate.
+
+    Attributes
+    ----------
+    t : ndarray, shape (n,)
+        Times [s].
+    pose, rate, acc : ndarray, shape (n, 6)
+        Pose reference and its first and second derivatives (noise included).
+    lengths, velocities, accelerations : ndarray, shape (n, 6)
+        Leg references from the exact inverse kinematics.
+
+    """
+
+    t: FloatArray
+    pose: FloatArray
+    rate: FloatArray
+    acc: FloatArray
+    lengths: FloatArray
+    velocities: FloatArray
+    accelerations: FloatArray
+
+
+def reference_chunks(
+    commands: Trajectory,
+    noise: NoiseRealisation | None,
+    geometry: Geometry,
+    rate_hz: float,
+    chunk_s: float,
+) -> Iterator[ReferenceChunk]:
+    """Yield the references of a run chunk by chunk (shared by full and reduced platforms)."""
+    t_all = physics_grid(commands, rate_hz)
+    step = max(1, round(chunk_s * rate_hz))
+    for k0 in range(0, t_all.size, step):
+        t = t_all[k0 : k0 + step]
+        pose, rate, acc = reference_motion(commands, t, noise)
+        legs = leg_rates(geometry, pose, rate, acc)
+        yield ReferenceChunk(t, pose, rate, acc, *legs)
 
 
 def physics_grid(commands: Trajectory, rate_hz: float) -> FloatArray:
@@ -135,21 +177,15 @@ class FullPlatform:
         mujoco.mj_getState(model, data, state, _STATE)
         warm = data.qacc_warmstart.copy()
         report = report if report is not None else LimitReport(self.limits.mode, self.rate_hz)
-        neutral = self.geometry.neutral_lengths
-        limiter = LimiterState(neutral.copy(), np.zeros(6))
-        t_all = physics_grid(commands, self.rate_hz)
-        step = max(1, round(chunk_s * self.rate_hz))
-        for k0 in range(0, t_all.size, step):
-            t = t_all[k0 : k0 + step]
-            pose, rate, acc = reference_motion(commands, t, noise)
-            lengths, velocities, accelerations = leg_rates(self.geometry, pose, rate, acc)
+        limiter = LimiterState(self.geometry.neutral_lengths.copy(), np.zeros(6))
+        for ref in reference_chunks(commands, noise, self.geometry, self.rate_hz, chunk_s):
             lengths, velocities = self.limits.apply(
-                t, lengths, velocities, accelerations, limiter, report
+                ref.t, ref.lengths, ref.velocities, ref.accelerations, limiter, report
             )
             ctrl = np.hstack([lengths, velocities])[None]
             states, sens = rollout.rollout(model, data, state, ctrl, initial_warmstart=warm[None])
             state, warm = states[0, -1], data.qacc_warmstart.copy()
-            yield self._response(t, pose, sens[0])
+            yield self._response(ref.t, ref.pose, sens[0])
 
     def _response(self, t: FloatArray, command: FloatArray, s: FloatArray) -> PlatformResponse:
         """Turn sensor rows (sensors at the start of each step, i.e. at ``t``) into a response."""

@@ -15,10 +15,9 @@ import numpy as np
 
 from twin.chain.limits import ActuatorLimits, LimitReport
 from twin.chain.noise import NoiseRealisation
-from twin.chain.physics import CHUNK_S, physics_grid, reference_motion
+from twin.chain.physics import CHUNK_S, reference_chunks
 from twin.chain.response import PlatformResponse, rigid_motion
 from twin.geometry import load_geometry
-from twin.kinematics import leg_rates
 from twin.platforms import load_facts, load_model
 from twin.trajectory import Trajectory
 
@@ -59,12 +58,7 @@ class ReducedPlatform:
     ) -> Iterator[PlatformResponse]:
         """Evaluate the response chunk by chunk (same arguments as :meth:`FullPlatform.run`)."""
         report = report if report is not None else LimitReport(self.limits.mode, self.rate_hz)
-        t_all = physics_grid(commands, self.rate_hz)
-        step = max(1, round(chunk_s * self.rate_hz))
-        for k0 in range(0, t_all.size, step):
-            t = t_all[k0 : k0 + step]
-            pose, rate, acc = reference_motion(commands, t, noise)
-            lengths, velocities, accelerations = leg_rates(self.geometry, pose, rate, acc)
-            self.limits.check(t, lengths, velocities, accelerations, report)
-            vel, accel, omega, omega_dot = rigid_motion(pose, rate, acc)
-            yield PlatformResponse(t, pose, pose.copy(), vel, accel, omega, omega_dot, lengths)
+        for ref in reference_chunks(commands, noise, self.geometry, self.rate_hz, chunk_s):
+            self.limits.check(ref.t, ref.lengths, ref.velocities, ref.accelerations, report)
+            motion = rigid_motion(ref.pose, ref.rate, ref.acc)
+            yield PlatformResponse(ref.t, ref.pose, ref.pose.copy(), *motion, ref.lengths)

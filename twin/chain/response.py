@@ -8,7 +8,6 @@ from dataclasses import dataclass, fields
 import numpy as np
 from numpy.typing import NDArray
 
-from twin.chain.limits import LimitReport
 from twin.frames import euler_rate_matrix, euler_rate_matrix_dot, rotation_matrix
 
 FloatArray = NDArray[np.float64]
@@ -66,26 +65,6 @@ class PlatformResponse:
             arrays = [getattr(c, f.name) for c in chunks]
             out[f.name] = None if arrays[0] is None else np.concatenate(arrays)
         return cls(**out)
-
-
-@dataclass
-class RunResult:
-    """A platform run: the response plus what happened to the commands on the way.
-
-    Attributes
-    ----------
-    response : PlatformResponse
-        Cabin motion at the platform rate.
-    limits : LimitReport
-        Actuator-limit counts.
-    notes : list of str
-        Anything the user should know (e.g. a delay shorter than the platform's own lag).
-
-    """
-
-    response: PlatformResponse
-    limits: LimitReport
-    notes: list[str]
 
 
 def rigid_motion(pose: FloatArray, rate: FloatArray, acc: FloatArray) -> tuple[FloatArray, ...]:
