@@ -3,6 +3,7 @@ PYTHON ?= python3
 VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
+NBSTAMP := $(VENV)/.installed-notebooks
 
 .PHONY: demo test test-all lint models bench clean
 
@@ -12,6 +13,10 @@ $(STAMP): pyproject.toml
 	$(BIN)/python -m pip install --quiet -e '.[dev]'
 	touch $(STAMP)
 
+$(NBSTAMP): $(STAMP)
+	$(BIN)/python -m pip install --quiet -e '.[dev,notebooks]'
+	touch $(NBSTAMP)
+
 demo: $(STAMP)
 	$(BIN)/twin workspace mpi
 	$(BIN)/twin workspace srs
@@ -19,7 +24,7 @@ demo: $(STAMP)
 test: $(STAMP)
 	$(BIN)/python -m pytest -q
 
-test-all: $(STAMP)
+test-all: $(NBSTAMP)
 	$(BIN)/python -m pytest -q -m ''
 
 lint: $(STAMP)

@@ -10,16 +10,17 @@ Prints, per platform:
 Run with ``--quick`` for a 10 min "long" run instead of 1 h.
 """
 
+import resource
+import subprocess
 import sys
 import tempfile
 import time
-import tracemalloc
 from pathlib import Path
 
 import mujoco
 import numpy as np
 
-from twin.chain.simulate import prepare
+from twin.chain.simulate import default_imu, prepare
 from twin.platforms import load_model
 from twin.signals import describing_signal
 from twin.trajectory import Trajectory
@@ -34,10 +35,11 @@ def raw_steps_per_s(platform, n=30000):
     return n / (time.perf_counter() - t0)
 
 
-def twin_steps_per_s(platform, model="full"):
-    cmd = describing_signal(2, "pitch").commands
-    run = prepare(platform, cmd, model, seed=1)
+def twin_steps_per_s(platform, model="full", commands=None):
+    """Physics-rate samples per second of wall time for a whole run (prepare included)."""
+    cmd = commands if commands is not None else describing_signal(2, "pitch").commands
     t0 = time.perf_counter()
+    run = prepare(platform, cmd, model, seed=1)
     steps = sum(len(resp.t) for resp, _ in run.chunks())
     return steps / (time.perf_counter() - t0), steps
 
@@ -50,40 +52,73 @@ def long_commands(duration_s):
     return Trajectory(100.0, v)
 
 
-def peak_mb_streaming(duration_s, model="reduced"):
-    """Peak traced memory [MB] of a run streamed to disk chunk by chunk."""
+def memory_case(duration_s, sink):
+    """Run one reduced ``mpi`` run of ``duration_s`` into ``sink``; print peak RSS [MB]."""
     from twin.runs import RunWriter
 
     cmd = long_commands(duration_s)
-    tracemalloc.start()
-    run = prepare("mpi", cmd, model, seed=1)
+    run = prepare("mpi", cmd, "reduced", seed=1)
     meta = {"platform": "mpi", "platform_config": run.config.to_meta(), "command_rate_hz": 100.0,
             "imu": {"position_m": [0, 0, 0], "rate_hz": 819.2}}  # fmt: skip
-    with tempfile.TemporaryDirectory() as tmp, RunWriter(Path(tmp) / "r", meta) as w:
-        w.write("commands.csv", cmd.t, cmd.values)
-        for _resp, imu in run.chunks():
-            w.write("imu.csv", imu.t, np.hstack([imu.accel, imu.gyro]))
-    peak = tracemalloc.get_traced_memory()[1] / 1e6
-    tracemalloc.stop()
-    return peak
+    with tempfile.TemporaryDirectory() as tmp:
+        recorder = None
+        if sink == "rrd":
+            from twin.record import Recorder
+
+            recorder = Recorder(run.platform.geometry, "bench", rrd=str(Path(tmp) / "r.rrd"))
+        if sink == "none":
+            for _ in run.chunks():
+                pass
+        else:
+            with RunWriter(Path(tmp) / "r", meta) as w:
+                w.write("commands.csv", cmd.t, cmd.values)
+                for resp, imu in run.chunks():
+                    w.write("imu.csv", imu.t, np.hstack([imu.accel, imu.gyro]))
+                    if recorder is not None:
+                        recorder.log(resp, imu)
+        if recorder is not None:
+            recorder.close()
+    print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024)
+
+
+def peak_rss_mb(duration_s, sink):
+    """Peak resident memory [MB] of :func:`memory_case` in a fresh process."""
+    out = subprocess.run(
+        [sys.executable, __file__, "--memory-case", str(duration_s), sink],
+        check=True, capture_output=True, text=True,
+    )  # fmt: skip
+    return float(out.stdout.split()[-1])
 
 
 def main():
+    if "--memory-case" in sys.argv:
+        k = sys.argv.index("--memory-case")
+        memory_case(float(sys.argv[k + 1]), sys.argv[k + 2])
+        return
     quick = "--quick" in sys.argv
     for platform in ("mpi", "srs"):
         raw = raw_steps_per_s(platform)
         full, _ = twin_steps_per_s(platform, "full")
-        red, _ = twin_steps_per_s(platform, "reduced")
         print(f"{platform}: raw mj_step {raw:,.0f} steps/s; twin full {full:,.0f} steps/s "
               f"-> ratio {full / raw:.2f} (goal >= 0.8)")  # fmt: skip
-        print(f"{platform}: full model real-time factor {full / 1000:.0f}x at 1 kHz physics; "
-              f"reduced model {red / 1000:.0f}x (goal >= 1000x)")  # fmt: skip
+        red_short, _ = twin_steps_per_s(platform, "reduced")
+        red_long, _ = twin_steps_per_s(platform, "reduced", long_commands(600.0))
+        rate = default_imu(platform).rate_hz
+        print(f"{platform}: real-time factor: full model {full / 1000:.0f}x (1 kHz physics); "
+              f"reduced model {red_long / rate:.0f}x on a 10 min run, {red_short / rate:.0f}x on "
+              f"the 32 s multi-sine ({rate:g} Hz, the IMU rate; goal >= 1000x)")  # fmt: skip
     long_s = 600.0 if quick else 3600.0
-    short = peak_mb_streaming(60.0)
-    long = peak_mb_streaming(long_s)
-    print(f"peak memory, reduced mpi run streamed to disk: 1 min {short:.0f} MB, "
-          f"{long_s / 60:.0f} min {long:.0f} MB (ratio {long / short:.2f}; the noise realisation "
-          "and the 100 Hz commands are the only parts that grow)")  # fmt: skip
+    label = f"{long_s / 60:.0f} min"
+    short = peak_rss_mb(60.0, "folder")
+    cases = {sink: peak_rss_mb(long_s, sink) for sink in ("none", "folder", "rrd")}
+    print(f"peak RSS, reduced mpi run: 1 min to a run folder {short:.0f} MB; {label}: no sink "
+          f"{cases['none']:.0f} MB, run folder {cases['folder']:.0f} MB, run folder + .rrd "
+          f"{cases['rrd']:.0f} MB")  # fmt: skip
+    print(f"  sink cost over no sink ({label}): run folder {cases['folder'] / cases['none']:.2f}, "
+          f".rrd {cases['rrd'] / cases['none']:.2f} (goal: ~1, the sinks stream to disk); growth "
+          f"1 min -> {label} {cases['folder'] - short:+.0f} MB = the 100 Hz commands and their "
+          f"filtered and delayed copies ({3 * 48 * 100 * (long_s - 60) / 1e6:.0f} MB), held "
+          "whole; physics, noise and IMU are streamed")  # fmt: skip
 
 
 if __name__ == "__main__":

@@ -54,7 +54,7 @@ def test_seeded_runs_are_bit_identical_and_chunking_does_not_matter():
     assert np.array_equal(a.response.pose, b.response.pose)
     assert not np.array_equal(a.imu.accel, c.imu.accel)
     run = prepare("mpi", cmd, "full", seed=5)
-    chunks = list(run.platform.run(run.platform_input, run.noise, chunk_s=3.3))
+    chunks = list(run.platform.run(run.platform_input, run.noise_stream(), chunk_s=3.3))
     pose = np.concatenate([ch.pose for ch in chunks])
     assert np.array_equal(pose, a.response.pose)
 
@@ -76,6 +76,26 @@ def test_actuator_limits_are_counted_and_applied():
     assert np.abs(v).max() < 0.3 * 1.1  # Table 5.1 0.3 m/s, with PD tracking error
     quiet = simulate("mpi-2008", describing_signal(1, "heave").commands, "full")
     assert quiet.limits.total == 0
+
+
+@pytest.mark.parametrize("config", ["mpi-2008", "mpi"])
+def test_reduced_model_counts_limits_like_an_exact_check_of_every_sample(config):
+    # the reduced platform computes leg rates only where a bound allows a violation; the
+    # counts must equal those of checking every sample exactly
+    run = prepare(config, _too_fast(), "reduced", seed=2)
+    sim = run.collect()
+    from twin.chain.limits import LimitReport
+    from twin.chain.physics import reference_chunks
+
+    plat = run.platform
+    exact = LimitReport("limit", plat.rate_hz)
+    for ref in reference_chunks(
+        run.platform_input, run.noise_stream(), plat.geometry, plat.rate_hz, 10.0
+    ):
+        plat.limits.check(ref.t, ref.lengths, ref.velocities, ref.accelerations, exact)
+    assert exact.samples["velocity"] > 0 and exact.samples["acceleration"] > 0
+    assert sim.limits.samples == exact.samples
+    assert sim.limits.first == exact.first
 
 
 def test_strict_mode_rejects_commands_beyond_limits():

@@ -28,6 +28,7 @@ from numpy.typing import NDArray
 
 from twin.agard.describing_function import LagDelayFit, describing_function, fit_lag_delay
 from twin.chain.config import MotionSystem, motion_system
+from twin.chain.reduced import ReducedPlatform
 from twin.chain.simulate import Platform, make_platform, simulate
 from twin.errors import SignalError
 from twin.frames import DOF_NAMES
@@ -266,10 +267,7 @@ class Comparison:
 
     def plot(self, path: str | None = None):
         """Bode plot per DOF: full, reduced and analytic Eq 5.11; saved to ``path`` if given."""
-        import matplotlib
-
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
+        import matplotlib.pyplot as plt  # Agg by itself when there is no display
 
         n = len(self.dofs)
         fig, axes = plt.subplots(2, n, figsize=(3.2 * n, 5.5), squeeze=False, sharex=True)
@@ -316,7 +314,8 @@ def compare(
     """
     ms = motion_system(config) if isinstance(config, str) else config
     ms_quiet = ms.replace(name=ms.name, noise=False)
-    full, reduced = make_platform(ms.platform, "full"), make_platform(ms.platform, "reduced")
+    full = make_platform(ms.platform, "full")
+    reduced = ReducedPlatform(ms.platform, rate_hz=full.rate_hz)  # same grid, sample by sample
     out, analytic = {}, {}
     for dof in _check_dofs(dofs):
         if progress:

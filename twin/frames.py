@@ -87,32 +87,55 @@ def euler_rate_matrix(angles: ArrayLike) -> NDArray[np.float64]:
     return R
 
 
-def euler_rate_matrix_dot(angles: ArrayLike, rates: ArrayLike) -> NDArray[np.float64]:
-    """Return the time derivative of R (Eq A.4) along Euler-angle rates.
+def angular_motion(
+    angles: ArrayLike, rates: ArrayLike, accelerations: ArrayLike | None = None
+) -> tuple[NDArray[np.float64], NDArray[np.float64] | None]:
+    """Angular velocity and acceleration in base axes from Euler angles and their derivatives.
+
+    ``omega = R eta_dot`` and ``omega_dot = R eta_ddot + R_dot eta_dot`` (Eq A.4), written out
+    component by component: several times faster than the matrix products for long arrays.
 
     Parameters
     ----------
     angles, rates : array_like, shape (..., 3)
         Euler angles [rad] and their rates [rad/s].
+    accelerations : array_like, shape (..., 3), optional
+        Euler-angle accelerations [rad/s^2].
 
     Returns
     -------
-    ndarray, shape (..., 3, 3)
-        dR/dt, so that ``omega_dot = R @ eta_ddot + Rdot @ eta_dot``.
+    omega, omega_dot : ndarray, shape (..., 3)
+        In base axes [rad/s, rad/s^2]; ``omega_dot`` is None without ``accelerations``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> eta, rate = np.array([0.1, -0.2, 0.3]), np.array([0.4, 0.5, -0.6])
+    >>> w, _ = angular_motion(eta, rate)
+    >>> bool(np.allclose(w, euler_rate_matrix(eta) @ rate))
+    True
 
     """
     a = np.asarray(angles, dtype=float)
     r = np.asarray(rates, dtype=float)
     ct, st = np.cos(a[..., 1]), np.sin(a[..., 1])
     cp, sp = np.cos(a[..., 2]), np.sin(a[..., 2])
-    td, pd = r[..., 1], r[..., 2]
-    Rd = np.zeros((*a.shape[:-1], 3, 3))
-    Rd[..., 0, 0] = -st * cp * td - ct * sp * pd
-    Rd[..., 0, 1] = -cp * pd
-    Rd[..., 1, 0] = -st * sp * td + ct * cp * pd
-    Rd[..., 1, 1] = -sp * pd
-    Rd[..., 2, 0] = -ct * td
-    return Rd
+    fd, td, pd = r[..., 0], r[..., 1], r[..., 2]
+    ctcp, ctsp = ct * cp, ct * sp
+    omega = np.stack([ctcp * fd - sp * td, ctsp * fd + cp * td, pd - st * fd], axis=-1)
+    if accelerations is None:
+        return omega, None
+    acc = np.asarray(accelerations, dtype=float)
+    fdd, tdd, pdd = acc[..., 0], acc[..., 1], acc[..., 2]
+    omega_dot = np.stack(
+        [
+            ctcp * fdd - sp * tdd - (st * cp * td + ctsp * pd) * fd - cp * pd * td,
+            ctsp * fdd + cp * tdd + (ctcp * pd - st * sp * td) * fd - sp * pd * td,
+            pdd - st * fdd - ct * td * fd,
+        ],
+        axis=-1,
+    )
+    return omega, omega_dot
 
 
 def euler_from_matrix(T: ArrayLike) -> NDArray[np.float64]:

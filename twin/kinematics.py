@@ -25,7 +25,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import brentq
 
 from twin.errors import ForwardKinematicsError, OutOfStrokeError, PoseError
-from twin.frames import DOF_NAMES, euler_rate_matrix, euler_rate_matrix_dot, rotation_matrix
+from twin.frames import DOF_NAMES, angular_motion, euler_rate_matrix, rotation_matrix
 from twin.geometry import Geometry
 
 FloatArray = NDArray[np.float64]
@@ -249,8 +249,12 @@ def forward(
 
 
 def leg_rates(
-    geo: Geometry, pose: ArrayLike, pose_rate: ArrayLike, pose_acc: ArrayLike | None = None
-) -> tuple[FloatArray, FloatArray, FloatArray | None]:
+    geo: Geometry,
+    pose: ArrayLike,
+    pose_rate: ArrayLike | None = None,
+    pose_acc: ArrayLike | None = None,
+    rotation: FloatArray | None = None,
+) -> tuple[FloatArray, FloatArray | None, FloatArray | None]:
     """Leg lengths, velocities and accelerations from a pose and its exact derivatives.
 
     Uses l_dot = n . L_dot and l_ddot = n . L_ddot + (|L_dot|^2 - l_dot^2) / l, with
@@ -261,40 +265,53 @@ def leg_rates(
     ----------
     geo : Geometry
         The platform.
-    pose, pose_rate : array_like, shape (..., 6)
-        Pose and its time derivative (Euler-angle rates for the rotations).
+    pose : array_like, shape (..., 6)
+        Pose offsets from neutral (m, rad).
+    pose_rate : array_like, shape (..., 6), optional
+        Its time derivative (Euler-angle rates for the rotations); leg velocities are
+        returned only if given.
     pose_acc : array_like, shape (..., 6), optional
-        Second derivative; leg accelerations are returned only if given.
+        Second derivative; leg accelerations are returned only if given (with ``pose_rate``).
+    rotation : ndarray, shape (..., 3, 3), optional
+        T_c^b of the poses if already computed (:func:`twin.frames.rotation_matrix`).
 
     Returns
     -------
     lengths, velocities, accelerations : ndarray, shape (..., 6)
-        ``accelerations`` is None if ``pose_acc`` was not given.
+        ``velocities`` and ``accelerations`` are None when their inputs were not given.
 
     """
     p = as_pose(pose)
+    # Component by component (each array (..., 6) over the legs): 3x faster than einsum/cross.
+    T = rotation_matrix(p[..., 3:]) if rotation is None else rotation
+    A, B = geo.cabin_gimbals, geo.base_gimbals
+    ab = [sum(T[..., i, j, None] * A[:, j] for j in range(3)) for i in range(3)]
+    L = [(geo.neutral_ugp[i] + p[..., i, None]) + ab[i] - B[:, i] for i in range(3)]
+    length = np.sqrt(L[0] ** 2 + L[1] ** 2 + L[2] ** 2)
+    inv = 1.0 / length
+    if pose_rate is None:
+        return length, None, None
     pd = np.broadcast_to(as_pose(pose_rate, "pose_rate"), p.shape)
-    a_b = _cabin_gimbals_in_base(geo, p)
-    L = (geo.neutral_ugp + p[..., :3])[..., None, :] + a_b - geo.base_gimbals
-    length = np.linalg.norm(L, axis=-1)
-    n = L / length[..., None]
-    omega = np.einsum("...ij,...j->...i", euler_rate_matrix(p[..., 3:]), pd[..., 3:])
-    w_x_a = np.cross(omega[..., None, :], a_b)
-    Ld = pd[..., None, :3] + w_x_a
-    ld = np.einsum("...ki,...ki->...k", n, Ld)
-    if pose_acc is None:
+    pdd = None if pose_acc is None else np.broadcast_to(as_pose(pose_acc, "pose_acc"), p.shape)
+    n = [Li * inv for Li in L]
+    w_b, wd_b = angular_motion(p[..., 3:], pd[..., 3:], None if pdd is None else pdd[..., 3:])
+    w = [w_b[..., i, None] for i in range(3)]
+    w_x_a = _cross(w, ab)
+    Ld = [pd[..., i, None] + w_x_a[i] for i in range(3)]
+    ld = n[0] * Ld[0] + n[1] * Ld[1] + n[2] * Ld[2]
+    if pdd is None:
         return length, ld, None
-    pdd = np.broadcast_to(as_pose(pose_acc, "pose_acc"), p.shape)
-    omega_dot = np.einsum("...ij,...j->...i", euler_rate_matrix(p[..., 3:]), pdd[..., 3:])
-    omega_dot += np.einsum("...ij,...j->...i", euler_rate_matrix_dot(p[..., 3:], pd[..., 3:]),
-                           pd[..., 3:])  # fmt: skip
-    Ldd = (
-        pdd[..., None, :3]
-        + np.cross(omega_dot[..., None, :], a_b)
-        + np.cross(omega[..., None, :], w_x_a)
-    )
-    ldd = np.einsum("...ki,...ki->...k", n, Ldd) + (np.sum(Ld**2, axis=-1) - ld**2) / length
+    wd = [wd_b[..., i, None] for i in range(3)]
+    wd_x_a, w_x_w_x_a = _cross(wd, ab), _cross(w, w_x_a)
+    Ldd = [pdd[..., i, None] + wd_x_a[i] + w_x_w_x_a[i] for i in range(3)]
+    ldd = n[0] * Ldd[0] + n[1] * Ldd[1] + n[2] * Ldd[2]
+    ldd += (Ld[0] ** 2 + Ld[1] ** 2 + Ld[2] ** 2 - ld**2) * inv
     return length, ld, ldd
+
+
+def _cross(u: list[FloatArray], v: list[FloatArray]) -> list[FloatArray]:
+    """Cross product of two vectors given as lists of their three components."""
+    return [u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]]
 
 
 @dataclass(frozen=True)

@@ -186,8 +186,10 @@ def _trajectory(cmd: FloatArray) -> Trajectory:
     return Trajectory(uniform_rate(cmd[:, 0]), cmd[:, 1:], float(cmd[0, 0]))
 
 
-def _write_rows(fh, t: FloatArray, values: FloatArray) -> None:
-    np.savetxt(fh, np.column_stack([t, values]), delimiter=",", fmt="%.10g")
+def _write_rows(fh, t: FloatArray, values: FloatArray, block: int = 8192) -> None:
+    for k in range(0, len(t), block):  # in blocks: no whole-run copy
+        rows = np.column_stack([t[k : k + block], values[k : k + block]])
+        np.savetxt(fh, rows, delimiter=",", fmt="%.10g")
 
 
 class RunWriter:

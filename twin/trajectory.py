@@ -16,6 +16,7 @@ Examples
 
 from __future__ import annotations
 
+import threading
 from dataclasses import dataclass, field
 from functools import cached_property
 
@@ -27,6 +28,10 @@ from twin.errors import SignalError
 from twin.frames import DOF_NAMES
 
 FloatArray = NDArray[np.float64]
+
+#: Samples per spline block and extra samples on each side (see :meth:`Trajectory.at`).
+SPLINE_BLOCK, SPLINE_MARGIN = 4096, 48
+_SPLINE_LOCK = threading.Lock()
 
 
 @dataclass(frozen=True, eq=False)
@@ -96,14 +101,31 @@ class Trajectory:
         """Return a trajectory on the same time grid with other values."""
         return Trajectory(self.rate_hz, np.asarray(values, dtype=float), self.t0, self.names)
 
+    def block_spline(self, block: int) -> CubicSpline:
+        """Return the cubic spline of block ``block`` of samples, with margins (see :meth:`at`)."""
+        with _SPLINE_LOCK:  # trajectories are read from a prefetch thread too
+            cache = self._splines
+            if block not in cache:
+                lo = max(0, block * SPLINE_BLOCK - SPLINE_MARGIN)
+                hi = min(self.n, (block + 1) * SPLINE_BLOCK + SPLINE_MARGIN + 1)
+                t = self.t0 + np.arange(lo, hi) / self.rate_hz
+                if len(cache) >= 4:
+                    cache.pop(next(iter(cache)))
+                cache[block] = CubicSpline(t, self.values[lo:hi], axis=0)
+            return cache[block]
+
     @cached_property
-    def spline(self) -> CubicSpline:
-        """Cubic spline through the samples (not-a-knot ends)."""
-        return CubicSpline(self.t, self.values, axis=0)
+    def _splines(self) -> dict[int, CubicSpline]:
+        return {}
 
     def at(self, t: ArrayLike, derivative: int = 0) -> FloatArray:
         """Evaluate the signal (or a derivative) at arbitrary times.
 
+        The interpolant is the not-a-knot cubic spline through all samples. Long signals are
+        splined block by block (:data:`SPLINE_BLOCK` samples with :data:`SPLINE_MARGIN` more
+        on each side; a spline's dependence on distant samples decays by 2 - sqrt(3) per
+        sample, so this equals the global spline to rounding) and only a few blocks are kept,
+        so memory does not grow with the signal's length beyond the samples themselves.
         Times before the first sample hold the first value, times after the last hold the
         last value (derivatives are zero there).
 
@@ -119,12 +141,52 @@ class Trajectory:
         ndarray, shape (m, k)
 
         """
-        tt = np.asarray(t, dtype=float)
+        if derivative not in (0, 1, 2):
+            raise SignalError(f"derivative must be 0, 1 or 2; got {derivative}")
+        return self.derivatives(t, derivative)[derivative]
+
+    def derivatives(self, t: ArrayLike, order: int = 2) -> list[FloatArray]:
+        """Evaluate the signal and its derivatives up to ``order`` in one pass.
+
+        Parameters
+        ----------
+        t : array_like, shape (m,)
+            Times [s] (held at the ends as in :meth:`at`).
+        order : int
+            Highest derivative (0, 1 or 2).
+
+        Returns
+        -------
+        list of ndarray, shape (m, k)
+            Value, first derivative, ... up to ``order``.
+
+        """
+        tt = np.atleast_1d(np.asarray(t, dtype=float))
         t_end = self.t0 + self.duration
         inside = np.clip(tt, self.t0, t_end)
-        out = self.spline(inside, derivative)
-        if derivative:
-            out[(tt < self.t0) | (tt > t_end)] = 0.0
+        # interval index on the uniform grid, and the block holding it
+        index = np.minimum(((inside - self.t0) * self.rate_hz).astype(int), self.n - 2)
+        blocks = index // SPLINE_BLOCK
+        out = [np.empty((tt.size, self.values.shape[1])) for _ in range(order + 1)]
+        present = np.unique(blocks)
+        for b in present:
+            sel = slice(None) if present.size == 1 else blocks == b
+            spline = self.block_spline(int(b))
+            first = round((spline.x[0] - self.t0) * self.rate_hz)
+            i = index[sel] - first
+            tau = (inside[sel] - spline.x[i])[:, None]
+            c3, c2, c1, c0 = spline.c[:, i]  # highest power first
+            out[0][sel] = ((c3 * tau + c2) * tau + c1) * tau + c0
+            if order >= 1:
+                out[1][sel] = (3 * c3 * tau + 2 * c2) * tau + c1
+            if order >= 2:
+                out[2][sel] = 6 * c3 * tau + 2 * c2
+        outside = (tt < self.t0) | (tt > t_end)
+        if outside.any():
+            for d in out[1:]:
+                d[outside] = 0.0
+        if np.ndim(t) == 0:
+            return [d[0] for d in out]
         return out
 
     def resample(self, rate_hz: float, t0: float | None = None, n: int | None = None) -> Trajectory:

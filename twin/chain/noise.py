@@ -2,11 +2,18 @@
 
 The thesis applies H_n,z = 0.084 (1 + 0.022 s) / ((1 + 0.009 s)(1 + 0.008 s)) to zero-mean,
 unit-variance Gaussian white noise; sampled at the IMU rate (819.2 Hz) that gives
-sigma = 4.23e-2 m/s^2 (§5.4.4). For the SRS the noise was generated in the frequency domain
-with the spectrum set to zero below 1 Hz "to prevent extreme excursions" (§5.4.4); this block
-does the same, which also makes the double integral to a heave *position* offset bounded, so
-the noise can be fed to a platform as a command. A platform cannot be given white
-acceleration down to 0 Hz as a position, so the position needs ``highpass_hz > 0``.
+sigma = 4.23e-2 m/s^2 (§5.4.4). For the SRS the noise had no content below 1 Hz "to prevent
+extreme excursions" (§5.4.4, done there in the frequency domain); here a 4th-order
+Butterworth high-pass at ``highpass_hz`` does the same in the time domain, which also makes
+the double integral to a heave *position* offset bounded, so the noise can be fed to a
+platform as a command. A platform cannot be given white acceleration down to 0 Hz as a
+position, so the position needs ``highpass_hz > 0``.
+
+The noise is generated as a stream (:class:`NoiseStream`): seeded white noise filtered by the
+bilinear transforms of the acceleration, velocity and position transfer functions, with the
+filter state carried, so a run of any length holds only its current chunk. The stream starts
+in steady state (the filters run over a discarded lead-in first), and the same seed gives the
+same samples however the stream is cut into chunks.
 
 Examples
 --------
@@ -23,11 +30,17 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+from scipy import signal
 
 from twin.errors import SignalError
 from twin.thesis import EQ_5_10
 
 FloatArray = NDArray[np.float64]
+
+#: Order of the high-pass that removes the noise below ``highpass_hz``.
+HIGHPASS_ORDER = 4
+#: Noise generated and discarded before the first sample, so the stream starts stationary [s].
+LEAD_IN_S = 1.0
 
 
 def shaping_response(f: ArrayLike) -> NDArray[np.complex128]:
@@ -95,38 +108,110 @@ class MotionNoise:
         hp = "" if self.highpass_hz is None else f", none below {self.highpass_hz:g} Hz"
         return f"heave noise Eq 5.10 at {self.rate_hz:g} Hz{hp}"
 
-    def generate(
-        self, duration_s: float, seed: int | np.random.Generator | None = 0
-    ) -> NoiseRealisation:
-        """Generate ``duration_s`` seconds of noise.
+    def sections(self) -> list[FloatArray]:
+        """Second-order sections of the acceleration, velocity and position filters.
 
-        The white sequence is drawn in the time domain (so a seed gives the same sequence
-        whatever is done with it) and shaped in the frequency domain with the exact response
-        of Eq 5.10; the result is periodic over its length.
+        Velocity and position are returned only with a high-pass (otherwise unbounded).
+        """
+        p1, p2 = EQ_5_10["poles_s"]
+        zeros = [-1.0 / EQ_5_10["zero_s"]]
+        poles = [-1.0 / p1, -1.0 / p2]
+        gain = EQ_5_10["gain"] * EQ_5_10["zero_s"] / (p1 * p2)
+        if self.highpass_hz is None:
+            outputs = [(np.array(zeros), 0)]
+        else:
+            hz, hp, hk = signal.butter(HIGHPASS_ORDER, 2 * np.pi * self.highpass_hz, "highpass",
+                                       analog=True, output="zpk")  # fmt: skip
+            poles += list(hp)
+            gain *= hk
+            # acceleration, velocity (1/s cancels one zero at 0), position (two zeros)
+            outputs = [(np.concatenate([zeros, hz[: len(hz) - k]]), k) for k in range(3)]
+        out = []
+        for z, _ in outputs:
+            zd, pd, kd = signal.bilinear_zpk(z, np.array(poles), gain, self.rate_hz)
+            out.append(signal.zpk2sos(zd, pd, kd))
+        return out
+
+    def stream(self, seed: int | np.random.SeedSequence | np.random.Generator = 0) -> NoiseStream:
+        """Return a fresh stream of this noise (see :class:`NoiseStream`)."""
+        return NoiseStream(self, seed)
+
+    def generate(
+        self, duration_s: float, seed: int | np.random.SeedSequence | np.random.Generator = 0
+    ) -> NoiseRealisation:
+        """Generate ``duration_s`` seconds of noise at once (the first samples of :meth:`stream`).
 
         Parameters
         ----------
         duration_s : float
             Length [s] (> 0).
-        seed : int or numpy.random.Generator or None
+        seed : int, SeedSequence or Generator
             Seed or generator for the white noise.
 
         """
         if not np.isfinite(duration_s) or duration_s <= 0:
             raise SignalError(f"noise duration must be > 0 s; got {duration_s}")
         n = int(np.ceil(duration_s * self.rate_hz)) + 1
-        rng = seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
-        white = rng.standard_normal(n)
-        f = np.fft.rfftfreq(n, 1.0 / self.rate_hz)
-        spec = np.fft.rfft(white) * shaping_response(f)
-        if self.highpass_hz is None:
-            return NoiseRealisation(self.rate_hz, np.fft.irfft(spec, n), None, None)
-        spec[f < self.highpass_hz] = 0.0
-        jw = 2j * np.pi * f
-        jw[0] = 1.0  # bin 0 is zero already
-        return NoiseRealisation(
-            self.rate_hz,
-            np.fft.irfft(spec, n),
-            np.fft.irfft(spec / jw, n),
-            np.fft.irfft(spec / jw**2, n),
-        )
+        return self.stream(seed).take(n)
+
+
+class NoiseStream:
+    """Consecutive samples of one noise realisation, generated on demand.
+
+    Parameters
+    ----------
+    noise : MotionNoise
+        The generator.
+    seed : int, SeedSequence or Generator
+        Seed of the white noise.
+
+    """
+
+    def __init__(
+        self, noise: MotionNoise, seed: int | np.random.SeedSequence | np.random.Generator = 0
+    ) -> None:
+        self.noise = noise
+        self._rng = seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
+        self._sos = noise.sections()
+        self._state = [np.zeros((sos.shape[0], 2)) for sos in self._sos]
+        lead_in = LEAD_IN_S if noise.highpass_hz is None else LEAD_IN_S + 5.0 / noise.highpass_hz
+        self._filter(int(np.ceil(lead_in * noise.rate_hz)))  # start in steady state
+        self._offset = 0  # index of the next sample
+        self._buffer = np.empty((0, len(self._sos)))  # samples from _buffer_start on
+        self._buffer_start = 0
+
+    def _filter(self, n: int) -> FloatArray:
+        white = self._rng.standard_normal(n)
+        columns = []
+        for k, sos in enumerate(self._sos):
+            y, self._state[k] = signal.sosfilt(sos, white, zi=self._state[k])
+            columns.append(y)
+        return np.column_stack(columns)
+
+    def take(self, n: int) -> NoiseRealisation:
+        """Return the next ``n`` samples as a realisation (its ``t`` starts at 0)."""
+        values = self._filter(n)
+        self._offset += n
+        cols = [values[:, k] for k in range(values.shape[1])] + [None, None]
+        return NoiseRealisation(self.noise.rate_hz, cols[0], cols[1], cols[2])
+
+    def at(self, t: FloatArray) -> FloatArray:
+        """Acceleration, velocity and position at times ``t`` [s from the stream's start].
+
+        Samples are generated as far as needed and linearly interpolated; times must not go
+        back before the previous call's last time. Returns shape ``(len(t), 3)`` (velocity and
+        position columns are zero without a high-pass).
+        """
+        fs = self.noise.rate_hz
+        need = int(np.ceil(float(t[-1]) * fs - 1e-9)) + 1
+        have = self._buffer_start + self._buffer.shape[0]
+        if need > have:
+            self._buffer = np.vstack([self._buffer, self._filter(need - have)])
+        ts = (self._buffer_start + np.arange(self._buffer.shape[0])) / fs
+        out = np.zeros((t.size, 3))
+        for k in range(self._buffer.shape[1]):
+            out[:, k] = np.interp(t, ts, self._buffer[:, k])
+        drop = max(0, int(np.floor(float(t[-1]) * fs)) - self._buffer_start)
+        self._buffer = self._buffer[drop:]
+        self._buffer_start += drop
+        return out

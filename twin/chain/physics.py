@@ -20,10 +20,12 @@ import numpy as np
 from mujoco import rollout
 from numpy.typing import NDArray
 
+from twin.background import prefetch
 from twin.chain.limits import ActuatorLimits, LimiterState, LimitReport
-from twin.chain.noise import NoiseRealisation
+from twin.chain.noise import NoiseStream
 from twin.chain.response import PlatformResponse
-from twin.frames import MJ_FROM_THESIS, euler_from_matrix, matrix_from_quat
+from twin.errors import SignalError
+from twin.frames import MJ_FROM_THESIS, euler_from_matrix, matrix_from_quat, rotation_matrix
 from twin.geometry import Geometry, load_geometry
 from twin.kinematics import leg_rates
 from twin.platforms import load_facts, load_model
@@ -37,7 +39,7 @@ CHUNK_S = 10.0
 
 
 def reference_motion(
-    commands: Trajectory, t: FloatArray, noise: NoiseRealisation | None
+    commands: Trajectory, t: FloatArray, noise: NoiseStream | None
 ) -> tuple[FloatArray, FloatArray, FloatArray]:
     """Pose, pose rate and pose acceleration references at times ``t`` (noise added in heave).
 
@@ -47,16 +49,22 @@ def reference_motion(
         Pose commands after the motion-system blocks.
     t : ndarray
         Times [s].
-    noise : NoiseRealisation or None
-        Heave noise (position, velocity, acceleration), interpolated linearly.
+    noise : NoiseStream or None
+        Heave noise (position, velocity, acceleration) from the commands' start, interpolated
+        linearly; successive calls must move forward in time.
 
     """
-    pose, rate, acc = commands.at(t), commands.at(t, 1), commands.at(t, 2)
+    pose, rate, acc = commands.derivatives(t)
     if noise is not None:
-        tn = commands.t0 + noise.t
-        pose[:, 2] += np.interp(t, tn, noise.position)
-        rate[:, 2] += np.interp(t, tn, noise.velocity)
-        acc[:, 2] += np.interp(t, tn, noise.acceleration)
+        if noise.noise.highpass_hz is None:
+            raise SignalError(
+                "heave noise without a high-pass has no bounded position and cannot be a "
+                "platform command; give the noise a highpass_hz > 0"
+            )
+        n = noise.at(t - commands.t0)
+        acc[:, 2] += n[:, 0]
+        rate[:, 2] += n[:, 1]
+        pose[:, 2] += n[:, 2]
     return pose, rate, acc
 
 
@@ -71,7 +79,10 @@ class ReferenceChunk:
     pose, rate, acc : ndarray, shape (n, 6)
         Pose reference and its first and second derivatives (noise included).
     lengths, velocities, accelerations : ndarray, shape (n, 6)
-        Leg references from the exact inverse kinematics.
+        Leg references from the exact inverse kinematics (velocities and accelerations None
+        when not asked for).
+    rotation : ndarray, shape (n, 3, 3)
+        T_c^b of the reference poses.
 
     """
 
@@ -80,25 +91,40 @@ class ReferenceChunk:
     rate: FloatArray
     acc: FloatArray
     lengths: FloatArray
-    velocities: FloatArray
-    accelerations: FloatArray
+    velocities: FloatArray | None
+    accelerations: FloatArray | None
+    rotation: FloatArray
 
 
 def reference_chunks(
     commands: Trajectory,
-    noise: NoiseRealisation | None,
+    noise: NoiseStream | None,
     geometry: Geometry,
     rate_hz: float,
     chunk_s: float,
+    leg_derivatives: bool = True,
 ) -> Iterator[ReferenceChunk]:
-    """Yield the references of a run chunk by chunk (shared by full and reduced platforms)."""
+    """Yield the references of a run chunk by chunk (shared by full and reduced platforms).
+
+    With ``leg_derivatives=False`` only leg lengths are computed (the reduced platform
+    computes leg velocities and accelerations itself, where they may break a limit).
+
+    The chunks are computed one ahead in a background thread (:func:`twin.background.prefetch`),
+    overlapping with the consumer's physics or post-processing.
+    """
     t_all = physics_grid(commands, rate_hz)
     step = max(1, round(chunk_s * rate_hz))
-    for k0 in range(0, t_all.size, step):
-        t = t_all[k0 : k0 + step]
-        pose, rate, acc = reference_motion(commands, t, noise)
-        legs = leg_rates(geometry, pose, rate, acc)
-        yield ReferenceChunk(t, pose, rate, acc, *legs)
+
+    def chunks() -> Iterator[ReferenceChunk]:
+        for k0 in range(0, t_all.size, step):
+            t = t_all[k0 : k0 + step]
+            pose, rate, acc = reference_motion(commands, t, noise)
+            T = rotation_matrix(pose[:, 3:])
+            derivatives = (rate, acc) if leg_derivatives else (None, None)
+            legs = leg_rates(geometry, pose, *derivatives, rotation=T)
+            yield ReferenceChunk(t, pose, rate, acc, *legs, T)
+
+    return prefetch(chunks())
 
 
 def physics_grid(commands: Trajectory, rate_hz: float) -> FloatArray:
@@ -150,7 +176,7 @@ class FullPlatform:
     def run(
         self,
         commands: Trajectory,
-        noise: NoiseRealisation | None = None,
+        noise: NoiseStream | None = None,
         report: LimitReport | None = None,
         chunk_s: float = CHUNK_S,
     ) -> Iterator[PlatformResponse]:
@@ -162,8 +188,8 @@ class FullPlatform:
         ----------
         commands : Trajectory
             Pose commands (after the motion-system blocks).
-        noise : NoiseRealisation, optional
-            Heave noise added to the reference.
+        noise : NoiseStream, optional
+            Heave noise added to the reference (a fresh stream: it is consumed).
         report : LimitReport, optional
             Filled with the actuator-limit counts.
         chunk_s : float

@@ -8,7 +8,7 @@ from dataclasses import dataclass, fields
 import numpy as np
 from numpy.typing import NDArray
 
-from twin.frames import euler_rate_matrix, euler_rate_matrix_dot, rotation_matrix
+from twin.frames import angular_motion, rotation_matrix
 
 FloatArray = NDArray[np.float64]
 
@@ -67,13 +67,17 @@ class PlatformResponse:
         return cls(**out)
 
 
-def rigid_motion(pose: FloatArray, rate: FloatArray, acc: FloatArray) -> tuple[FloatArray, ...]:
+def rigid_motion(
+    pose: FloatArray, rate: FloatArray, acc: FloatArray, rotation: FloatArray | None = None
+) -> tuple[FloatArray, ...]:
     """Cabin velocities and accelerations of a pose trajectory with exact derivatives.
 
     Parameters
     ----------
     pose, rate, acc : ndarray, shape (n, 6)
         Pose offsets and their first and second time derivatives (Euler-angle rates).
+    rotation : ndarray, shape (n, 3, 3), optional
+        T_c^b of the poses if already computed.
 
     Returns
     -------
@@ -81,11 +85,8 @@ def rigid_motion(pose: FloatArray, rate: FloatArray, acc: FloatArray) -> tuple[F
         Linear (base axes) and angular (cabin axes, Eq A.4) motion.
 
     """
-    T = rotation_matrix(pose[:, 3:])
-    omega_b = np.einsum("nij,nj->ni", euler_rate_matrix(pose[:, 3:]), rate[:, 3:])
-    omega_dot_b = np.einsum("nij,nj->ni", euler_rate_matrix(pose[:, 3:]), acc[:, 3:])
-    omega_dot_b += np.einsum("nij,nj->ni", euler_rate_matrix_dot(pose[:, 3:], rate[:, 3:]),
-                             rate[:, 3:])  # fmt: skip
+    T = rotation_matrix(pose[:, 3:]) if rotation is None else rotation
+    omega_b, omega_dot_b = angular_motion(pose[:, 3:], rate[:, 3:], acc[:, 3:])
     omega = np.einsum("nji,nj->ni", T, omega_b)
     omega_dot = np.einsum("nji,nj->ni", T, omega_dot_b)
     return rate[:, :3].copy(), acc[:, :3].copy(), omega, omega_dot

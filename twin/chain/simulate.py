@@ -19,7 +19,7 @@ import numpy as np
 from twin.chain.config import MotionSystem, motion_system
 from twin.chain.imu import ImuRecord, ImuSpec, VirtualImu
 from twin.chain.limits import LimitReport
-from twin.chain.noise import NoiseRealisation
+from twin.chain.noise import MotionNoise, NoiseStream
 from twin.chain.physics import FullPlatform
 from twin.chain.reduced import ReducedPlatform
 from twin.chain.response import PlatformResponse
@@ -99,8 +99,8 @@ class Run:
         As in :class:`Simulation`.
     platform : FullPlatform or ReducedPlatform
         The platform.
-    noise : NoiseRealisation or None
-        The heave noise realisation.
+    noise : MotionNoise or None
+        The heave-noise generator (seeded from ``seed``; see :meth:`noise_stream`).
 
     """
 
@@ -113,13 +113,19 @@ class Run:
     limits: LimitReport
     notes: list[str]
     platform: Platform
-    noise: NoiseRealisation | None
+    noise: MotionNoise | None
+
+    def noise_stream(self) -> NoiseStream | None:
+        """Return a fresh stream of this run's heave noise (same seed, same samples)."""
+        if self.noise is None:
+            return None
+        return self.noise.stream(np.random.SeedSequence([self.seed, 0]))
 
     def chunks(self) -> Iterator[tuple[PlatformResponse, ImuRecord]]:
         """Yield (response, IMU) chunk pairs; memory stays bounded for any duration."""
         imu_seed = np.random.default_rng(np.random.SeedSequence([self.seed, 1]))
         imu = VirtualImu(self.imu_spec, imu_seed)
-        for chunk in self.platform.run(self.platform_input, self.noise, self.limits):
+        for chunk in self.platform.run(self.platform_input, self.noise_stream(), self.limits):
             yield chunk, imu.feed(chunk)
 
     def collect(self) -> Simulation:
@@ -144,7 +150,7 @@ def prepare(
     limit_mode: str = "limit",
     platform: Platform | None = None,
 ) -> Run:
-    """Set up a run: apply the blocks to the commands and draw the noise.
+    """Set up a run: apply the blocks to the commands and choose the noise.
 
     Parameters
     ----------
@@ -179,11 +185,7 @@ def prepare(
     for block in ms.blocks(plat.own_lag_s):
         shaped = block(shaped)
     spec = imu if imu is not None else default_imu(ms.platform)
-    noise_gen = ms.noise_block(spec.rate_hz)
-    noise = None
-    if noise_gen is not None:
-        rng = np.random.default_rng(np.random.SeedSequence([int(seed), 0]))
-        noise = noise_gen.generate(commands.duration, rng)
+    noise = ms.noise_block(spec.rate_hz)
     limits = LimitReport(plat.limits.mode, plat.rate_hz)
     return Run(ms, plat.kind, int(seed), commands, shaped, spec, limits, notes, plat, noise)
 
