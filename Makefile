@@ -18,8 +18,7 @@ $(NBSTAMP): $(STAMP)
 	touch $(NBSTAMP)
 
 demo: $(STAMP)
-	$(BIN)/twin workspace mpi
-	$(BIN)/twin workspace srs
+	$(BIN)/twin agard demo --out out/demo
 
 test: $(STAMP)
 	$(BIN)/python -m pytest -q
@@ -37,6 +36,7 @@ models: $(STAMP)
 bench: $(STAMP)
 	$(BIN)/python bench/kinematics_throughput.py
 	$(BIN)/python bench/twin_throughput.py
+	$(BIN)/python bench/agard_sweep.py
 
 clean:
 	rm -rf $(VENV) .pytest_cache .ruff_cache build *.egg-info

@@ -28,21 +28,25 @@ def test_default_imu_noise_and_bias_are_applied():
     assert acc[:, 2].mean() == pytest.approx(-9.81, abs=0.05)
 
 
-def test_lever_arm_matches_finite_differences_and_mujoco_at_the_ugp():
-    sig = describing_signal(2, "pitch")
+@pytest.mark.parametrize("dof", ["heave", "pitch"])
+def test_full_model_specific_force_is_the_second_difference_of_the_cabin_path(dof):
+    # ground truth: the second difference of the simulated path of the mount point, at the
+    # UGP and off it (MuJoCo's acceleration sensors are not: under implicitfast they miss the
+    # implicit damping correction and read ~2.4x too much in heave)
+    sig = describing_signal(2, dof)
     r = simulate("mpi-2008", sig.commands, "full").response
-    # at the UGP (the model's imu site) MuJoCo's own accelerometer agrees to round-off
-    assert np.abs(specific_force(r, np.zeros(3)) - r.sensor_accelerometer).max() < 1e-9
-    assert np.abs(r.omega - r.sensor_gyro).max() < 1e-9
-    # off the UGP: the second difference of the mount point's path is the ground truth
-    mount = np.array([0.4, -0.3, -0.5])  # cabin frame, m
     T = rotation_matrix(r.pose[:, 3:])
-    path = r.pose[:, :3] + T @ mount
-    a = (path[2:] - 2 * path[1:-1] + path[:-2]) / (r.t[1] - r.t[0]) ** 2
-    truth = np.einsum("nji,nj->ni", T[1:-1], a - [0.0, 0.0, 9.81])
-    f = specific_force(r, mount)[1:-1]
-    assert np.sqrt(np.mean((f - truth)[1000:] ** 2)) < 0.01
-    assert np.abs(f - specific_force(r, np.zeros(3))[1:-1]).max() > 0.1  # the arm matters
+    dt = r.t[1] - r.t[0]
+    for mount in (np.zeros(3), np.array([0.4, -0.3, -0.5])):  # cabin frame, m
+        path = r.pose[:, :3] + T @ mount
+        a = (path[2:] - 2 * path[1:-1] + path[:-2]) / dt**2
+        truth = np.einsum("nji,nj->ni", T[1:-1], a - [0.0, 0.0, 9.81])
+        f = specific_force(r, mount)[1:-1]
+        err = np.sqrt(np.mean((f - truth)[1000:] ** 2))
+        assert err < 0.01 * np.std(truth[1000:], axis=0).max()
+    if dof == "pitch":  # the arm matters
+        assert np.abs(f - specific_force(r, np.zeros(3))[1:-1]).max() > 0.1
+    assert np.abs(r.omega - r.sensor_gyro).max() < 1e-9
 
 
 def test_seeded_runs_are_bit_identical_and_chunking_does_not_matter():

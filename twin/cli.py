@@ -166,6 +166,9 @@ def build_parser() -> argparse.ArgumentParser:
     ws.set_defaults(func=_cmd_workspace)
     _add_simulate(sub)
     _add_analysis(sub)
+    from twin.agard.cli import add_parser as add_agard
+
+    add_agard(sub, _Parser)
     return parser
 
 

@@ -38,3 +38,7 @@ class ActuatorLimitError(TwinError, ValueError):
 
 class RunFormatError(TwinError, ValueError):
     """A recorded-run folder that does not follow the ``twin-run/1`` format."""
+
+
+class SignalLimitError(SignalError):
+    """A command signal would break a platform's stroke, velocity or acceleration limit."""

@@ -14,6 +14,7 @@ Entity paths
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 
 import numpy as np
@@ -52,10 +53,10 @@ def _z_up(points: FloatArray) -> FloatArray:
     return points @ MJ_FROM_THESIS.T
 
 
-def _every(t: FloatArray, rate_hz: float, start: float) -> NDArray[np.intp]:
-    """Return the indices of samples on a ``rate_hz`` grid counted from ``start``."""
+def _every(t: FloatArray, rate_hz: float, start: float, dt: float) -> NDArray[np.intp]:
+    """Return the indices of samples (``dt`` apart) nearest a ``rate_hz`` grid from ``start``."""
     phase = (t - start) * rate_hz
-    return np.flatnonzero(np.abs(phase - np.round(phase)) < 0.5 * rate_hz * (t[1] - t[0]) + 1e-9)
+    return np.flatnonzero(np.abs(phase - np.round(phase)) < 0.5 * rate_hz * dt + 1e-9)
 
 
 class Recorder:
@@ -100,16 +101,25 @@ class Recorder:
         else:
             raise ValueError("Recorder needs a file (rrd) or a viewer URL (connect)")
         self._t0: float | None = None
+        self._dt = 1e-3  # sample interval of the responses, from the first chunk
         base = _z_up(np.vstack([geometry.base_gimbals, geometry.base_gimbals[:1]]))
         self.rec.log("world/base", rr.LineStrips3D([base], colors=[[120, 120, 120]]), static=True)
 
-    def log(self, response: PlatformResponse, imu: ImuRecord | None = None) -> None:
-        """Log one chunk of a run."""
+    def log(
+        self, response: PlatformResponse, imu: ImuRecord | None = None, offset_s: float = 0.0
+    ) -> None:
+        """Log one chunk of a run, its times shifted by ``offset_s`` [s]."""
+        if offset_s:
+            response = dataclasses.replace(response, t=response.t + offset_s)
+            if imu is not None:
+                imu = dataclasses.replace(imu, t=imu.t + offset_s)
         t = response.t
         if self._t0 is None:
             self._t0 = float(t[0])
-        self._series(response, _every(t, self.series_rate_hz, self._t0))
-        self._frames(response, _every(t, self.frames_rate_hz, self._t0))
+        if t.size > 1:
+            self._dt = float(t[1] - t[0])
+        self._series(response, _every(t, self.series_rate_hz, self._t0, self._dt))
+        self._frames(response, _every(t, self.frames_rate_hz, self._t0, self._dt))
         if imu is not None and len(imu.t):
             values = np.hstack([imu.accel, np.degrees(imu.gyro)])
             times = rr.TimeColumn(TIMELINE, duration=imu.t)

@@ -1,8 +1,14 @@
-"""Command signals: the fade of Eq 3.1, the multi-sines of Eq 5.2 / Table 5.2, built-ins.
+"""Command signals of the AGARD-AR-144 tests (§3.2.3) and the describing functions (§5.3.1).
 
 Signals are pose-offset trajectories (:class:`twin.trajectory.Trajectory`) in the thesis base
-frame, sampled at the command rate. Multi-sine amplitudes are given in acceleration (Table 5.2)
-and integrated analytically to position, as the thesis does.
+frame, sampled at the command rate. Every periodic signal has the phases of §3.2.3: fade-in
+(Eq 3.1, fade frequency half the lowest frequency present, Eq 3.2), pre-measurement (Eq 3.3
+periods of the lowest frequency), the measurement window (an integer number of periods of
+every frequency present) and fade-out. Amplitudes are given in acceleration and integrated
+analytically to position, as the thesis does: single sines (Eq 3.4), multi-sines (Eq 3.5;
+Table 5.2's two signals), and the square-wave acceleration steps of the dynamic threshold test
+(Fig 3.2b). :func:`check_signal` says which platform limit a signal would break before it is
+run.
 
 Examples
 --------
@@ -20,7 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from twin.errors import SignalError
+from twin.errors import SignalError, SignalLimitError
 from twin.frames import DOF_NAMES
 from twin.thesis import TABLE_5_2
 from twin.trajectory import Trajectory
@@ -118,7 +124,7 @@ def table_5_2(signal: int, dof: str) -> MultiSine:
 
 @dataclass(frozen=True)
 class DescribingSignal:
-    """Commands for one describing-function measurement and where to analyse them.
+    """A periodic test signal in one DOF and where to analyse it.
 
     Attributes
     ----------
@@ -129,7 +135,12 @@ class DescribingSignal:
     frequencies_hz : ndarray
         The excited frequencies.
     window : tuple of float
-        Start and end [s] of the periodic part to analyse (``WINDOW_S`` long).
+        Start and end [s] of the measurement window (an integer number of periods of every
+        excited frequency).
+    amplitudes : ndarray or None
+        Acceleration amplitude of each frequency [m/s^2 or rad/s^2].
+    label : str
+        Short description for reports.
 
     """
 
@@ -137,16 +148,90 @@ class DescribingSignal:
     dof: str
     frequencies_hz: FloatArray
     window: tuple[float, float]
+    amplitudes: FloatArray | None = None
+    label: str = ""
+
+
+def premeasurement_periods(f_hz: float) -> int:
+    """Return the pre-measurement periods N_p of Eq 3.3 for the (lowest) frequency ``f_hz``."""
+    return 2 if f_hz < 0.5 else 5 if f_hz < 2.0 else 10
+
+
+def base_frequency(frequencies_hz: ArrayLike, resolution_hz: float = 1e-4) -> float:
+    """Greatest common divisor of the frequencies (to ``resolution_hz``) [Hz].
+
+    A window of ``k / base_frequency`` seconds holds an integer number of periods of every
+    frequency (§3.2.3.3: the frequencies are multiples of the base frequency 1 / t_m).
+    """
+    ticks = np.round(np.asarray(frequencies_hz, dtype=float) / resolution_hz).astype(np.int64)
+    if np.any(ticks <= 0):
+        raise SignalError(f"frequencies must be >= {resolution_hz} Hz; got {frequencies_hz}")
+    return float(np.gcd.reduce(ticks)) * resolution_hz
+
+
+def periodic_signal(
+    ms: MultiSine,
+    dof: str,
+    rate_hz: float = 100.0,
+    settle_s: float | None = None,
+    window_s: float = WINDOW_S,
+    label: str = "",
+) -> DescribingSignal:
+    """Build a periodic run in one DOF: fade-in, pre-measurement, window, fade-out (§3.2.3).
+
+    The fade (Eq 3.1) uses the lowest frequency (f_f = f_min / 2, Eq 3.2) and multiplies the
+    whole position signal, so position, velocity and acceleration start and end at zero.
+
+    Parameters
+    ----------
+    ms : MultiSine
+        Frequencies and acceleration amplitudes (one frequency: a single sine, Eq 3.4).
+    dof : str
+        One of :data:`twin.frames.DOF_NAMES`.
+    rate_hz : float
+        Command rate [Hz].
+    settle_s : float, optional
+        Pre-measurement time [s]; Eq 3.3 (N_p periods of the lowest frequency) by default.
+    window_s : float
+        Shortest measurement window [s]; rounded up to whole periods of the base frequency.
+    label : str
+        Description for reports.
+
+    """
+    if dof not in DOF_NAMES:
+        raise SignalError(f"unknown DOF {dof!r}; expected one of {', '.join(DOF_NAMES)}")
+    f = np.asarray(ms.frequencies_hz, dtype=float)
+    amps = np.asarray(ms.amplitudes, dtype=float)
+    if f.size == 0 or f.shape != amps.shape or not np.all(np.isfinite(f) & np.isfinite(amps)):
+        raise SignalError("a periodic signal needs finite frequencies and amplitudes, one each")
+    if np.any(f <= 0) or np.any(f >= rate_hz / 2):
+        raise SignalError(
+            f"frequencies must lie between 0 and the Nyquist frequency {rate_hz / 2:g} Hz; "
+            f"got {f.tolist()}"
+        )
+    f_min = float(f.min())
+    period = 1.0 / base_frequency(f)
+    window = period * max(1, int(np.ceil(window_s / period - 1e-9)))
+    fade_len = 1.0 / f_min  # 1 / (2 f_f) with f_f = f_min / 2
+    settle = premeasurement_periods(f_min) / f_min if settle_s is None else float(settle_s)
+    start = fade_len + settle
+    end = start + window
+    total = end + fade_len
+    n = round(total * rate_hz) + 1
+    t = np.arange(n) / rate_hz
+    values = np.zeros((n, 6))
+    values[:, DOF_NAMES.index(dof)] = ms.position(t) * fade(t, f_min / 2, fade_out_at=total)
+    return DescribingSignal(Trajectory(rate_hz, values), dof, f, (start, end), amps, label)
 
 
 def describing_signal(
-    signal: int, dof: str, rate_hz: float = 100.0, settle_s: float = 2.0, scale: float = 1.0
+    signal: int,
+    dof: str,
+    rate_hz: float = 100.0,
+    settle_s: float | None = 2.0,
+    scale: float = 1.0,
 ) -> DescribingSignal:
-    """Build a Table 5.2 multi-sine run for one DOF: fade-in, settle, 20 s window, fade-out.
-
-    The fade (Eq 3.1) uses the lowest frequency of the signal (f_f = f_min / 2, Eq 3.2) and
-    multiplies the whole position signal, so position, velocity and acceleration start and
-    end at zero. The window starts ``settle_s`` after the fade-in so that filters have settled.
+    """Build a Table 5.2 multi-sine run for one DOF (see :func:`periodic_signal`).
 
     Parameters
     ----------
@@ -156,24 +241,188 @@ def describing_signal(
         One of :data:`twin.frames.DOF_NAMES`.
     rate_hz : float
         Command rate [Hz].
-    settle_s : float
-        Time between the end of the fade-in and the start of the window [s].
+    settle_s : float or None
+        Time between the end of the fade-in and the start of the 20 s window [s]; None for
+        the pre-measurement of Eq 3.3 (2 periods of the lowest frequency). The default 2 s
+        lets the filters settle and keeps the runs short.
     scale : float
         Factor on all amplitudes (1 = Table 5.2).
 
     """
     ms = table_5_2(signal, dof)
     ms = MultiSine(ms.frequencies_hz, ms.amplitudes * scale)
-    f_fade = ms.frequencies_hz.min() / 2
-    fade_len = 0.5 / f_fade
-    start = fade_len + settle_s
-    end = start + WINDOW_S
-    total = end + fade_len
-    n = round(total * rate_hz) + 1
-    t = np.arange(n) / rate_hz
-    values = np.zeros((n, 6))
-    values[:, DOF_NAMES.index(dof)] = ms.position(t) * fade(t, f_fade, fade_out_at=total)
-    return DescribingSignal(Trajectory(rate_hz, values), dof, ms.frequencies_hz, (start, end))
+    return periodic_signal(ms, dof, rate_hz, settle_s, WINDOW_S, f"Table 5.2 signal {signal}")
+
+
+def single_sine(
+    dof: str,
+    frequency_hz: float,
+    amplitude: float,
+    rate_hz: float = 100.0,
+    window_s: float = 10.0,
+    settle_s: float | None = None,
+) -> DescribingSignal:
+    """Build a single sine (Eq 3.4) in acceleration, with the phases of §3.2.3.
+
+    Parameters
+    ----------
+    dof : str
+        Driven DOF.
+    frequency_hz : float
+        Frequency [Hz].
+    amplitude : float
+        Acceleration amplitude [m/s^2 or rad/s^2].
+    rate_hz : float
+        Command rate [Hz].
+    window_s : float
+        Shortest measurement window [s] (whole periods).
+    settle_s : float, optional
+        Pre-measurement time; Eq 3.3 by default.
+
+    """
+    if dof not in DOF_NAMES:
+        raise SignalError(f"unknown DOF {dof!r}; expected one of {', '.join(DOF_NAMES)}")
+    unit = "rad/s^2" if DOF_NAMES.index(dof) >= 3 else "m/s^2"
+    ms = MultiSine(np.array([float(frequency_hz)]), np.array([float(amplitude)]))
+    label = f"sine {frequency_hz:g} Hz, {amplitude:g} {unit}"
+    return periodic_signal(ms, dof, rate_hz, settle_s, window_s, label)
+
+
+#: Acceleration levels of the dynamic threshold signal, in units of the step amplitude: every
+#: level lasts one step length; velocity and position return to zero at the end (Fig 3.2b).
+STEP_PATTERN = (1, -1, -1, 1, -1, 1, 1, -1)
+
+
+@dataclass(frozen=True)
+class StepSignal:
+    """The square-wave acceleration steps of the dynamic threshold test (§3.2.3.5, Fig 3.2b).
+
+    Attributes
+    ----------
+    commands : Trajectory
+        Pose-offset commands (the double integral of the acceleration levels).
+    dof : str
+        Driven DOF.
+    amplitude : float
+        Step amplitude [m/s^2 or rad/s^2].
+    step_s : float
+        Length of each level [s].
+    start_s : float
+        Time of the first step [s].
+    levels : tuple of int
+        Acceleration levels in units of ``amplitude`` (:data:`STEP_PATTERN`).
+
+    """
+
+    commands: Trajectory
+    dof: str
+    amplitude: float
+    step_s: float
+    start_s: float
+    levels: tuple[int, ...] = STEP_PATTERN
+
+    def acceleration(self, t: ArrayLike) -> FloatArray:
+        """Return the commanded acceleration profile at ``t`` [m/s^2 or rad/s^2]."""
+        k = np.floor((np.asarray(t, dtype=float) - self.start_s) / self.step_s).astype(int)
+        inside = (k >= 0) & (k < len(self.levels))
+        lv = np.asarray(self.levels, dtype=float)
+        return np.where(inside, lv[np.clip(k, 0, len(lv) - 1)], 0.0) * self.amplitude
+
+    @property
+    def step_times(self) -> FloatArray:
+        """Times at which the acceleration level changes [s]."""
+        lv = np.concatenate([[0], self.levels, [0]])
+        change = np.flatnonzero(np.diff(lv) != 0)
+        return self.start_s + change * self.step_s
+
+
+def square_steps(
+    dof: str,
+    amplitude: float,
+    step_s: float,
+    rate_hz: float = 100.0,
+    rest_s: float = 2.0,
+    repeats: int = 1,
+) -> StepSignal:
+    """Build the dynamic threshold signal: steps of ``amplitude`` lasting ``step_s``.
+
+    The levels of :data:`STEP_PATTERN` are integrated twice analytically (position is
+    piecewise quadratic), with ``rest_s`` at rest before and after.
+
+    Parameters
+    ----------
+    dof : str
+        Driven DOF.
+    amplitude : float
+        Step amplitude [m/s^2 or rad/s^2] (§3.3.4: 0.1 m/s^2 for 1 s; §4.2: 0.1875 m/s^2 for
+        0.5 s).
+    step_s : float
+        Length of each level [s].
+    rate_hz : float
+        Command rate [Hz].
+    rest_s : float
+        Rest before the first and after the last step [s].
+    repeats : int
+        How many times the pattern is run (each ends at rest, so they can follow each other);
+        more repeats average more noise out of the fit.
+
+    """
+    if not isinstance(repeats, int) or repeats < 1:
+        raise SignalError(f"repeats must be an integer >= 1; got {repeats!r}")
+    if dof not in DOF_NAMES:
+        raise SignalError(f"unknown DOF {dof!r}; expected one of {', '.join(DOF_NAMES)}")
+    if not (np.isfinite(amplitude) and amplitude > 0 and np.isfinite(step_s) and step_s > 0):
+        raise SignalError(
+            f"step amplitude and length must be positive; got {amplitude} and {step_s} s"
+        )
+    if step_s * rate_hz < 2 or rest_s < 0:
+        raise SignalError(f"steps must last at least 2 command samples; got {step_s} s")
+    levels = STEP_PATTERN * repeats
+    total = 2 * rest_s + len(levels) * step_s
+    t = np.arange(round(total * rate_hz) + 1) / rate_hz
+    x = np.zeros_like(t)
+    v = p = 0.0
+    for k, level in enumerate(levels):  # exact double integral, level by level
+        t0 = rest_s + k * step_s
+        tau = np.clip(t - t0, 0.0, step_s)
+        a = level * amplitude
+        seg = (t >= t0) & (t < t0 + step_s)
+        x[seg] = p + v * tau[seg] + 0.5 * a * tau[seg] ** 2
+        p, v = p + v * step_s + 0.5 * a * step_s**2, v + a * step_s
+    values = np.zeros((t.size, 6))
+    values[:, DOF_NAMES.index(dof)] = x
+    return StepSignal(Trajectory(rate_hz, values), dof, float(amplitude), float(step_s), rest_s,
+                      levels)  # fmt: skip
+
+
+def check_signal(commands: Trajectory, platform: str, what: str = "the signal") -> None:
+    """Raise :class:`SignalLimitError` if ``commands`` would break a platform limit.
+
+    Leg lengths, velocities and accelerations are evaluated by the exact inverse kinematics
+    from the commands' spline at four times the command rate and compared with the stroke
+    and the actuator limits of ``platform.toml`` (Table 5.1).
+
+    Parameters
+    ----------
+    commands : Trajectory
+        Pose-offset commands.
+    platform : str
+        ``"mpi"`` or ``"srs"``.
+    what : str
+        Name of the signal for the message.
+
+    """
+    from twin.geometry import load_geometry
+    from twin.kinematics import actuator_trajectory
+    from twin.platforms import load_facts
+
+    geo, facts = load_geometry(platform), load_facts(platform)
+    t = commands.t0 + np.arange(4 * (commands.n - 1) + 1) / (4 * commands.rate_hz)
+    pose, rate, acc = commands.derivatives(t)
+    legs = actuator_trajectory(geo, t, pose, rate, acc)
+    broken = legs.limit_violations(geo, facts.max_velocity, facts.max_acceleration)
+    if broken:
+        raise SignalLimitError(f"{what} would break the {platform} limits: " + "; ".join(broken))
 
 
 def rest(duration_s: float, rate_hz: float = 100.0) -> Trajectory:

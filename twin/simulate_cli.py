@@ -4,13 +4,14 @@ from __future__ import annotations
 
 import sys
 import time
+from contextlib import nullcontext
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
 
 from twin.chain.config import motion_system
-from twin.chain.simulate import Run, prepare
+from twin.chain.simulate import Run, Simulation, prepare
 from twin.runs import RunWriter, read_commands
 from twin.signals import builtin_signal
 from twin.trajectory import Trajectory
@@ -70,7 +71,7 @@ def run_to_folder(
         recorder = Recorder(run.platform.geometry, folder.name, rrd=rrd, connect=connect)
     start = time.perf_counter()
     try:
-        _write(run, commands, meta, folder, overwrite, recorder, quiet)
+        execute(run, meta, folder, overwrite, recorder, quiet)
     except BaseException:
         if recorder is not None:
             recorder.abort()
@@ -88,29 +89,62 @@ def run_to_folder(
     return folder
 
 
-def _write(
+def execute(
     run: Run,
-    commands: Trajectory,
-    meta: dict,
-    folder: Path,
-    overwrite: bool,
-    recorder: Recorder | None,
-    quiet: bool,
-) -> None:
-    """Stream the run's chunks into the run folder (and the recorder)."""
+    meta: dict | None = None,
+    folder: Path | None = None,
+    overwrite: bool = False,
+    recorder: Recorder | None = None,
+    quiet: bool = True,
+    offset_s: float = 0.0,
+) -> Simulation:
+    """Run all chunks, streaming them into a run folder and a recorder if given.
+
+    Parameters
+    ----------
+    run : Run
+        A prepared run.
+    meta : dict, optional
+        ``meta.json`` contents (needed with ``folder``).
+    folder : Path, optional
+        Destination ``twin-run/1`` folder.
+    overwrite : bool
+        Replace an existing folder.
+    recorder : Recorder, optional
+        Rerun sink.
+    quiet : bool
+        No progress on stderr.
+    offset_s : float
+        Added to the recorded times (runs of a test follow each other in one recording).
+
+    Returns
+    -------
+    Simulation
+        The whole run.
+
+    """
+    commands = run.commands
     t_cmd = commands.t
-    with RunWriter(folder, meta, overwrite=overwrite) as writer:
-        writer.write("commands.csv", t_cmd, commands.values)
+    responses, records = [], []
+    writer = RunWriter(folder, meta or {}, overwrite=overwrite) if folder else nullcontext()
+    with writer as w:
+        if w is not None:
+            w.write("commands.csv", t_cmd, commands.values)
         for response, imu in run.chunks():
-            end = response.t[-1] + 0.5 / response.rate_hz
-            sel = (t_cmd >= response.t[0] - 1e-9) & (t_cmd < end)
-            writer.write("actuators.csv", t_cmd[sel], _legs_at(t_cmd[sel], response.t,
-                                                              response.legs))  # fmt: skip
-            writer.write("imu.csv", imu.t, np.hstack([imu.accel, imu.gyro]))
+            responses.append(response)
+            records.append(imu)
+            if w is not None:
+                end = response.t[-1] + 0.5 / run.platform.rate_hz
+                sel = (t_cmd >= response.t[0] - 1e-9) & (t_cmd < end)
+                legs = _legs_at(t_cmd[sel], response.t, response.legs)
+                w.write("actuators.csv", t_cmd[sel], legs)
+                w.write("imu.csv", imu.t, np.hstack([imu.accel, imu.gyro]))
             if recorder is not None:
-                recorder.log(response, imu)
+                recorder.log(response, imu, offset_s)
             if not quiet:
                 print(f"\r  simulated {response.t[-1] - commands.t0:7.1f} / "
                       f"{commands.duration:.1f} s", end="", file=sys.stderr)  # fmt: skip
-        writer.meta["limits"] = run.limits.to_dict()
-        writer.meta["run_notes"] = run.notes
+        if w is not None:
+            w.meta["limits"] = run.limits.to_dict()
+            w.meta["run_notes"] = run.notes
+    return run.simulation(responses, records)

@@ -109,3 +109,22 @@ NOISE_SIGMA = 4.230e-2
 
 #: Eq 5.12 and 5.13: SRS resonance terms H = 1 + T s, T [s], per DOF (heave, pitch).
 EQ_5_12_13 = MappingProxyType({"heave": 0.023, "pitch": 0.027})
+
+#: Table 5.6, MPI IMU: time delays [ms] fitted on the SRS, heave and pitch, for the baseline
+#: and the MPI model's 1, 5, 10 Hz filters, with tau = 0 and 35 ms: (tau=0, tau=35, delta).
+TABLE_5_6_MPI_IMU = MappingProxyType(
+    {
+        "heave": {None: (24.0, 60.0, 36.0), 1.0: (12.0, 48.4, 36.4), 5.0: (19.0, 53.4, 34.4),
+                  10.0: (19.3, 53.7, 34.4)},
+        "pitch": {None: (22.9, 58.5, 35.6), 1.0: (14.2, 51.6, 37.4), 5.0: (18.0, 52.1, 34.1),
+                  10.0: (17.5, 53.3, 35.8)},
+    }
+)  # fmt: skip
+
+#: §3.4.3-3.4.4 and §4.3: figures read off the thesis' plots: fitted delays [ms], the dynamic
+#: threshold's tau [ms] (1 Hz filter, 0.1 m/s^2 steps of 1 s) and the 63 % times [ms] with the
+#: 1, 5, 10 Hz filters (0.1875 m/s^2 steps of 0.5 s).
+CHAPTER_3_4 = MappingProxyType(
+    {"delay_2008_ms": 100.0, "threshold_tau_ms": 300.0, "delay_ms": 35.0,
+     "t63_ms": MappingProxyType({1.0: 350.0, 5.0: 100.0, 10.0: 50.0})}
+)  # fmt: skip

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.optimize import least_squares
+from scipy.optimize import least_squares, minimize_scalar
 
 from twin.errors import SignalError
 
@@ -141,3 +141,104 @@ def fit_lag_delay(frequencies_hz: ArrayLike, response: ArrayLike) -> LagDelayFit
                         x_scale=[1e-3, 1e-3], xtol=1e-14, ftol=1e-14, gtol=1e-14)  # fmt: skip
     rms = float(np.sqrt(np.mean(np.abs(residual(sol.x)) ** 2) * 2))
     return LagDelayFit(float(sol.x[0]), float(sol.x[1]), rms)
+
+
+def neighbour_noise(
+    t: ArrayLike,
+    y: ArrayLike,
+    frequencies_hz: ArrayLike,
+    window: tuple[float, float],
+    bins: int = 3,
+) -> FloatArray:
+    """RMS Fourier amplitude of ``y`` at the non-excited bins next to each excited frequency.
+
+    The window's frequency resolution is 1 / T; the ``bins`` bins on each side of every
+    excited frequency that are neither excited nor a 2nd or 3rd harmonic of an excited
+    frequency carry only noise (and non-periodic distortion). Their RMS amplitude (same
+    scaling as :func:`fourier_coefficients`) is the noise level at that frequency: the
+    standard deviation of a describing function there is about this over the input amplitude.
+
+    Parameters
+    ----------
+    t, y, frequencies_hz, window
+        As :func:`fourier_coefficients` (``y`` one signal).
+    bins : int
+        Neighbours on each side.
+
+    Returns
+    -------
+    ndarray, shape (m,)
+
+    """
+    f = np.asarray(frequencies_hz, dtype=float)
+    df = 1.0 / (window[1] - window[0])
+    taken = np.round(np.concatenate([f, 2 * f, 3 * f]) / df).astype(int)
+    out = np.empty(f.size)
+    for i, fi in enumerate(f):
+        k0 = round(fi / df)
+        ks = [k0 + j for j in range(-bins, bins + 1) if j and k0 + j > 0 and k0 + j not in taken]
+        if not ks:
+            out[i] = np.nan
+            continue
+        c = fourier_coefficients(t, y, np.array(ks) * df, window)
+        out[i] = np.sqrt(np.mean(np.abs(c) ** 2))
+    return out
+
+
+def fit_delay(
+    frequencies_hz: ArrayLike,
+    response: ArrayLike,
+    model: ArrayLike | None = None,
+    weights: ArrayLike | None = None,
+    max_delay_s: float = 0.5,
+) -> float:
+    """Fit a pure delay to the phase of ``response / model`` (§3.4.3, §5.6.2.2) [s].
+
+    Minimises sum w (1 - cos(phi + 2 pi f tau)) over tau, phi the phase of response / model:
+    the circular form of a least-squares phase fit, so wrapped phases need no unwrapping.
+    With equal weights this is the thesis' fit; with ``weights`` = signal-to-noise power at
+    each frequency (see :func:`neighbour_noise`) frequencies where a filter leaves little
+    signal stop dominating (with equal weights the thesis found 13 ms instead of about 19 ms
+    behind the 1 Hz filter, Table 5.6).
+
+    Parameters
+    ----------
+    frequencies_hz : array_like, shape (m,)
+        Frequencies [Hz].
+    response : array_like, shape (m,)
+        Measured describing function.
+    model : array_like, shape (m,), optional
+        The known part of the dynamics (e.g. the platform filter, Eq 3.8); 1 if not given.
+    weights : array_like, shape (m,), optional
+        Weight of each frequency; equal if not given.
+    max_delay_s : float
+        Search range [-0.05 s, max_delay_s].
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> f = np.array([0.1, 0.5, 1.0, 2.0, 7.1])
+    >>> round(fit_delay(f, np.exp(-2j * np.pi * f * 0.1)) * 1e3, 3)
+    100.0
+
+    """
+    f = np.asarray(frequencies_hz, dtype=float)
+    h = np.asarray(response, dtype=complex)
+    h0 = np.ones_like(h) if model is None else np.asarray(model, dtype=complex)
+    w = np.ones(f.size) if weights is None else np.asarray(weights, dtype=float)
+    ok = np.isfinite(w) & (w > 0) & np.isfinite(h) & (np.abs(h0) > 0)
+    if not ok.any():
+        raise SignalError("no frequency with a usable phase to fit a delay to")
+    f, w = f[ok], w[ok] / w[ok].max()
+    phi = np.angle(h[ok] / h0[ok])
+
+    def cost(tau: float | FloatArray) -> FloatArray:
+        return (1 - np.cos(phi + 2 * np.pi * np.multiply.outer(tau, f))) @ w
+
+    # grid finer than a quarter period of the highest frequency, then refine
+    step = min(1e-3, 0.25 / (2 * np.pi * f.max()))
+    grid = np.arange(-0.05, max_delay_s + step, step)
+    best = float(grid[np.argmin(cost(grid))])
+    sol = minimize_scalar(cost, bounds=(best - step, best + step), method="bounded",
+                          options={"xatol": 1e-9})  # fmt: skip
+    return float(sol.x)

@@ -25,7 +25,7 @@ from twin.chain.limits import ActuatorLimits, LimiterState, LimitReport
 from twin.chain.noise import NoiseStream
 from twin.chain.response import PlatformResponse
 from twin.errors import SignalError
-from twin.frames import MJ_FROM_THESIS, euler_from_matrix, matrix_from_quat, rotation_matrix
+from twin.frames import euler_from_matrix, matrix_from_quat, rotation_matrix
 from twin.geometry import Geometry, load_geometry
 from twin.kinematics import leg_rates
 from twin.platforms import load_facts, load_model
@@ -204,25 +204,53 @@ class FullPlatform:
         warm = data.qacc_warmstart.copy()
         report = report if report is not None else LimitReport(self.limits.mode, self.rate_hz)
         limiter = LimiterState(self.geometry.neutral_lengths.copy(), np.zeros(6))
-        for ref in reference_chunks(commands, noise, self.geometry, self.rate_hz, chunk_s):
+        held: tuple[FloatArray, FloatArray, FloatArray] | None = None  # awaiting its successor
+        chunks = iter(reference_chunks(commands, noise, self.geometry, self.rate_hz, chunk_s))
+        ref = next(chunks, None)
+        while ref is not None:
+            following = next(chunks, None)
             lengths, velocities = self.limits.apply(
                 ref.t, ref.lengths, ref.velocities, ref.accelerations, limiter, report
             )
             ctrl = np.hstack([lengths, velocities])[None]
             states, sens = rollout.rollout(model, data, state, ctrl, initial_warmstart=warm[None])
             state, warm = states[0, -1], data.qacc_warmstart.copy()
-            yield self._response(ref.t, ref.pose, sens[0])
+            t, cmd, s = ref.t, ref.pose, sens[0]
+            if held is not None:
+                t, cmd, s = (np.concatenate([h, x]) for h, x in zip(held, (t, cmd, s), strict=True))
+            if following is None:  # the run's last sample repeats the acceleration before it
+                yield self._response(t, cmd, s)
+                return
+            # a sample's acceleration needs the next sample's velocity: the last one waits
+            yield self._response(t[:-1], cmd[:-1], s)
+            held = (t[-1:], cmd[-1:], s[-1:])
+            ref = following
 
     def _response(self, t: FloatArray, command: FloatArray, s: FloatArray) -> PlatformResponse:
-        """Turn sensor rows (sensors at the start of each step, i.e. at ``t``) into a response."""
+        """Turn sensor rows (sensors at the start of each step, i.e. at ``t``) into a response.
+
+        ``s`` may hold one row more than ``t``: the successor of the last sample. Linear and
+        angular accelerations are the differences of the UGP velocities over each step,
+        a_k = (v_{k+1} - v_k) / h: exactly the second difference of the integrated positions.
+        MuJoCo's acceleration sensors are not used: under ``implicitfast`` they report the
+        acceleration before the implicit damping correction, which with the legs' velocity
+        feedback (K_d, Eq 5.9) is about 2.4 times too large in heave. The last sample of a run
+        repeats the acceleration before it.
+        """
         a = self._adr
+        n = t.size
+        h = 1.0 / self.rate_hz
+        v = s[:, a["ugp_velocity"]]
+        w = s[:, a["ugp_angular_velocity"]]
+        dv, dw = np.diff(v, axis=0) / h, np.diff(w, axis=0) / h
+        if dv.shape[0] < n:
+            dv, dw = np.vstack([dv, dv[-1:]]), np.vstack([dw, dw[-1:]])
+        s = s[:n]
         T = matrix_from_quat(s[:, a["ugp_orientation"]])
-        gravity = self.model.opt.gravity
-        acc_base = (s[:, a["ugp_linear_acceleration"]] + gravity) @ MJ_FROM_THESIS.T
-        alpha_base = s[:, a["ugp_angular_acceleration"]] @ MJ_FROM_THESIS.T
+        acc_base, alpha_base = dv[:n], dw[:n]  # the velocity sensors are in base-frame axes
         position = s[:, a["ugp_position"]] - self.geometry.neutral_ugp
         pose = np.hstack([position, euler_from_matrix(T)])
-        return PlatformResponse(
+        response = PlatformResponse(
             t=t,
             command=command,
             pose=pose,
@@ -234,3 +262,4 @@ class FullPlatform:
             sensor_accelerometer=s[:, a["imu_accelerometer"]].copy(),
             sensor_gyro=s[:, a["imu_gyro"]].copy(),
         )
+        return response

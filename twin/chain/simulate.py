@@ -134,6 +134,10 @@ class Run:
         for resp, rec in self.chunks():
             responses.append(resp)
             records.append(rec)
+        return self.simulation(responses, records)
+
+    def simulation(self, responses: list[PlatformResponse], records: list[ImuRecord]) -> Simulation:
+        """Join chunks produced by :meth:`chunks` into a :class:`Simulation`."""
         return Simulation(
             self.config, self.model, self.seed, self.commands, self.platform_input,
             PlatformResponse.concatenate(responses), VirtualImu.concatenate(records),

@@ -1,0 +1,113 @@
+"""`twin agard ...`: JSON outputs, run folders as targets, report folders, errors."""
+
+import json
+
+import numpy as np
+import pytest
+
+from twin.agard.omct import BoundsFileError, read_bounds
+from twin.cli import main
+
+
+def _json(capsys, argv):
+    assert main(argv) == 0
+    return json.loads(capsys.readouterr().out)
+
+
+def test_df_json_has_the_documented_keys(capsys):
+    out = _json(capsys, ["agard", "df", "mpi", "--dof", "pitch", "--model", "reduced",
+                         "--json", "--quiet"])  # fmt: skip
+    assert {"frequencies_hz", "gain", "phase_deg", "delay_ms"} <= out.keys()
+    assert len(out["frequencies_hz"]) == 11  # Table 5.2: 5 + 6 lines
+    assert out["delay_ms"] == pytest.approx(35.0, abs=3.0)
+
+
+def test_threshold_json_has_the_documented_keys(capsys):
+    out = _json(capsys, ["agard", "threshold", "mpi", "--dof", "heave", "--model", "reduced",
+                         "--break-hz", "10", "--amplitude", "0.1875", "--step-s", "0.5",
+                         "--json", "--quiet"])  # fmt: skip
+    assert {"delay_ms", "tau_ms", "t63_ms"} <= out.keys()
+    assert out["t63_ms"] == pytest.approx(out["delay_ms"] + out["tau_ms"])
+
+
+def test_a_recorded_run_is_analysed_by_the_same_command(capsys, tmp_path):
+    assert main(["agard", "noise", "srs", "--dof", "heave", "--model", "reduced", "--out",
+                 str(tmp_path), "--quiet"]) == 0  # fmt: skip
+    capsys.readouterr()
+    assert (tmp_path / "result.json").exists() and (tmp_path / "noise.png").exists()
+    runs = sorted((tmp_path / "runs").iterdir())
+    assert len(runs) == 6  # the six default amplitudes
+    simulated = json.loads((tmp_path / "result.json").read_text())["points"][2]
+    out = _json(capsys, ["agard", "noise", str(runs[2]), "--json"])
+    again = out["points"][0]
+    assert again["ratios"]["total"] == pytest.approx(simulated["ratios"]["total"], rel=1e-4)
+
+
+def test_omct_json_checks_the_points_against_the_bounds_file(capsys):
+    out = _json(capsys, ["agard", "omct", "srs", "--dof", "pitch", "--model", "reduced",
+                         "--no-noise", "--ideal-imu", "--json", "--quiet"])  # fmt: skip
+    assert len(out["frequencies_rad_s"]) == 12 and len(out["inside"]) == 12
+    assert out["frequencies_rad_s"][0] == pytest.approx(0.1)
+    assert out["frequencies_rad_s"][-1] == pytest.approx(10**1.2)
+    assert "ILLUSTRATIVE" in out["bounds"]["title"]
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["agard", "df", "nosuch", "--dof", "heave"], "unknown configuration 'nosuch'"),
+        (["agard", "df", "mpi"], "give --dof"),
+        (["agard", "df", "mpi", "--dof", "heave", "--break-hz", "-1"], "--break-hz must be"),
+        (
+            ["agard", "omct", "srs", "--dof", "heave", "--bounds", "/no/such.toml"],
+            "no such OMCT bounds file",
+        ),
+        (["agard", "report", "srs", "--model", "reduced", "--seed", "-3"], "seed must be"),
+    ],
+)
+def test_bad_input_is_one_line_and_exit_2(capsys, argv, message, tmp_path):
+    assert main([*argv, "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert message in err and err.count("\n") == 1
+    assert not (tmp_path / "o").exists()  # nothing written
+
+
+def test_a_malformed_run_folder_is_rejected_naming_the_file(capsys, tmp_path):
+    run = tmp_path / "run"
+    run.mkdir()
+    (run / "meta.json").write_text("{not json")
+    assert main(["agard", "df", str(run)]) == 2
+    assert "meta.json" in capsys.readouterr().err
+
+
+def test_bounds_files_are_checked(tmp_path):
+    good = read_bounds()
+    assert "default" in good.tables
+    b = good.at("heave", np.array([0.1, 15.85]))
+    assert np.all(b["gain_min"] < b["gain_max"])
+    bad = tmp_path / "b.toml"
+    bad.write_text('format = "twin-omct-bounds/1"\n[pitch]\nfrequency_rad_s = [1.0, 2.0]\n'
+                   "gain_min = [1.0, 1.0]\ngain_max = [0.5, 2.0]\n"
+                   "phase_min_deg = [0.0, 0.0]\nphase_max_deg = [1.0, 1.0]\n")  # fmt: skip
+    with pytest.raises(BoundsFileError, match="minimum lies above"):
+        read_bounds(bad)
+    bad.write_text('format = "other"\n')
+    with pytest.raises(BoundsFileError, match="format must be"):
+        read_bounds(bad)
+    bad.write_text('format = "twin-omct-bounds/1"\n[wobble]\n')
+    with pytest.raises(BoundsFileError, match="unknown table"):
+        read_bounds(bad)
+
+
+@pytest.mark.slow
+def test_report_writes_a_complete_folder(capsys, tmp_path):
+    out = tmp_path / "rep"
+    assert main(["agard", "report", "srs", "--model", "reduced", "--dof", "heave", "--out",
+                 str(out), "--quiet"]) == 0  # fmt: skip
+    names = {p.name for p in out.iterdir()}
+    assert {"report.json", "summary.md", "df-heave.png", "noise-heave.png",
+            "threshold-heave.png", "omct-heave.png", "snr-heave.png", "runs"} <= names  # fmt: skip
+    report = json.loads((out / "report.json").read_text())
+    assert set(report["dofs"]["heave"]) == {"df", "noise", "threshold", "omct", "snr"}
+    assert "## heave" in (out / "summary.md").read_text()
+    assert not (tmp_path / "rep.partial").exists()

@@ -1,0 +1,270 @@
+"""``twin agard ...``: the AGARD-AR-144 and OMCT tests from the command line.
+
+Each test takes a configuration (``mpi``, ``srs``, ``condition-N``, ...; simulated) or a
+recorded ``twin-run/1`` folder (analysed as measured). ``report`` runs the whole suite and
+writes a report folder; ``demo`` is what ``make demo`` runs.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import shutil
+import sys
+from collections.abc import Callable
+from pathlib import Path
+
+from twin.frames import DOF_NAMES
+
+TESTS = ("df", "noise", "snr", "threshold", "omct")
+HELP = {
+    "df": "describing function (§3.3.3, Table 5.2 multi-sines): gain, phase, fitted delay",
+    "noise": "half-Hertz noise level (§3.3.1): harmonic and stochastic noise ratios (Fig 3.5)",
+    "snr": "signal-to-noise grid (§3.3.2): noise-ratio contours vs system limits (Fig 3.6)",
+    "threshold": "dynamic threshold (§3.3.4): Eq 3.7 fitted to acceleration steps",
+    "omct": "Objective Motion Cueing Test (§5.3.2): DF at the twelve OMCT frequencies",
+}
+
+
+def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
+    """Add ``twin agard`` and its subcommands to the ``twin`` parser."""
+    from twin.chain.config import config_names
+
+    agard = sub.add_parser(
+        "agard", help="AGARD-AR-144 and OMCT tests on a twin or a recorded run", description=__doc__
+    )
+    tests = agard.add_subparsers(dest="test", required=True, parser_class=parser_class)
+    for name in TESTS:
+        p = tests.add_parser(name, help=HELP[name], description=HELP[name])
+        p.add_argument(
+            "target",
+            metavar="PLATFORM_OR_CONFIG",
+            help=f"{', '.join(config_names())}, or a twin-run/1 folder",
+        )
+        p.add_argument(
+            "--dof",
+            choices=DOF_NAMES,
+            help="driven DOF (needed for a configuration; a run says its own)",
+        )
+        _common(p)
+        if name == "threshold":
+            p.add_argument(
+                "--amplitude",
+                type=float,
+                default=0.1,
+                help="step amplitude, m/s^2 or rad/s^2 (default 0.1, §3.3.4)",
+            )
+            p.add_argument("--step-s", type=float, default=1.0, help="step length, s (default 1)")
+            p.add_argument(
+                "--fix-delay-ms",
+                type=float,
+                help="keep tau_d at this value (the thesis fixed it to the DF's)",
+            )
+            p.add_argument(
+                "--repeats",
+                type=int,
+                default=1,
+                help="run the 8-step pattern this many times (default 1)",
+            )
+        if name == "omct":
+            p.add_argument(
+                "--bounds",
+                default=None,
+                help="OMCT boundaries file (twin-omct-bounds/1 TOML); default: the "
+                "illustrative example shipped with the twin",
+            )
+            p.add_argument(
+                "--fraction",
+                type=float,
+                default=0.1,
+                help="sine amplitude as a fraction of the system limit (default 0.1)",
+            )
+        p.set_defaults(func=_cmd_test)
+    rep = tests.add_parser(
+        "report",
+        help="run the whole suite and write a report folder",
+        description="Run df, noise, threshold, omct and snr for each DOF and "
+        "write report.json, summary.md and figures into a folder.",
+    )
+    rep.add_argument("target", metavar="CONFIG", help=", ".join(config_names()))
+    rep.add_argument(
+        "--dof",
+        nargs="+",
+        choices=DOF_NAMES,
+        default=["pitch", "heave"],
+        help="DOFs (default pitch heave)",
+    )
+    _common(rep)
+    rep.set_defaults(func=_cmd_report)
+    demo = tests.add_parser("demo", help="the make-demo sweep: Table 5.2 DFs of MPI and SRS twins")
+    demo.add_argument("--out", default="out/demo", help="folder for figures and .rrd")
+    demo.add_argument("--quiet", action="store_true", help="no progress on stderr")
+    demo.set_defaults(func=_cmd_demo)
+
+
+def _common(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--model", choices=("full", "reduced"), default="full", help="platform model (default full)"
+    )
+    p.add_argument("--break-hz", type=float, help="platform-filter break frequency (0: none)")
+    p.add_argument("--delay-ms", type=float, help="total motion-system delay, ms")
+    p.add_argument("--no-noise", action="store_true", help="switch the Eq 5.10 noise off")
+    p.add_argument("--ideal-imu", action="store_true", help="IMU without noise and bias")
+    p.add_argument("--seed", type=int, default=0, help="seed of the first run (default 0)")
+    p.add_argument("--json", action="store_true", help="print the result as JSON")
+    p.add_argument("--out", help="folder for the runs (twin-run/1), result.json and figures")
+    p.add_argument("--rrd", help="save every run to this Rerun recording")
+    p.add_argument("--quiet", action="store_true", help="no progress on stderr")
+
+
+def _progress(args: argparse.Namespace) -> Callable[[str], None] | None:
+    from twin.agard.session import stderr_progress
+
+    return None if args.quiet else stderr_progress
+
+
+def _bench(args: argparse.Namespace, target: str):
+    from twin.agard.measure import Bench, configure
+    from twin.chain.simulate import default_imu
+
+    config = configure(target, args.break_hz, args.delay_ms, False if args.no_noise else None)
+    imu = default_imu(config.platform).ideal() if args.ideal_imu else None
+    return Bench(config, args.model, args.seed, imu)
+
+
+def _simulate(args: argparse.Namespace, out: Path | None):
+    """Run a test on a configuration (runs into ``out``); return (result, config)."""
+    from twin.agard import df, noise_level, omct, snr, threshold
+    from twin.agard.session import Session
+    from twin.errors import SignalError
+
+    if args.dof is None:
+        raise SignalError(f"give --dof for a configuration ({', '.join(DOF_NAMES)})")
+    bench = _bench(args, args.target)
+    with Session(bench, out, args.rrd, _progress(args)) as s:
+        if args.test == "df":
+            return df.run_df(s, args.dof), bench.config
+        if args.test == "noise":
+            return noise_level.run_noise(s, args.dof), bench.config
+        if args.test == "snr":
+            return snr.run_snr(s, args.dof), bench.config
+        if args.test == "threshold":
+            fix = None if args.fix_delay_ms is None else args.fix_delay_ms / 1e3
+            return threshold.run_threshold(
+                s, args.dof, args.amplitude, args.step_s, fix, args.repeats
+            ), bench.config
+        return omct.run_omct(s, args.dof, args.fraction), bench.config
+
+
+def _analyse(args: argparse.Namespace):
+    """Run a test's analysis on a recorded run folder; return (result, config)."""
+    import numpy as np
+
+    from twin.agard import df, noise_level, omct, snr, threshold
+    from twin.agard.measure import from_run
+
+    m = from_run(args.target)
+    if args.test == "df":
+        return df.analyse_df(m, args.dof), m.config
+    if args.test == "noise":
+        return noise_level.NoiseLevelResult([noise_level.analyse_noise(m, args.dof)]), m.config
+    if args.test == "snr":
+        p = noise_level.analyse_noise(m, args.dof)
+        return snr.SnrResult(p.dof, m.config.platform, [p], source=m.source), m.config
+    if args.test == "threshold":
+        fix = None if args.fix_delay_ms is None else args.fix_delay_ms / 1e3
+        return threshold.analyse_threshold(m, args.dof, fix), m.config
+    w, h = omct.analyse_omct_point(m, args.dof)
+    dof = DOF_NAMES[np.argmax(np.ptp(m.commands.values, axis=0))] if args.dof is None else args.dof
+    analytic = m.config.frequency_response([w / (2 * np.pi)])[:, DOF_NAMES.index(dof)]
+    return omct.OmctResult(
+        dof, np.array([w]), np.array([h]), analytic, m.source, m.source
+    ), m.config
+
+
+def _cmd_test(args: argparse.Namespace) -> int:
+    from twin.agard.measure import check_target, is_run_folder
+
+    check_target(args.target)
+    bounds = None
+    if args.test == "omct":  # checked before anything runs
+        from twin.agard.omct import EXAMPLE_BOUNDS, read_bounds
+
+        bounds = read_bounds(args.bounds or EXAMPLE_BOUNDS)
+    out = Path(args.out) if args.out else None
+    work = out.with_name(out.name + ".partial") if out else None  # renamed when complete
+    if work is not None:
+        shutil.rmtree(work, ignore_errors=True)
+    try:
+        if is_run_folder(args.target):
+            result, config = _analyse(args)
+        else:
+            result, config = _simulate(args, work)
+        payload = result.to_dict(bounds) if bounds is not None else result.to_dict()
+        if work is not None:
+            _save(work, args.test, result, payload, config, bounds)
+    except BaseException:
+        if work is not None:
+            shutil.rmtree(work, ignore_errors=True)
+        raise
+    if out is not None and work is not None:
+        if out.exists():
+            shutil.rmtree(out)
+        work.rename(out)
+    if args.json:
+        print(json.dumps(payload, indent=2))
+    else:
+        print(result.format_table(bounds) if bounds is not None else result.format_table())
+        if args.out:
+            print(f"wrote {args.out}/result.json and {args.out}/{args.test}.png")
+    return 0
+
+
+def _save(out: Path, test: str, result, payload: dict, config, bounds) -> None:
+    """Write result.json and the test's figure into ``out``."""
+    import matplotlib.pyplot as plt
+
+    out.mkdir(parents=True, exist_ok=True)
+    tmp = out / ".result.json.partial"
+    tmp.write_text(json.dumps(payload, indent=2) + "\n")
+    tmp.replace(out / "result.json")
+    png = str(out / f"{test}.png")
+    if test == "df":
+        fig = result.plot(png, config=config)
+    elif test == "omct":
+        from twin.agard.omct import plot_omct
+
+        fig = plot_omct([result], bounds, png)
+    else:
+        fig = result.plot(png)
+    plt.close(fig)
+
+
+def _cmd_report(args: argparse.Namespace) -> int:
+    from twin.agard.measure import check_target, is_run_folder
+    from twin.agard.report import write_report
+    from twin.errors import SignalError
+
+    check_target(args.target)
+    if is_run_folder(args.target):
+        raise SignalError(
+            "report runs the whole suite on a configuration; for a recorded run "
+            "use the single tests (twin agard df RUN_DIR, ...)"
+        )
+    bench = _bench(args, args.target)
+    out = Path(args.out or f"out/agard-{bench.config.name}-{bench.model}")
+    report = write_report(bench, args.dof, out, args.rrd, _progress(args))
+    print(json.dumps(report, indent=2) if args.json else (out / "summary.md").read_text())
+    return 0
+
+
+def _cmd_demo(args: argparse.Namespace) -> int:
+    from twin.agard.demo import run_demo
+
+    text = run_demo(Path(args.out), None if args.quiet else _stderr)
+    print(text)
+    return 0
+
+
+def _stderr(message: str) -> None:
+    print(f"  {message}", file=sys.stderr)

@@ -1,0 +1,360 @@
+"""The describing-function test (§3.3.3, §5.3.1): primary and cross describing functions.
+
+The driven DOF is excited with multi-sines (Table 5.2's two signals by default); at every
+excited frequency the describing function is the ratio of the Fourier coefficients of the
+measured and the commanded acceleration over the measurement window (Eq 3.6). Cross
+describing functions relate the same input to the accelerations measured in the undriven
+DOFs. A pure delay is fitted to the phase on top of the configuration's known dynamics
+(platform filter, resonance), and a Bode plot shows the analytic model (Eq 5.11) overlaid.
+
+Examples
+--------
+>>> from twin.agard.measure import Bench, configure
+>>> res = run_df(Bench(configure("mpi"), "reduced"), "heave", signals=(2,))  # doctest: +SKIP
+>>> round(res.delay_s * 1e3)  # doctest: +SKIP
+35
+
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy import signal
+
+from twin.agard.describing_function import (
+    describing_function,
+    fit_delay,
+    fourier_coefficients,
+    neighbour_noise,
+)
+from twin.agard.measure import Bench, Measurement, driven_dof
+from twin.agard.session import Session, signal_meta
+from twin.errors import SignalError
+from twin.frames import DOF_NAMES
+from twin.signals import describing_signal
+
+FloatArray = NDArray[np.float64]
+ComplexArray = NDArray[np.complex128]
+#: Points below this signal-to-noise ratio are drawn hollow [dB].
+LOW_SNR_DB = 6.0
+
+
+@dataclass(frozen=True, eq=False)
+class DfResult:
+    """Describing functions of one driven DOF.
+
+    Attributes
+    ----------
+    dof : str
+        Driven DOF.
+    frequencies_hz : ndarray, shape (m,)
+        Excited frequencies, ascending.
+    response : ndarray of complex, shape (m,)
+        Primary describing function (measured / commanded acceleration).
+    cross : dict of str to ndarray of complex
+        Cross describing functions: acceleration of each undriven DOF / commanded input.
+    model : ndarray of complex, shape (m,)
+        The configuration's known dynamics without delay (filter, resonance).
+    configured_delay_s : float
+        The configuration's total delay [s].
+    delay_s : float
+        Delay fitted to the phase of ``response / model``, each frequency weighted by its
+        signal-to-noise power [s].
+    source : str
+        What was measured.
+    noise : ndarray, shape (m,)
+        Standard deviation of ``response`` at each frequency, from the neighbouring
+        non-excited bins (:func:`twin.agard.describing_function.neighbour_noise`).
+    delay_equal_weights_s : float
+        The delay fitted with every frequency weighted equally (the thesis' fit) [s].
+
+    """
+
+    dof: str
+    frequencies_hz: FloatArray
+    response: ComplexArray
+    cross: dict[str, ComplexArray]
+    model: ComplexArray
+    configured_delay_s: float
+    delay_s: float
+    source: str
+    noise: FloatArray
+    delay_equal_weights_s: float
+
+    @property
+    def gain(self) -> FloatArray:
+        """|H| (ratio)."""
+        return np.abs(self.response)
+
+    @property
+    def phase_deg(self) -> FloatArray:
+        """Phase of H [deg], unwrapped from the lowest frequency."""
+        return np.degrees(np.unwrap(np.angle(self.response)))
+
+    @property
+    def snr_db(self) -> FloatArray:
+        """Signal-to-noise ratio at each frequency, 20 log10(|H| / noise) [dB]."""
+        with np.errstate(divide="ignore"):
+            return 20 * np.log10(self.gain / self.noise)
+
+    def analytic(self) -> ComplexArray:
+        """Return the analytic model (known dynamics times the configured delay) at the lines."""
+        return self.model * np.exp(-2j * np.pi * self.frequencies_hz * self.configured_delay_s)
+
+    def to_dict(self) -> dict[str, object]:
+        """JSON-ready result (``frequencies_hz``, ``gain``, ``phase_deg``, ``delay_ms``, ...)."""
+        a = self.analytic()
+        return {
+            "test": "describing function",
+            "dof": self.dof,
+            "source": self.source,
+            "frequencies_hz": self.frequencies_hz.tolist(),
+            "gain": self.gain.tolist(),
+            "gain_db": (20 * np.log10(self.gain)).tolist(),
+            "phase_deg": self.phase_deg.tolist(),
+            "delay_ms": self.delay_s * 1e3,
+            "delay_equal_weights_ms": self.delay_equal_weights_s * 1e3,
+            "configured_delay_ms": self.configured_delay_s * 1e3,
+            "gain_sd": self.noise.tolist(),
+            "snr_db": self.snr_db.tolist(),
+            "analytic": {
+                "gain": np.abs(a).tolist(),
+                "phase_deg": np.degrees(np.unwrap(np.angle(a))).tolist(),
+            },
+            "cross": {
+                dof: {
+                    "gain": np.abs(h).tolist(),
+                    "phase_deg": np.degrees(np.unwrap(np.angle(h))).tolist(),
+                }
+                for dof, h in self.cross.items()
+            },
+        }
+
+    def format_table(self) -> str:
+        """Plain-text table: frequency, gain, phase, analytic gain and phase."""
+        a = self.analytic()
+        lines = [
+            f"describing function, {self.dof} ({self.source})",
+            f"{'f [Hz]':>7} {'gain dB':>8} {'phase':>7} {'Eq 5.11 dB':>10} {'phase':>7} "
+            f"{'SNR dB':>7}",
+        ]
+        phase_a = np.degrees(np.unwrap(np.angle(a)))
+        for f, g, p, ga, pa, snr in zip(
+            self.frequencies_hz,
+            self.gain,
+            self.phase_deg,
+            np.abs(a),
+            phase_a,
+            self.snr_db,
+            strict=True,
+        ):
+            lines.append(
+                f"{f:7.2f} {20 * np.log10(g):8.2f} {p:7.1f} {20 * np.log10(ga):10.2f}"
+                f" {pa:7.1f} {snr:7.1f}"
+            )
+        lines.append(
+            f"fitted delay {self.delay_s * 1e3:.1f} ms, weighted by signal-to-noise "
+            f"({self.delay_equal_weights_s * 1e3:.1f} ms with equal weights; "
+            f"configured {self.configured_delay_s * 1e3:.1f} ms)"
+        )
+        return "\n".join(lines)
+
+    def plot(self, path: str | None = None, config=None, cross: bool = True):
+        """Bode plot: measured points, the analytic model and the fitted delay.
+
+        Parameters
+        ----------
+        path : str, optional
+            Save the figure here.
+        config : MotionSystem, optional
+            For a smooth analytic curve (otherwise the analytic model at the points).
+        cross : bool
+            Also show the largest cross describing function.
+
+        """
+        import matplotlib.pyplot as plt
+
+        fig, (ax_g, ax_p) = plt.subplots(2, 1, figsize=(6, 5.5), sharex=True)
+        f = self.frequencies_hz
+        k = DOF_NAMES.index(self.dof)
+        if config is not None:
+            fa = np.geomspace(min(f.min(), 0.05), max(f.max(), 10.0), 300)
+            ha = config.frequency_response(fa)[:, k]
+            ax_g.semilogx(fa, 20 * np.log10(np.abs(ha)), "k-", lw=0.8, label="Eq 5.11")
+            ax_p.semilogx(fa, np.degrees(np.unwrap(np.angle(ha))), "k-", lw=0.8)
+            h0 = config.replace(delay_s=0.0).frequency_response(fa)[:, k]
+            hf = h0 * np.exp(-2j * np.pi * fa * self.delay_s)
+            ax_p.semilogx(
+                fa,
+                np.degrees(np.unwrap(np.angle(hf))),
+                "C1--",
+                lw=0.8,
+                label=f"fitted delay {self.delay_s * 1e3:.1f} ms",
+            )
+        good = self.snr_db >= LOW_SNR_DB
+        for sel, face, what in ((good, "C0", ""), (~good, "none", f" (SNR < {LOW_SNR_DB} dB)")):
+            if sel.any():
+                ax_g.semilogx(
+                    f[sel],
+                    20 * np.log10(self.gain[sel]),
+                    "o",
+                    mfc=face,
+                    mec="C0",
+                    label=f"measured {self.dof}{what}",
+                )
+                ax_p.semilogx(f[sel], self.phase_deg[sel], "o", mfc=face, mec="C0")
+        if cross and self.cross:
+            worst = max(self.cross, key=lambda d: np.abs(self.cross[d]).max())
+            ax_g.semilogx(
+                f, 20 * np.log10(np.abs(self.cross[worst]) + 1e-12), "x", label=f"cross: {worst}"
+            )
+        ax_g.set_ylabel("gain [dB]")
+        ax_p.set_ylabel("phase [deg]")
+        ax_p.set_xlabel("frequency [Hz]")
+        ax_g.legend(fontsize=8)
+        ax_p.legend(fontsize=8)
+        ax_g.set_title(f"describing function, {self.dof}: {self.source}", fontsize=9)
+        fig.tight_layout()
+        if path:
+            fig.savefig(path, dpi=120)
+        return fig
+
+
+def periodic_design(m: Measurement, k: int) -> tuple[FloatArray, tuple[float, float]]:
+    """Excited frequencies and measurement window of a periodic run.
+
+    From the run's ``meta["signal"]`` when the twin wrote it; otherwise inferred from the
+    commanded acceleration: spectral peaks above 2 % of the largest in the middle half of the
+    run, the fades of Eq 3.1 (1 / f_min long) at both ends, and the longest whole number of
+    base periods that fits between them, ending where the fade-out starts.
+    """
+    sig = m.meta.get("signal", {})
+    if "frequencies_hz" in sig and "window_s" in sig:
+        return np.asarray(sig["frequencies_hz"], dtype=float), tuple(sig["window_s"])
+    u = m.commanded[:, k]
+    n = u.size
+    mid = u[n // 4 : 3 * n // 4]
+    if mid.size < 64 or not np.any(mid):
+        raise SignalError(f"{m.source}: the commands hold no periodic signal to analyse")
+    pad = 16 * mid.size
+    spec = np.abs(np.fft.rfft(mid * signal.windows.blackmanharris(mid.size), pad))
+    freqs = np.fft.rfftfreq(pad, m.t[1] - m.t[0])
+    peak = (spec[1:-1] > spec[:-2]) & (spec[1:-1] >= spec[2:]) & (spec[1:-1] > 0.01 * spec.max())
+    found = freqs[1:-1][peak]
+    if found.size == 0:
+        raise SignalError(f"{m.source}: no excited frequency found in the commands")
+    # the frequencies are multiples of a base frequency (§3.2.3.3): the largest that fits all
+    tol = 0.3 / (mid.size * (m.t[1] - m.t[0]))
+    for k_div in range(1, 2001):
+        fb = found.min() / k_div
+        if np.all(np.abs(found / fb - np.round(found / fb)) * fb < tol):
+            break
+    harmonic = np.round(found / fb)
+    fb = float(harmonic @ found / (harmonic @ harmonic))  # refined on all lines
+    f = np.unique(harmonic * fb)
+    period = 1.0 / fb
+    start, end = m.t[0] + 1.0 / f.min(), m.t[-1] - 1.0 / f.min()
+    count = int(np.floor((end - start) / period + 1e-9))
+    if count < 1:
+        raise SignalError(f"{m.source}: the run is too short for one period of {1 / period} Hz")
+    return f, (end - count * period, end)
+
+
+def analyse_df(m: Measurement, dof: str | None = None) -> DfResult:
+    """Return the describing functions of one measurement (design from its signal)."""
+    k = driven_dof(m, dof)
+    f, window = periodic_design(m, k)
+    u = m.commanded[:, k]
+    U = fourier_coefficients(m.t, u, f, window)
+    h = describing_function(m.t, u, m.measured[:, k], f, window)
+    noise = neighbour_noise(m.t, m.measured[:, k], f, window) / np.abs(U)
+    cross = {
+        DOF_NAMES[j]: describing_function(m.t, u, m.measured[:, j], f, window)
+        for j in range(6)
+        if j != k
+    }
+    model = m.config.replace(delay_s=0.0).frequency_response(f)[:, k]
+    return _result(DOF_NAMES[k], f, h, cross, model, m.config.delay_s, m.source, noise)
+
+
+def _result(dof, f, h, cross, model, delay, source, noise) -> DfResult:
+    snr = np.abs(h) ** 2 / np.where(noise > 0, noise, np.nan) ** 2
+    weights = np.where(np.isfinite(snr), snr, 1.0) if np.any(noise > 0) else None
+    return DfResult(
+        dof,
+        f,
+        h,
+        cross,
+        model,
+        delay,
+        fit_delay(f, h, model, weights),
+        source,
+        noise,
+        fit_delay(f, h, model),
+    )
+
+
+def combine(results: Sequence[DfResult]) -> DfResult:
+    """Join the describing functions of several runs of the same DOF (e.g. signals 1 and 2)."""
+    if len({r.dof for r in results}) != 1:
+        raise SignalError("only describing functions of the same DOF can be combined")
+    f = np.concatenate([r.frequencies_hz for r in results])
+    order = np.argsort(f)
+
+    def join(name: str) -> NDArray:
+        return np.concatenate([getattr(r, name) for r in results])[order]
+
+    cross = {d: np.concatenate([r.cross[d] for r in results])[order] for d in results[0].cross}
+    sources = "; ".join(sorted({r.source for r in results}))
+    return _result(
+        results[0].dof,
+        f[order],
+        join("response"),
+        cross,
+        join("model"),
+        results[0].configured_delay_s,
+        sources,
+        join("noise"),
+    )
+
+
+def run_df(session: Session, dof: str, signals: Sequence[int] = (1, 2)) -> DfResult:
+    """Run the Table 5.2 multi-sines in ``dof`` on a session's bench and analyse them."""
+    results = []
+    for number in signals:
+        sig = describing_signal(number, dof, settle_s=None)
+        m = session.measure(sig, f"multisine{number}-{dof}")
+        results.append(analyse_df(m, dof))
+    return combine(results)
+
+
+def sweep(
+    bench: Bench, dofs: Sequence[str], signals: Sequence[int] = (1, 2), workers: int = 2
+) -> dict[str, DfResult]:
+    """Run the describing-function sweep of several DOFs, runs in parallel threads (no sinks).
+
+    Runs are numbered as a :class:`Session` numbers them (DOF by DOF, signal by signal), so
+    the seeds and the results equal those of :func:`run_df` on a fresh session.
+    """
+    jobs = [(dof, number) for dof in dofs for number in signals]
+
+    def one(k: int) -> Measurement:
+        dof, number = jobs[k]
+        sig = describing_signal(number, dof, settle_s=None)
+        sim = bench.prepare(sig.commands, k, f"multisine{number}-{dof}").collect()
+        return bench.measure(sim, {"signal": signal_meta(sig)})
+
+    with ThreadPoolExecutor(max(1, workers)) as pool:  # MuJoCo and NumPy release the GIL
+        measurements = list(pool.map(one, range(len(jobs))))
+    out = {}
+    for dof in dofs:
+        parts = [
+            analyse_df(m, dof) for (d, _), m in zip(jobs, measurements, strict=True) if d == dof
+        ]
+        out[dof] = combine(parts)
+    return out

@@ -1,0 +1,221 @@
+"""Measurements: run a test signal on a twin (or read a recorded run) and get accelerations.
+
+Every AGARD-AR-144 test compares a commanded acceleration with the acceleration an IMU
+measured (§3.3: "acceleration is chosen as the metric"). A :class:`Measurement` holds both on
+the post-processing grid (App. C.2.3: FIR 201 taps / 15 Hz, Savitzky-Golay differentiator,
+100 Hz):
+
+* commanded: the second derivative of the pose commands (the cubic spline the twin follows):
+  UGP acceleration in base axes [m/s^2] and Euler-angle accelerations [rad/s^2];
+* measured: the IMU's specific force with the static 1 g removed (f + (0, 0, 9.81) in cabin
+  axes: a cabin at rest reads zero; tilt still shows, as g sin(theta) in surge when pitching,
+  because specific force is what a pilot feels, §3.3) and the angular acceleration
+  differentiated from the gyros [rad/s^2].
+
+A :class:`Bench` is what is measured: a motion-system configuration on the full or reduced
+platform, with a seed and an IMU. The same analyses run on a recorded ``twin-run/1`` folder
+(:func:`from_run`), so a real platform's measurement goes through the same code.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+
+from twin.chain.config import MotionSystem, motion_system
+from twin.chain.imu import ImuRecord, ImuSpec, postprocess
+from twin.chain.simulate import MODELS, Run, Simulation, prepare
+from twin.errors import SignalError, UnknownPlatformError
+from twin.frames import DOF_NAMES
+from twin.runs import RecordedRun, read_run
+from twin.signals import check_signal
+from twin.trajectory import Trajectory
+
+FloatArray = NDArray[np.float64]
+G = 9.81
+#: Rate of the post-processed signals (App. C.2.3) [Hz].
+ANALYSIS_RATE_HZ = 100.0
+
+
+@dataclass(frozen=True, eq=False)
+class Measurement:
+    """Commanded and measured accelerations of one run, on the post-processing grid.
+
+    Attributes
+    ----------
+    t : ndarray, shape (n,)
+        Time [s].
+    commanded, measured : ndarray, shape (n, 6)
+        Accelerations per DOF (surge, sway, heave [m/s^2], roll, pitch, yaw [rad/s^2]).
+    commands : Trajectory
+        The pose commands of the run.
+    source : str
+        What was measured (configuration, model and seed, or the run folder).
+    config : MotionSystem
+        The configuration (for the analytic model; from ``meta.json`` for recorded runs).
+    meta : dict
+        Signal design and other facts (``signal`` as written by :mod:`twin.agard.runs`).
+
+    """
+
+    t: FloatArray
+    commanded: FloatArray
+    measured: FloatArray
+    commands: Trajectory
+    source: str
+    config: MotionSystem
+    meta: dict = field(default_factory=dict)
+
+
+def from_imu(
+    commands: Trajectory, imu: ImuRecord, source: str, config: MotionSystem, meta: dict
+) -> Measurement:
+    """Post-process IMU samples (App. C.2.3) and pair them with the commanded accelerations."""
+    p = postprocess(imu, ANALYSIS_RATE_HZ)
+    t = p.t
+    acc = commands.at(t, 2)
+    measured = np.hstack([p.accel + np.array([0.0, 0.0, G]), p.angular_acceleration])
+    return Measurement(t, acc, measured, commands, source, config, meta)
+
+
+def from_run(run: RecordedRun | str | Path) -> Measurement:
+    """Return the :class:`Measurement` of a recorded ``twin-run/1`` folder (validated)."""
+    rec = run if isinstance(run, RecordedRun) else read_run(run)
+    cfg = rec.meta["platform_config"]
+    config = MotionSystem(
+        name=str(cfg.get("name", "recorded")),
+        platform=rec.meta["platform"],
+        filter_break_hz=cfg["filter_break_hz"],
+        delay_s=float(cfg["delay_s"]),
+        noise=bool(cfg["noise"]),
+        resonance=bool(cfg.get("resonance", False)),
+        description=f"from {rec.path}/meta.json",
+    )
+    imu = ImuRecord(rec.imu_t, rec.imu[:, :3], rec.imu[:, 3:])
+    return from_imu(rec.commands, imu, str(rec.path), config, dict(rec.meta))
+
+
+@dataclass(frozen=True)
+class Bench:
+    """A simulated platform set up for tests: configuration, model, seed and IMU.
+
+    Attributes
+    ----------
+    config : MotionSystem
+        The motion system.
+    model : str
+        ``"full"`` (MuJoCo) or ``"reduced"`` (Eq 5.11).
+    seed : int
+        Seed of the first run; run ``k`` of a test uses ``seed + k``.
+    imu : ImuSpec or None
+        The IMU; the platform's ADIS16355 at the UGP by default.
+
+    """
+
+    config: MotionSystem
+    model: str = "full"
+    seed: int = 0
+    imu: ImuSpec | None = None
+
+    def __post_init__(self) -> None:
+        """Check the model and seed."""
+        if self.model not in MODELS:
+            raise SignalError(f"unknown model {self.model!r}; expected one of {MODELS}")
+        if not isinstance(self.seed, int) or self.seed < 0:
+            raise SignalError(f"seed must be an integer >= 0; got {self.seed!r}")
+
+    @property
+    def name(self) -> str:
+        """Short description, e.g. ``mpi (full, seed 0)``."""
+        return f"{self.config.name} ({self.model}, seed {self.seed})"
+
+    def prepare(self, commands: Trajectory, k: int = 0, label: str = "signal") -> Run:
+        """Check ``commands`` against the platform limits and set up run ``k``."""
+        check_signal(commands, self.config.platform, label)
+        return prepare(self.config, commands, self.model, self.seed + k, self.imu)
+
+    def measure(self, sim: Simulation, meta: dict | None = None) -> Measurement:
+        """Turn a simulation of this bench into a :class:`Measurement`."""
+        return from_imu(
+            sim.commands, sim.imu, f"{self.name} run seed {sim.seed}", self.config, dict(meta or {})
+        )
+
+
+def configure(
+    name: str,
+    break_hz: float | None = None,
+    delay_ms: float | None = None,
+    noise: bool | None = None,
+    resonance: bool | None = None,
+) -> MotionSystem:
+    """Return a named configuration with the command-line overrides of ``twin agard``.
+
+    Parameters
+    ----------
+    name : str
+        ``mpi``, ``srs``, ``condition-N``, ... (:func:`twin.chain.config.motion_system`).
+    break_hz : float, optional
+        Platform-filter break frequency [Hz]; 0 removes the filter.
+    delay_ms : float, optional
+        Total motion-system delay [ms] (command to measured response, as §5.6.2.2 measures
+        it: on the SRS, 25 ms is the SRS alone and 60 ms adds the MPI's 35 ms).
+    noise : bool, optional
+        Heave noise of Eq 5.10 on or off.
+    resonance : bool, optional
+        SRS resonance terms of Eq 5.12/5.13 on or off.
+
+    """
+    ms = motion_system(name)
+    changes: dict[str, object] = {}
+    tags = []
+    if break_hz is not None:
+        if not np.isfinite(break_hz) or break_hz < 0:
+            raise SignalError(f"--break-hz must be >= 0 (0: no filter); got {break_hz}")
+        changes["filter_break_hz"] = float(break_hz) or None
+        tags.append(f"fb{break_hz:g}")
+    if delay_ms is not None:
+        if not np.isfinite(delay_ms) or delay_ms < 0:
+            raise SignalError(f"--delay-ms must be >= 0; got {delay_ms}")
+        changes["delay_s"] = float(delay_ms) / 1e3
+        tags.append(f"{delay_ms:g}ms")
+    if noise is not None and noise != ms.noise:
+        changes["noise"] = bool(noise)
+        tags.append("noise" if noise else "quiet")
+    if resonance is not None and resonance != ms.resonance:
+        changes["resonance"] = bool(resonance)
+        tags.append("resonance" if resonance else "no-resonance")
+    if not changes:
+        return ms
+    return ms.replace(name="-".join([ms.name, *tags]), **changes)
+
+
+def is_run_folder(target: str | Path) -> bool:
+    """Whether a command-line target names a run folder (rather than a configuration)."""
+    return Path(target).is_dir() and (Path(target) / "meta.json").exists()
+
+
+def check_target(target: str) -> None:
+    """Raise a clear error for a target that is neither a configuration nor a run folder."""
+    if is_run_folder(target):
+        return
+    if Path(target).exists():
+        raise UnknownPlatformError(f"{target}: a folder without meta.json is not a twin-run/1 run")
+    motion_system(target)
+
+
+def driven_dof(m: Measurement, dof: str | None = None) -> int:
+    """Index of the driven DOF: ``dof`` if given, else the one the commands move most."""
+    if dof is not None:
+        if dof not in DOF_NAMES:
+            raise SignalError(f"unknown DOF {dof!r}; expected one of {', '.join(DOF_NAMES)}")
+        return DOF_NAMES.index(dof)
+    signal = m.meta.get("signal", {})
+    if signal.get("dof") in DOF_NAMES:
+        return DOF_NAMES.index(signal["dof"])
+    excursion = np.ptp(m.commands.values, axis=0)
+    if not excursion.any():
+        raise SignalError(f"{m.source}: the commands do not move; no driven DOF")
+    return int(np.argmax(excursion))

@@ -1,0 +1,131 @@
+"""A test session: the runs of one AGARD test on a bench, with their sinks.
+
+Each run of a test is checked against the platform limits, simulated with its own seed
+(``bench.seed + k``), optionally written as a ``twin-run/1`` folder (``OUT/runs/NN-name``, with
+the signal's design in ``meta.json`` so that the same analysis can be run on it later) and
+logged to one Rerun recording, the runs following each other on the timeline as in a
+measurement session.
+"""
+
+from __future__ import annotations
+
+import sys
+from collections.abc import Callable
+from pathlib import Path
+
+from twin.agard.measure import Bench, Measurement
+from twin.signals import DescribingSignal, StepSignal
+from twin.simulate_cli import execute
+
+
+def signal_meta(sig: DescribingSignal | StepSignal) -> dict[str, object]:
+    """Return the ``signal`` entry of a run's ``meta.json``: how to analyse the run."""
+    if isinstance(sig, StepSignal):
+        return {
+            "kind": "steps",
+            "dof": sig.dof,
+            "amplitude": sig.amplitude,
+            "step_s": sig.step_s,
+            "start_s": sig.start_s,
+            "levels": list(sig.levels),
+        }
+    return {
+        "kind": "periodic",
+        "dof": sig.dof,
+        "label": sig.label,
+        "frequencies_hz": [float(f) for f in sig.frequencies_hz],
+        "amplitudes": None if sig.amplitudes is None else [float(a) for a in sig.amplitudes],
+        "window_s": [float(sig.window[0]), float(sig.window[1])],
+    }
+
+
+class Session:
+    """Runs test signals on a bench.
+
+    Parameters
+    ----------
+    bench : Bench
+        What is measured.
+    out : str or Path, optional
+        Folder for the run folders (``OUT/runs/NN-name``).
+    rrd : str, optional
+        Rerun recording of every run, one after the other.
+    progress : callable, optional
+        Called with a message before each run.
+
+    """
+
+    def __init__(
+        self,
+        bench: Bench,
+        out: str | Path | None = None,
+        rrd: str | None = None,
+        progress: Callable[[str], None] | None = None,
+    ) -> None:
+        self.bench = bench
+        self.out = Path(out) if out is not None else None
+        self.progress = progress
+        self.count = 0
+        self._offset = 0.0
+        self.recorder = None
+        if rrd is not None:
+            from twin.geometry import load_geometry
+            from twin.record import Recorder
+
+            self.recorder = Recorder(load_geometry(bench.config.platform), bench.name, rrd=rrd)
+
+    def measure(self, sig: DescribingSignal | StepSignal, name: str) -> Measurement:
+        """Run one signal and return its measurement."""
+        k = self.count
+        self.count += 1
+        if self.progress:
+            self.progress(f"run {k + 1}: {name} on {self.bench.name}")
+        run = self.bench.prepare(sig.commands, k, name)
+        meta = {
+            "platform": self.bench.config.platform,
+            "platform_config": self.bench.config.to_meta(),
+            "command_rate_hz": sig.commands.rate_hz,
+            "imu": {"position_m": list(run.imu_spec.position_m), "rate_hz": run.imu_spec.rate_hz},
+            "notes": f"AGARD-AR-144 test run {name}, simulated by twin",
+            "model": self.bench.model,
+            "seed": run.seed,
+            "signal": signal_meta(sig),
+        }
+        folder = None if self.out is None else self.out / "runs" / f"{k:02d}-{name}"
+        try:
+            sim = execute(
+                run, meta, folder, overwrite=True, recorder=self.recorder, offset_s=self._offset
+            )
+        except BaseException:
+            self.abort()
+            raise
+        self._offset += sig.commands.duration + 1.0
+        return self.bench.measure(sim, {"signal": meta["signal"]})
+
+    def close(self) -> None:
+        """Finish the recording (if any)."""
+        if self.recorder is not None:
+            self.recorder.close()
+            self.recorder = None
+
+    def abort(self) -> None:
+        """Delete a partial recording."""
+        if self.recorder is not None:
+            self.recorder.abort()
+            self.recorder = None
+
+    def __enter__(self) -> Session:
+        """Enter the context."""
+        return self
+
+    def __exit__(self, kind: object, exc: object, tb: object) -> None:
+        """Close, or abort on an exception."""
+        if kind is None:
+            self.close()
+        else:
+            self.abort()
+
+
+def stderr_progress(message: str) -> None:
+    """Print progress on stderr."""
+    print(f"  {message}", file=sys.stderr)

@@ -1,0 +1,258 @@
+"""The dynamic threshold test (§3.3.4, §4.3.2, Fig 3.8, Fig 4.2).
+
+Square-wave acceleration steps (Fig 3.2b) drive one DOF; the first-order lag with delay of
+Eq 3.7, G(s) = e^{-tau_d s} / (tau s + 1), is fitted to the measured acceleration response in
+the time domain (least squares over the whole step sequence, the input being the commanded
+acceleration). ``t63 = tau_d + tau`` is the time the fitted model takes to reach 63 % of a
+step (§3.3.4). The delay can be fixed, as the thesis fixed it to the describing function's
+(100 ms in §3.4.4). The configuration's analytic model (Eq 5.11) is put through the same fit
+on the same input, so measured and analytic 63 % times compare like for like; the exact
+63 % time of the analytic step response from rest is reported too.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy import signal
+from scipy.optimize import brentq, least_squares
+
+from twin.agard.measure import Measurement, driven_dof
+from twin.agard.session import Session
+from twin.chain.config import MotionSystem
+from twin.chain.spline_filter import filter_spline
+from twin.errors import SignalError
+from twin.frames import DOF_NAMES
+from twin.signals import square_steps
+from twin.trajectory import Trajectory
+
+FloatArray = NDArray[np.float64]
+
+
+def lag_delay_response(t: FloatArray, u: FloatArray, tau: float, delay: float) -> FloatArray:
+    """Response of e^{-delay s} / (tau s + 1) to ``u`` (linear between samples), from rest."""
+    _, y, _ = signal.lsim(([1.0], [max(tau, 1e-6), 1.0]), u, t - t[0])
+    return np.interp(t - delay, t, y, left=0.0)
+
+
+@dataclass(frozen=True)
+class LagDelayStepFit:
+    """Eq 3.7 fitted to a step response.
+
+    Attributes
+    ----------
+    delay_s, tau_s : float
+        tau_d and tau [s].
+    rms_error : float
+        RMS residual over the fit span [signal units].
+
+    """
+
+    delay_s: float
+    tau_s: float
+    rms_error: float
+
+    @property
+    def t63_s(self) -> float:
+        """Time to 63 % of a step: tau_d + tau [s]."""
+        return self.delay_s + self.tau_s
+
+
+def fit_eq_3_7(
+    t: FloatArray, u: FloatArray, y: FloatArray, fixed_delay_s: float | None = None
+) -> LagDelayStepFit:
+    """Fit Eq 3.7 to the response ``y`` of the input ``u`` (least squares in time).
+
+    Parameters
+    ----------
+    t, u, y : ndarray, shape (n,)
+        Uniform times, commanded and measured acceleration.
+    fixed_delay_s : float, optional
+        Keep tau_d at this value and fit tau only.
+
+    """
+    if not np.any(u):
+        raise SignalError("the input of the step fit is zero")
+
+    def residual(x: FloatArray) -> FloatArray:
+        delay = fixed_delay_s if fixed_delay_s is not None else x[1]
+        return lag_delay_response(t, u, x[0], delay) - y
+
+    best = None
+    delays = [0.0] if fixed_delay_s is not None else [0.0, 0.03, 0.1, 0.2]
+    for tau0 in (0.02, 0.1, 0.3):
+        for d0 in delays:
+            x0 = [tau0] if fixed_delay_s is not None else [tau0, d0]
+            lo, hi = ([1e-4], [5.0]) if fixed_delay_s is not None else ([1e-4, 0.0], [5.0, 1.0])
+            sol = least_squares(residual, x0, bounds=(lo, hi), x_scale=[0.05] * len(x0))
+            if best is None or sol.cost < best.cost:
+                best = sol
+    delay = fixed_delay_s if fixed_delay_s is not None else float(best.x[1])
+    rms = float(np.sqrt(2 * best.cost / t.size))
+    return LagDelayStepFit(float(delay), float(best.x[0]), rms)
+
+
+def analytic_t63(config: MotionSystem, dof: str) -> float:
+    """Exact 63 % time of the configuration's Eq 5.11 acceleration step response from rest [s]."""
+    if config.filter_break_hz is None:
+        return config.delay_s
+    w = 2 * np.pi * config.filter_break_hz
+    # step response of 1 / (1 + s / w)^2: 1 - (1 + w t) e^{-w t}
+    t = brentq(lambda x: 1 - (1 + w * x) * np.exp(-w * x) - (1 - np.exp(-1)), 0, 50 / w)
+    del dof
+    return config.delay_s + float(t)
+
+
+@dataclass(frozen=True, eq=False)
+class ThresholdResult:
+    """The dynamic threshold test of one DOF.
+
+    Attributes
+    ----------
+    dof : str
+        Driven DOF.
+    amplitude, step_s : float
+        Step amplitude [m/s^2 or rad/s^2] and length [s].
+    fit : LagDelayStepFit
+        Eq 3.7 fitted to the measured response.
+    analytic_fit : LagDelayStepFit
+        The same fit to the configuration's analytic response (Eq 5.11) to the same input.
+    analytic_t63_s : float
+        Exact 63 % time of the analytic step response from rest [s].
+    t, commanded, measured : ndarray
+        The fit span: time, commanded and measured acceleration (baseline removed).
+    source : str
+        What was measured.
+
+    """
+
+    dof: str
+    amplitude: float
+    step_s: float
+    fit: LagDelayStepFit
+    analytic_fit: LagDelayStepFit
+    analytic_t63_s: float
+    t: FloatArray
+    commanded: FloatArray
+    measured: FloatArray
+    source: str
+
+    def to_dict(self) -> dict[str, object]:
+        """JSON-ready (``delay_ms``, ``tau_ms``, ``t63_ms`` and the analytic values)."""
+        return {
+            "test": "dynamic threshold",
+            "dof": self.dof,
+            "amplitude": self.amplitude,
+            "step_s": self.step_s,
+            "delay_ms": self.fit.delay_s * 1e3,
+            "tau_ms": self.fit.tau_s * 1e3,
+            "t63_ms": self.fit.t63_s * 1e3,
+            "rms_error": self.fit.rms_error,
+            "analytic_fit": {
+                "delay_ms": self.analytic_fit.delay_s * 1e3,
+                "tau_ms": self.analytic_fit.tau_s * 1e3,
+                "t63_ms": self.analytic_fit.t63_s * 1e3,
+            },
+            "analytic_step_t63_ms": self.analytic_t63_s * 1e3,
+            "source": self.source,
+        }
+
+    def format_table(self) -> str:
+        """Plain-text summary."""
+        a, f = self.analytic_fit, self.fit
+        unit = "rad/s^2" if DOF_NAMES.index(self.dof) >= 3 else "m/s^2"
+        return "\n".join(
+            [
+                f"dynamic threshold, {self.dof}: steps of {self.amplitude:g} {unit} lasting "
+                f"{self.step_s:g} s ({self.source})",
+                f"{'':22}{'tau_d [ms]':>11}{'tau [ms]':>10}{'t63 [ms]':>10}",
+                f"{'measured, Eq 3.7 fit':22}{f.delay_s * 1e3:11.1f}{f.tau_s * 1e3:10.1f}"
+                f"{f.t63_s * 1e3:10.1f}",
+                f"{'Eq 5.11, same fit':22}{a.delay_s * 1e3:11.1f}{a.tau_s * 1e3:10.1f}"
+                f"{a.t63_s * 1e3:10.1f}",
+                f"Eq 5.11 step from rest reaches 63 % after {self.analytic_t63_s * 1e3:.1f} ms",
+            ]
+        )
+
+    def plot(self, path: str | None = None):
+        """Commanded, measured and fitted responses (as Fig 3.8 / Fig 4.2)."""
+        import matplotlib.pyplot as plt
+
+        fig, ax = plt.subplots(figsize=(7, 3.5))
+        ax.plot(self.t, self.commanded, "k-", lw=0.8, label="commanded")
+        ax.plot(self.t, self.measured, lw=0.7, alpha=0.8, label="measured")
+        f = self.fit
+        ax.plot(
+            self.t,
+            lag_delay_response(self.t, self.commanded, f.tau_s, f.delay_s),
+            "C3--",
+            label=f"Eq 3.7: tau_d {f.delay_s * 1e3:.0f} ms, tau {f.tau_s * 1e3:.0f} ms",
+        )
+        unit = "rad/s^2" if DOF_NAMES.index(self.dof) >= 3 else "m/s^2"
+        ax.set_xlabel("time [s]")
+        ax.set_ylabel(f"{self.dof} acceleration [{unit}]")
+        ax.set_title(f"dynamic threshold: {self.source}", fontsize=9)
+        ax.legend(fontsize=7)
+        fig.tight_layout()
+        if path:
+            fig.savefig(path, dpi=120)
+        return fig
+
+
+def analyse_threshold(
+    m: Measurement, dof: str | None = None, fixed_delay_s: float | None = None
+) -> ThresholdResult:
+    """Fit Eq 3.7 to a step-signal measurement (and the analytic model to the same input)."""
+    k = driven_dof(m, dof)
+    u = m.commanded[:, k]
+    du = np.abs(np.diff(u))
+    if du.max() <= 0:
+        raise SignalError(f"{m.source}: the commands hold no acceleration steps")
+    steps = np.flatnonzero(du > 0.3 * du.max())
+    first, last = m.t[steps[0]], m.t[steps[-1]]
+    span = (m.t >= first - 0.5) & (m.t <= min(last + 1.5, m.t[-1]))
+    before = m.t < first - 0.1
+    baseline = float(m.measured[before, k].mean()) if before.sum() > 10 else 0.0
+    t, uu = m.t[span], u[span]
+    y = m.measured[span, k] - baseline
+    fit = fit_eq_3_7(t, uu, y, fixed_delay_s)
+    # the analytic model's response to the same commanded acceleration
+    acc = Trajectory(1.0 / (t[1] - t[0]), uu[:, None], float(t[0]), ("a",))
+    model = m.config
+    y_a = acc.values[:, 0]
+    if model.filter_break_hz is not None:
+        wb = 2 * np.pi * model.filter_break_hz
+        y_a = filter_spline(acc, [1.0], [1 / wb**2, 2 / wb, 1.0])[:, 0]
+    y_a = np.interp(t - model.delay_s, t, y_a, left=0.0)
+    analytic = fit_eq_3_7(t, uu, y_a, fixed_delay_s)
+    sig = m.meta.get("signal", {})
+    amplitude = float(sig.get("amplitude", np.abs(u).max()))
+    step_s = float(sig.get("step_s", np.median(np.diff(m.t[steps]))))
+    return ThresholdResult(
+        DOF_NAMES[k],
+        amplitude,
+        step_s,
+        fit,
+        analytic,
+        analytic_t63(model, DOF_NAMES[k]),
+        t,
+        uu,
+        y,
+        m.source,
+    )
+
+
+def run_threshold(
+    session: Session,
+    dof: str,
+    amplitude: float = 0.1,
+    step_s: float = 1.0,
+    fixed_delay_s: float | None = None,
+    repeats: int = 1,
+) -> ThresholdResult:
+    """Run the square-wave steps in ``dof`` and fit Eq 3.7 (defaults: §3.3.4, 0.1 for 1 s)."""
+    sig = square_steps(dof, amplitude, step_s, repeats=repeats)
+    m = session.measure(sig, f"steps-{dof}-{amplitude:g}-{step_s:g}s")
+    return analyse_threshold(m, dof, fixed_delay_s)
