@@ -36,7 +36,9 @@ class PlatformResponse:
         Leg lengths [m].
     sensor_accelerometer, sensor_gyro : ndarray, shape (n, 3), or None
         MuJoCo's own accelerometer and gyro at the model's ``imu`` site (full model only),
-        thesis cabin axes; a cross-check of :func:`twin.chain.imu.specific_force`.
+        thesis cabin axes. The gyro equals ``omega``; the accelerometer is NOT reliable under
+        ``implicitfast`` (it misses the implicit damping correction, ~2.4x in heave): use
+        :func:`twin.chain.imu.specific_force`.
 
     """
 
