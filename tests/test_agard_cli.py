@@ -111,3 +111,17 @@ def test_report_writes_a_complete_folder(capsys, tmp_path):
     assert set(report["dofs"]["heave"]) == {"df", "noise", "threshold", "omct", "snr"}
     assert "## heave" in (out / "summary.md").read_text()
     assert not (tmp_path / "rep.partial").exists()
+
+
+def test_rrd_records_every_run_of_a_test(capsys, tmp_path):
+    from twin.record import read_entities
+
+    rrd = tmp_path / "df.rrd"
+    assert main(["agard", "df", "srs", "--dof", "heave", "--model", "reduced", "--rrd",
+                 str(rrd), "--quiet"]) == 0  # fmt: skip
+    counts = read_entities(rrd)
+    out = capsys.readouterr().out
+    assert "fitted delay" in out
+    # both multi-sine runs, one after the other: IMU samples of 60 s + 40 s at 819.2 Hz
+    assert counts["/imu/az"] == pytest.approx(819.2 * 100, rel=0.01)
+    assert counts["/legs/l1"] > 0 and counts["/world/cabin"] > 0
