@@ -37,6 +37,7 @@ bench: $(STAMP)
 	$(BIN)/python bench/kinematics_throughput.py
 	$(BIN)/python bench/twin_throughput.py
 	$(BIN)/python bench/agard_sweep.py
+	$(BIN)/python bench/pilot_montecarlo.py
 
 clean:
 	rm -rf $(VENV) .pytest_cache .ruff_cache build *.egg-info

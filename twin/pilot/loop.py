@@ -1,0 +1,204 @@
+"""The closed loop of Chapter 2 (Fig 2.1), many runs at once.
+
+    e = f_t - x,   u = H_pe e - H_px x + n,   x = H_c (u + f_d),   H_c = 4 / s^2
+
+simulated at 100 Hz: H_c by zero-order hold, the pilot's rational parts by the bilinear
+transform with their delays as whole samples, and the remnant of Eq 2.21 driven by seeded
+unit white noise and scaled so that its power is a chosen fraction of the power of u (10 % in
+§2.5.1). Runs are vectorised: every time step updates all runs together.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy import signal
+
+from twin.errors import SignalError
+from twin.pilot.forcing import MEASUREMENT_S, RATE_HZ, RUN_IN_S, ForcingFunction
+from twin.pilot.model import REMNANT_FILTER, RollPilot
+
+FloatArray = NDArray[np.float64]
+
+
+class _Filter:
+    """A discrete transfer function stepped for many runs (transposed direct form II)."""
+
+    def __init__(self, b: FloatArray, a: FloatArray, runs: int) -> None:
+        self.b, self.a = np.asarray(b) / a[0], np.asarray(a) / a[0]
+        n = max(len(self.a), len(self.b))
+        self.b = np.pad(self.b, (0, n - len(self.b)))
+        self.a = np.pad(self.a, (0, n - len(self.a)))
+        self.z = np.zeros((n - 1, runs))
+
+    def step(self, x: FloatArray) -> FloatArray:
+        y = self.b[0] * x + (self.z[0] if len(self.z) else 0.0)
+        for i in range(len(self.z) - 1):
+            self.z[i] = self.z[i + 1] + self.b[i + 1] * x - self.a[i + 1] * y
+        if len(self.z):
+            self.z[-1] = self.b[-1] * x - self.a[-1] * y
+        return y
+
+
+def _bilinear(num: FloatArray, den: FloatArray, rate: float) -> tuple[FloatArray, FloatArray]:
+    b, a = signal.bilinear(num, den, fs=rate)
+    return b, a
+
+
+@dataclass(frozen=True, eq=False)
+class LoopData:
+    """Signals of the measurement window of many runs, shape (runs, samples).
+
+    Attributes
+    ----------
+    t : ndarray, shape (samples,)
+        Time [s] from the start of the window.
+    e, u, x, n, ft, fd : ndarray, shape (runs, samples)
+        Error, control, state, remnant and forcing functions.
+    rate_hz : float
+        Sample rate.
+
+    """
+
+    t: FloatArray
+    e: FloatArray
+    u: FloatArray
+    x: FloatArray
+    n: FloatArray
+    ft: FloatArray
+    fd: FloatArray
+    rate_hz: float
+
+
+#: Run-in of the simulated loop before the window [s]: the forced response is computed with a
+#: whole extra period (the slow canal mode, tau_v2 = 6 s, would not settle in the 8.08 s
+#: run-in of the experiment), the remnant response with 30 s (five tau_v2).
+FORCED_RUN_IN_S = RUN_IN_S + MEASUREMENT_S
+REMNANT_RUN_IN_S = 30.0
+
+
+def simulate_loop(
+    pilot: RollPilot,
+    fd: ForcingFunction,
+    ft: ForcingFunction,
+    runs: int = 1,
+    seed: int = 0,
+    remnant_scale: float = 0.0,
+    rate_hz: float = RATE_HZ,
+) -> LoopData:
+    """Simulate ``runs`` closed-loop runs and return their 81.92 s measurement windows.
+
+    The loop is linear, so each run is the forced response (one simulation, in periodic
+    steady state) plus its own remnant response (all runs at once, seeded).
+
+    Parameters
+    ----------
+    pilot : RollPilot
+        Pilot model.
+    fd, ft : ForcingFunction
+        Disturbance (added to u, before H_c) and target.
+    runs : int
+        Number of runs with fresh remnant.
+    seed : int
+        Seed of the remnant's white noise (same seed, same bits).
+    remnant_scale : float
+        Gain on the Eq 2.21 remnant (see :func:`remnant_scale_for`); 0 for none.
+    rate_hz : float
+        Simulation rate [Hz].
+
+    """
+    if runs < 1:
+        raise SignalError(f"runs must be >= 1; got {runs}")
+    n_keep = round(MEASUREMENT_S * rate_hz)
+    start = round(FORCED_RUN_IN_S * rate_hz)
+    t = np.arange(start + n_keep) / rate_hz
+    forced = _simulate(pilot, ft(t), fd(t), 1, 0.0, None, rate_hz, start)
+    out = {k: np.repeat(v, runs, axis=0) for k, v in forced.items()}
+    if remnant_scale:
+        rng = np.random.default_rng(seed)
+        start_n = round(REMNANT_RUN_IN_S * rate_hz)
+        zero = np.zeros(start_n + n_keep)
+        noise = _simulate(pilot, zero, zero, runs, remnant_scale, rng, rate_hz, start_n)
+        for k in ("e", "u", "x", "n"):
+            out[k] += noise[k]
+    t_run = t[start:] - RUN_IN_S - MEASUREMENT_S  # t = 0 at the window's start ...
+    t_exp = t_run + RUN_IN_S  # ... which is 8.08 s into the experiment's run
+    return LoopData(
+        t_run - t_run[0],
+        out["e"],
+        out["u"],
+        out["x"],
+        out["n"],
+        np.broadcast_to(ft(t_exp), (runs, n_keep)),
+        np.broadcast_to(fd(t_exp), (runs, n_keep)),
+        rate_hz,
+    )
+
+
+def _simulate(
+    pilot: RollPilot,
+    f_t: FloatArray,
+    f_d: FloatArray,
+    runs: int,
+    remnant_scale: float,
+    rng: np.random.Generator | None,
+    rate_hz: float,
+    start: int,
+) -> dict[str, FloatArray]:
+    """Step the loop over the samples of ``f_t``/``f_d``; keep the samples from ``start``."""
+    dt = 1.0 / rate_hz
+    parts = pilot.rational_parts()
+    pe = _Filter(*_bilinear(*parts["pe"][:2], rate_hz), runs)
+    px = _Filter(*_bilinear(*parts["px"][:2], rate_hz), runs)
+    d_pe, d_px = round(parts["pe"][2] * rate_hz), round(parts["px"][2] * rate_hz)
+    nf = _Filter(*_bilinear(*REMNANT_FILTER, rate_hz), runs)
+    pos, vel = np.zeros(runs), np.zeros(runs)  # H_c = 4 / s^2 by zero-order hold
+    n_keep = f_t.size - start
+    out = {k: np.empty((runs, n_keep)) for k in ("e", "u", "x", "n")}
+    hist = max(d_pe, d_px) + 1
+    e_hist, x_hist = np.zeros((hist, runs)), np.zeros((hist, runs))
+    zeros = np.zeros(runs)
+    for k in range(f_t.size):
+        x = pos
+        e = f_t[k] - x
+        e_hist[k % hist], x_hist[k % hist] = e, x
+        ye = pe.step(e_hist[(k - d_pe) % hist] if k >= d_pe else zeros)
+        yx = px.step(x_hist[(k - d_px) % hist] if k >= d_px else zeros)
+        n = remnant_scale * nf.step(rng.standard_normal(runs)) if rng is not None else zeros
+        u = ye - yx + n
+        acc = 4.0 * (u + f_d[k])
+        pos = pos + vel * dt + 0.5 * acc * dt**2
+        vel = vel + acc * dt
+        if k >= start:
+            j = k - start
+            out["e"][:, j], out["u"][:, j], out["x"][:, j], out["n"][:, j] = e, u, x, n
+    return out
+
+
+def remnant_scale_for(
+    pilot: RollPilot,
+    fd: ForcingFunction,
+    ft: ForcingFunction,
+    ratio: float = 0.1,
+    rate_hz: float = RATE_HZ,
+    runs: int = 64,
+    seed: int = 12345,
+) -> float:
+    """Gain on the Eq 2.21 remnant that makes its power ``ratio`` times the power of u.
+
+    The loop is linear: u = u_f + g u_n and n = g n_1, so g^2 P(n_1) = ratio (P(u_f) +
+    g^2 P(u_n)) gives g; the powers of the remnant parts are averaged over ``runs`` runs.
+    """
+    if not 0 < ratio < 1:
+        raise SignalError(f"remnant power ratio must be between 0 and 1; got {ratio}")
+    forced = simulate_loop(pilot, fd, ft, 1, seed, 0.0, rate_hz)
+    zero = ForcingFunction(fd.omega_rad_s[:1], np.zeros(1), np.zeros(1))
+    noise = simulate_loop(pilot, zero, zero, runs, seed, 1.0, rate_hz)
+    p_uf = float(np.mean(forced.u**2))
+    p_n1 = float(np.mean(noise.n**2))
+    p_un = float(np.mean(noise.u**2))
+    if p_n1 <= ratio * p_un:
+        raise SignalError(f"a remnant power ratio of {ratio} cannot be reached in this loop")
+    return float(np.sqrt(ratio * p_uf / (p_n1 - ratio * p_un)))
