@@ -1,0 +1,127 @@
+"""Chapter 6's experiment in simulation: the eight motion conditions of Table 6.3.
+
+The same pilot (fixed: the model does not adapt, so every difference is the motion's) flies the
+pitch task through each condition; the variances of e, u and theta are split into target,
+disturbance and remnant parts (§6.4.1), the disturbance and target open loops give crossover
+frequencies and phase margins (§6.4.2.1), and each factor's effect (platform filter, delay,
+noise) is the mean over the four conditions with it minus the mean over the four without, as in
+a 2x2x2 factorial design.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from twin.chain.config import motion_system
+from twin.errors import SignalError
+from twin.pilot.forcing import pitch_task
+from twin.pilot.pitch import PitchPilot, open_loops, simulate_pitch, variance_decomposition
+from twin.thesis import TABLE_6_3
+
+FACTORS = ("filter", "delay", "noise")
+MEASURES = ("var_e", "var_u", "var_theta", "crossover_d", "phase_margin_d", "crossover_t",
+            "phase_margin_t", "motion_lead_phase_deg")  # fmt: skip
+
+
+def pitch_remnant_scale(pilot: PitchPilot, ratio: float = 0.15, seed: int = 0) -> float:
+    """Gain on the unit remnant making its power ``ratio`` times that of u (SRS baseline)."""
+    if not 0 < ratio < 1:
+        raise SignalError(f"remnant power ratio must be between 0 and 1; got {ratio}")
+    base = simulate_pitch(pilot, "condition-1", 16, seed, 0.0)
+    unit = simulate_pitch(pilot, "condition-1", 16, seed, 1.0)
+    un = unit.u - base.u
+    p_uf, p_n, p_un = np.mean(base.u**2), np.mean(unit.n**2), np.mean(un**2)
+    cross = 2 * np.mean(base.u * un)
+    # ratio (p_uf + g cross + g^2 p_un) = g^2 p_n
+    a, b, c = p_n - ratio * p_un, -ratio * cross, -ratio * p_uf
+    return float((-b + np.sqrt(b * b - 4 * a * c)) / (2 * a))
+
+
+@dataclass(frozen=True)
+class ExperimentResult:
+    """Measures per condition and the factor effects.
+
+    Attributes
+    ----------
+    conditions : dict of int to dict of str to float
+        Condition number -> measure -> value (variances in deg^2, crossovers in rad/s, phase
+        margins and the motion-lead phase in deg), plus the variance parts.
+    effects : dict of str to dict of str to float
+        Factor -> measure -> effect (with minus without).
+
+    """
+
+    conditions: dict[int, dict[str, object]]
+    effects: dict[str, dict[str, float]]
+
+    def format_table(self) -> str:
+        """Plain-text table of the conditions and the effects."""
+        head = (f"{'cond':>4} {'filter':>6} {'delay':>6} {'noise':>5} {'var e':>7} {'var u':>7} "
+                f"{'wc,d':>5} {'pm,d':>5} {'wc,t':>5} {'pm,t':>5} {'lead':>6}")  # fmt: skip
+        lines = ["pitch task through the Table 6.3 conditions (pilot fixed; deg^2, rad/s, deg)",
+                 head]  # fmt: skip
+        for n, c in self.conditions.items():
+            fb, delay, noise = TABLE_6_3[n]
+            filt, nz = ("1 Hz" if fb else "-"), ("+" if noise else "-")
+            lines.append(
+                f"{n:4d} {filt:>6} {delay * 1e3:4.0f}ms {nz:>5} "
+                f"{c['var_e']:7.3f} {c['var_u']:7.3f} {c['crossover_d']:5.2f} "
+                f"{c['phase_margin_d']:5.1f} {c['crossover_t']:5.2f} {c['phase_margin_t']:5.1f} "
+                f"{c['motion_lead_phase_deg']:6.1f}"
+            )
+        lines.append("effects (with minus without):")
+        for f, eff in self.effects.items():
+            lines.append(f"  {f:6s} " + "  ".join(f"{m} {v:+.3g}" for m, v in eff.items()))
+        return "\n".join(lines)
+
+
+def run_experiment(
+    pilot: PitchPilot | None = None,
+    runs: int = 5,
+    seed: int = 0,
+    remnant_ratio: float = 0.15,
+    conditions: Sequence[int] = tuple(TABLE_6_3),
+    progress: Callable[[str], None] | None = None,
+) -> ExperimentResult:
+    """Fly every condition ``runs`` times and compute the measures and factor effects."""
+    p = pilot or PitchPilot()
+    fd, ft = pitch_task()
+    scale = pitch_remnant_scale(p, remnant_ratio, seed)
+    deg2 = (180 / np.pi) ** 2
+    out: dict[int, dict[str, object]] = {}
+    for n in conditions:
+        cfg = motion_system(f"condition-{n}")
+        r = simulate_pitch(p, cfg, runs, seed + n, scale)
+        parts = {name: variance_decomposition(getattr(r, name), fd, ft)
+                 for name in ("e", "u", "theta")}  # fmt: skip
+        ol = open_loops(p, cfg)
+        out[n] = {
+            "var_e": float(np.var(r.e, axis=1).mean() * deg2),
+            "var_u": float(np.var(r.u, axis=1).mean() * deg2),
+            "var_theta": float(np.var(r.theta, axis=1).mean() * deg2),
+            "parts_deg2": {k: {c: v * deg2 for c, v in d.items()} for k, d in parts.items()},
+            "crossover_d": ol.crossover_d,
+            "phase_margin_d": ol.phase_margin_d,
+            "crossover_t": ol.crossover_t,
+            "phase_margin_t": ol.phase_margin_t,
+            "motion_lead_phase_deg": ol.motion_lead_phase_deg,
+        }
+        if progress:
+            progress(f"condition {n} done")
+    effects = {}
+    for i, f in enumerate(FACTORS):
+        with_f = [n for n in out if bool(_levels(n)[i])]
+        without = [n for n in out if not _levels(n)[i]]
+        if with_f and without:
+            effects[f] = {m: float(np.mean([out[n][m] for n in with_f])
+                                   - np.mean([out[n][m] for n in without]))
+                          for m in MEASURES}  # fmt: skip
+    return ExperimentResult(out, effects)
+
+
+def _levels(n: int) -> tuple[bool, bool, bool]:
+    fb, delay, noise = TABLE_6_3[n]
+    return (fb is not None, delay > 0.03, bool(noise))

@@ -1,0 +1,284 @@
+"""Chapter 6's pitch tracking task flown through a motion configuration of the twin.
+
+The task (§6.3.1, Fig 6.3): the Cessna Citation pitch dynamics of Eq 6.3 behind the stick gain
+K = -0.2865, the disturbance f_d acting on the control signal and the target f_t of Table 6.2,
+the compensatory display 25 ms late. The pilot (Eq 6.5-6.7) sees the error and feels the motion
+the motion system actually produces: the pitch attitude after the configuration's platform
+filter and delay (the reduced model of Eq 5.11), plus the heave noise of Eq 5.10 at the pilot
+station, 3.2 m ahead of the c.g., where a heave offset z reads as a pitch attitude -z / l (the
+model's single motion response combines pitch and pitch-heave, §6.3.5):
+
+    u = H_pe e_display - H_ptheta theta_felt + n,   theta = K H_theta,de (u + f_d)
+
+Runs are simulated at 100 Hz, vectorised over runs (as :mod:`twin.pilot.loop`). Crossover
+frequencies and phase margins of the disturbance and target open loops come from
+python-control's ``stability_margins`` on the analytic open loops.
+
+What it leaves out: the full MuJoCo platform in the loop (the motion is the reduced model's),
+the c.g. heave (negligible, §6.3.1), and any adaptation of the pilot: the pilot model is fixed
+across conditions, so the effects are those of the motion alone.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import control
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy import signal
+
+from twin.chain.config import MotionSystem, motion_system
+from twin.chain.noise import MotionNoise
+from twin.errors import SignalError
+from twin.frames import DOF_NAMES
+from twin.pilot.forcing import MEASUREMENT_S, RATE_HZ, RUN_IN_S, ForcingFunction, pitch_task
+from twin.pilot.loop import _Filter
+from twin.pilot.model import REMNANT_FILTER
+
+FloatArray = NDArray[np.float64]
+ComplexArray = NDArray[np.complex128]
+
+#: Eq 6.3: pitch attitude per elevator deflection (numerator, denominator in s).
+AIRCRAFT = (-10.6189 * np.array([1.0, 0.9906]), np.array([1.0, 2.756, 7.612, 0.0]))
+#: Stick gain K_de,u (§6.3.1), pilot station ahead of the c.g. [m], display latency [s].
+STICK_GAIN, PILOT_STATION_M, DISPLAY_DELAY_S = -0.2865, 3.2, 0.025
+PITCH = DOF_NAMES.index("pitch")
+
+
+@dataclass(frozen=True)
+class PitchPilot:
+    """The multi-modal pilot of Eq 6.5-6.7.
+
+    The thesis gives its estimates only as figures (Fig 6.8, 6.9); these defaults are
+    illustrative values for this task (on the SRS baseline: disturbance crossover 3.3 rad/s with
+    53 deg of phase margin, target crossover 0.6 rad/s), not the thesis' numbers.
+
+    Attributes
+    ----------
+    k_v, t_lead, t_lag, tau_v : float
+        Visual gain [-], lead and lag time constants [s], visual delay [s] (Eq 6.5).
+    k_m, tau_m : float
+        Motion gain [s] and motion delay [s] (Eq 6.7).
+    omega_nm, zeta_nm : float
+        Neuromuscular frequency [rad/s] and damping [-] (Eq 6.6).
+
+    """
+
+    k_v: float = 1.5
+    t_lead: float = 0.2
+    t_lag: float = 0.1
+    tau_v: float = 0.30
+    k_m: float = 0.35
+    tau_m: float = 0.20
+    omega_nm: float = 11.0
+    zeta_nm: float = 0.25
+
+    def nm(self, w: ArrayLike) -> ComplexArray:
+        """H_nm of Eq 6.6."""
+        s = 1j * np.asarray(w, dtype=float)
+        return self.omega_nm**2 / (s**2 + 2 * self.zeta_nm * self.omega_nm * s + self.omega_nm**2)
+
+    def h_pe(self, w: ArrayLike) -> ComplexArray:
+        """Eq 6.5 (without the display latency)."""
+        s = 1j * np.asarray(w, dtype=float)
+        lead = (1 + self.t_lead * s) ** 2 / (1 + self.t_lag * s)
+        return self.k_v * lead * np.exp(-s * self.tau_v) * self.nm(w)
+
+    def h_ptheta(self, w: ArrayLike) -> ComplexArray:
+        """Eq 6.7: response to the felt pitch attitude."""
+        s = 1j * np.asarray(w, dtype=float)
+        return self.k_m * s * np.exp(-s * self.tau_m) * self.nm(w)
+
+
+def aircraft(w: ArrayLike) -> ComplexArray:
+    """K H_theta,de at ``w`` [rad/s]: pitch attitude per control signal (Eq 6.3 with K)."""
+    s = 1j * np.asarray(w, dtype=float)
+    return STICK_GAIN * np.polyval(AIRCRAFT[0], s) / np.polyval(AIRCRAFT[1], s)
+
+
+def motion_response(config: MotionSystem, w: ArrayLike) -> ComplexArray:
+    """Felt over simulated pitch attitude: the configuration's filter and delay (Eq 5.11)."""
+    return config.frequency_response(np.asarray(w, dtype=float) / (2 * np.pi))[:, PITCH]
+
+
+@dataclass(frozen=True)
+class OpenLoops:
+    """Crossover frequencies [rad/s] and phase margins [deg] of the two open loops (§6.4.2.1).
+
+    The crossover is the 0 dB crossing with the smallest phase margin (python-control's
+    ``stability_margins``).
+
+    Attributes
+    ----------
+    crossover_d, phase_margin_d : float
+        Disturbance open loop, K H (H_pe e^{-s T_d} + H_ptheta H_m).
+    crossover_t, phase_margin_t : float
+        Target open loop, H_pe e^{-s T_d} K H / (1 + H_ptheta H_m K H).
+    motion_lead_phase_deg : float
+        Phase of the felt motion cue relative to the true attitude at the disturbance crossover
+        (the lead the motion channel can provide is lost by this much).
+
+    """
+
+    crossover_d: float
+    phase_margin_d: float
+    crossover_t: float
+    phase_margin_t: float
+    motion_lead_phase_deg: float
+
+
+def open_loops(pilot: PitchPilot, config: MotionSystem) -> OpenLoops:
+    """Crossovers and phase margins of the disturbance and target open loops."""
+    w = np.geomspace(0.1, 50.0, 4000)
+    hc = aircraft(w)
+    hpe = pilot.h_pe(w) * np.exp(-1j * w * DISPLAY_DELAY_S)
+    hm = pilot.h_ptheta(w) * motion_response(config, w)
+    loops = {"d": hc * (hpe + hm), "t": hpe * hc / (1 + hm * hc)}
+    out = {}
+    for name, h in loops.items():
+        # the gain crossing with the smallest phase margin (python-control's choice): with
+        # motion lead the disturbance loop can cross 0 dB more than once
+        _, pm, _, _, wgc, _ = control.stability_margins(control.frd(h, w))
+        if not np.isfinite(wgc):
+            raise SignalError(f"the {name} open loop never crosses 0 dB between 0.1 and 50 rad/s")
+        out[name] = (float(wgc), float(pm))
+    lead = float(np.degrees(np.angle(motion_response(config, [out["d"][0]])[0])))
+    return OpenLoops(out["d"][0], out["d"][1], out["t"][0], out["t"][1], lead)
+
+
+@dataclass(frozen=True, eq=False)
+class PitchRuns:
+    """Signals of the measurement windows of several runs, shape (runs, samples).
+
+    Attributes
+    ----------
+    t : ndarray
+        Time [s] from the window's start.
+    e, u, theta, theta_felt, n : ndarray
+        Error, control, pitch attitude, felt pitch attitude and remnant [rad].
+    ft, fd : ndarray, shape (samples,)
+        Forcing functions over the window.
+    config : MotionSystem
+        The motion configuration.
+
+    """
+
+    t: FloatArray
+    e: FloatArray
+    u: FloatArray
+    theta: FloatArray
+    theta_felt: FloatArray
+    n: FloatArray
+    ft: FloatArray
+    fd: FloatArray
+    config: MotionSystem
+
+
+def simulate_pitch(
+    pilot: PitchPilot,
+    config: MotionSystem | str,
+    runs: int = 1,
+    seed: int = 0,
+    remnant_scale: float = 0.0,
+    rate_hz: float = RATE_HZ,
+) -> PitchRuns:
+    """Fly the pitch task through a motion configuration (run-in 8.08 s, window 81.92 s).
+
+    Parameters
+    ----------
+    pilot : PitchPilot
+        The pilot.
+    config : MotionSystem or str
+        Motion configuration (``srs``, ``condition-1`` ... ``condition-8``, ...).
+    runs : int
+        Runs with fresh remnant and noise.
+    seed : int
+        Seed of remnant and motion noise.
+    remnant_scale : float
+        Gain on the Eq 2.21-shaped unit remnant (0: none).
+    rate_hz : float
+        Simulation rate [Hz].
+
+    """
+    cfg = motion_system(config) if isinstance(config, str) else config
+    if runs < 1:
+        raise SignalError(f"runs must be >= 1; got {runs}")
+    fd, ft = pitch_task()
+    dt = 1.0 / rate_hz
+    start = round(RUN_IN_S * rate_hz)
+    n_keep = round(MEASUREMENT_S * rate_hz)
+    t = np.arange(start + n_keep) / rate_hz
+    f_t, f_d = ft(t), fd(t)
+    rng = np.random.default_rng(np.random.SeedSequence([seed, 2]))
+    # aircraft (Eq 6.3 with K) by zero-order hold, pilot channels by the bilinear transform
+    ad, bd, cd, _, _ = signal.cont2discrete(
+        signal.tf2ss(STICK_GAIN * AIRCRAFT[0], AIRCRAFT[1]), dt, method="zoh"
+    )
+    state = np.zeros((ad.shape[0], runs))
+    w2 = pilot.omega_nm**2
+    nm_den = [1.0, 2 * pilot.zeta_nm * pilot.omega_nm, w2]
+    pe_num = pilot.k_v * w2 * np.polymul([pilot.t_lead, 1.0], [pilot.t_lead, 1.0])
+    pe = _Filter(*signal.bilinear(pe_num, np.polymul(nm_den, [pilot.t_lag, 1.0]), fs=rate_hz),
+                 runs)  # fmt: skip
+    pm = _Filter(*signal.bilinear(pilot.k_m * w2 * np.array([1.0, 0.0]), nm_den, fs=rate_hz),
+                 runs)  # fmt: skip
+    nf = _Filter(*signal.bilinear(*REMNANT_FILTER, fs=rate_hz), runs)
+    motion = None
+    if cfg.filter_break_hz is not None:
+        wb = 2 * np.pi * cfg.filter_break_hz
+        motion = _Filter(*signal.bilinear([1.0], [1 / wb**2, 2 / wb, 1.0], fs=rate_hz), runs)
+    noise = np.zeros((runs, t.size))
+    if cfg.noise:
+        gen = MotionNoise(highpass_hz=cfg.noise_highpass_hz)
+        for i in range(runs):  # heave position noise at the pilot station, as pitch attitude
+            z = gen.generate(
+                t[-1] + 1.0, np.random.default_rng(np.random.SeedSequence([seed, 3, i]))
+            )
+            noise[i] = -np.interp(t, z.t, z.position) / PILOT_STATION_M
+    d_v, d_m = round((pilot.tau_v + DISPLAY_DELAY_S) * rate_hz), round(pilot.tau_m * rate_hz)
+    delay = cfg.delay_s * rate_hz  # motion-system delay in samples (fractional)
+    d0, frac = int(np.floor(delay)), delay - np.floor(delay)
+    hist = max(d_v, d_m + d0 + 2) + 1
+    e_hist, th_hist = np.zeros((hist, runs)), np.zeros((hist, runs))
+    felt_hist = np.zeros((hist, runs))
+    zeros = np.zeros(runs)
+    out = {k: np.empty((runs, n_keep)) for k in ("e", "u", "theta", "theta_felt", "n")}
+    for k in range(t.size):
+        theta = (cd @ state)[0]
+        e = f_t[k] - theta
+        filtered = motion.step(theta) if motion is not None else theta
+        th_hist[k % hist] = filtered
+        a = th_hist[(k - d0) % hist] if k >= d0 else zeros
+        b = th_hist[(k - d0 - 1) % hist] if k >= d0 + 1 else zeros
+        felt = (1 - frac) * a + frac * b + noise[:, k]
+        e_hist[k % hist], felt_hist[k % hist] = e, felt
+        ye = pe.step(e_hist[(k - d_v) % hist] if k >= d_v else zeros)
+        ym = pm.step(felt_hist[(k - d_m) % hist] if k >= d_m else zeros)
+        n = remnant_scale * nf.step(rng.standard_normal(runs)) if remnant_scale else zeros
+        u = ye - ym + n
+        state = ad @ state + bd @ (u + f_d[k])[None, :]
+        if k >= start:
+            j = k - start
+            for name, v in (("e", e), ("u", u), ("theta", theta), ("theta_felt", felt),
+                            ("n", n)):  # fmt: skip
+                out[name][:, j] = v
+    window = slice(start, start + n_keep)
+    return PitchRuns(t[window] - t[start], out["e"], out["u"], out["theta"], out["theta_felt"],
+                     out["n"], f_t[window], f_d[window], cfg)  # fmt: skip
+
+
+def variance_decomposition(
+    x: FloatArray, fd: ForcingFunction, ft: ForcingFunction
+) -> dict[str, float]:
+    """Variance of ``x`` (runs, samples) split into target, disturbance and remnant (§6.4.1).
+
+    The power at the target lines, at the disturbance lines, and everything else (averaged
+    over runs), as Jex and Magdaleno (1978) split it.
+    """
+    n = x.shape[-1]
+    p = 2 * np.abs(np.fft.rfft(x - x.mean(axis=-1, keepdims=True), axis=-1)) ** 2 / n**2
+    p = p.mean(axis=0)
+    target, dist = p[ft.bins()].sum(), p[fd.bins()].sum()
+    return {"target": float(target), "disturbance": float(dist),
+            "remnant": float(p.sum() - target - dist)}  # fmt: skip
