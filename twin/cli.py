@@ -169,6 +169,9 @@ def build_parser() -> argparse.ArgumentParser:
     from twin.agard.cli import add_parser as add_agard
 
     add_agard(sub, _Parser)
+    from twin.pilot.cli import add_parser as add_pilot
+
+    add_pilot(sub, _Parser)
     return parser
 
 

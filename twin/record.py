@@ -180,3 +180,35 @@ def read_entities(path: str | Path) -> dict[str, int]:
     for chunk in RrdReader(str(path)).stream():
         counts[chunk.entity_path] = counts.get(chunk.entity_path, 0) + chunk.num_rows
     return counts
+
+
+def record_series(
+    path: str | Path, name: str, t: FloatArray, series: dict[str, FloatArray]
+) -> Path:
+    """Save scalar time series (entity path -> samples at ``t``) to an ``.rrd`` file.
+
+    Written to a partial name and renamed; used for pilot-in-the-loop runs (e, u, theta, the
+    forcing functions and the felt motion), each its own time series under one timeline.
+    """
+    final = Path(path)
+    final.parent.mkdir(parents=True, exist_ok=True)
+    partial = final.with_name(f".{final.name}.partial")
+    rec = rr.RecordingStream(application_id="twin", recording_id=None)
+    rec.send_recording_name(name)
+    rec.save(str(partial), default_blueprint=rrb.Blueprint(rrb.TimeSeriesView(origin="/")))
+    times = rr.TimeColumn(TIMELINE, duration=np.asarray(t, dtype=float))
+    try:
+        for entity, values in series.items():
+            rec.send_columns(
+                entity,
+                indexes=[times],
+                columns=rr.Scalars.columns(scalars=np.asarray(values, float)),
+            )
+        rec.flush()
+    except BaseException:
+        rec.disconnect()
+        partial.unlink(missing_ok=True)
+        raise
+    rec.disconnect()
+    partial.replace(final)
+    return final

@@ -1,0 +1,59 @@
+"""`twin pilot ...`: runs, recorded runs, identification, Monte-Carlo, lead; errors."""
+
+import json
+
+import pytest
+
+from twin.cli import main
+
+
+def test_run_writes_a_csv_that_identify_reads(capsys, tmp_path):
+    from twin.record import read_entities
+
+    csv, rrd = tmp_path / "run.csv", tmp_path / "run.rrd"
+    assert main(["pilot", "run", "condition-1", "--out", str(csv), "--rrd", str(rrd),
+                 "--json"]) == 0  # fmt: skip
+    run = json.loads(capsys.readouterr().out)
+    assert run["open_loops"]["crossover_d"] > run["open_loops"]["crossover_t"]
+    assert csv.read_text().splitlines()[0] == "t,ft,fd,e,u,theta,theta_felt"
+    counts = read_entities(rrd)
+    assert counts["/task/e"] == 8192 and counts["/motion/theta_felt"] == 8192
+    assert main(["pilot", "identify", str(csv), "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert len(out["omega_rad_s"]) == 20  # Table 6.2: 10 + 10 lines
+    assert 60 < out["mle"]["vaf_percent"] < 99
+    assert out["mle"]["parameters"]["k_v"] == pytest.approx(1.5, rel=0.2)
+
+
+def test_montecarlo_and_lead_json(capsys):
+    assert main(["pilot", "montecarlo", "--runs", "40", "--json"]) == 0
+    mc = json.loads(capsys.readouterr().out)
+    assert mc["runs"] == 40 and len(mc["pe"]["fc_std_gain"]) == 24
+    assert main(["pilot", "lead", "srs", "--json"]) == 0
+    lead = json.loads(capsys.readouterr().out)
+    assert [r["sensor"] for r in lead] == ["canals", "otoliths"]
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["pilot", "run", "nosuch"], "unknown configuration"),
+        (["pilot", "run", "srs", "--runs", "0"], "--runs must be"),
+        (["pilot", "run", "srs", "--model", "full"], "not available yet"),
+        (["pilot", "identify", "/no/such.csv"], "no such pilot-run file"),
+    ],
+)
+def test_bad_input_is_one_line_and_exit_2(capsys, argv, message):
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert message in err and err.count("\n") == 1
+
+
+def test_a_malformed_pilot_csv_names_the_problem(capsys, tmp_path):
+    bad = tmp_path / "bad.csv"
+    bad.write_text("t,ft,fd,e,u\n0,0,0,0,0\n")
+    assert main(["pilot", "identify", str(bad)]) == 2
+    assert "header must be" in capsys.readouterr().err
+    bad.write_text("t,ft,fd,e,u,theta\n0,0,0,0,0,0\n0.01,0,0,nan,0,0\n")
+    assert main(["pilot", "identify", str(bad)]) == 2
+    assert "e is not a finite number at row 3" in capsys.readouterr().err

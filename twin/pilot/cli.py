@@ -1,0 +1,304 @@
+"""``twin pilot ...``: pilots in the loop from the command line (thesis Ch 2, 6, 7)."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+
+import numpy as np
+
+DEG2 = (180 / np.pi) ** 2
+
+
+def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
+    """Add ``twin pilot`` and its subcommands to the ``twin`` parser."""
+    from twin.chain.config import config_names
+
+    pilot = sub.add_parser("pilot", help="pilot-in-the-loop tasks and identification")
+    cmds = pilot.add_subparsers(dest="pilot_command", required=True, parser_class=parser_class)
+    run = cmds.add_parser("run", help="fly the pitch task (§6.3) through a motion configuration")
+    run.add_argument("config", metavar="CONFIG", help=", ".join(config_names()))
+    run.add_argument(
+        "--model",
+        choices=("reduced", "full"),
+        default="reduced",
+        help="motion model in the loop (only reduced so far)",
+    )
+    run.add_argument("--runs", type=int, default=1, help="runs with fresh remnant (default 1)")
+    run.add_argument(
+        "--remnant",
+        type=float,
+        default=0.15,
+        help="remnant power over control power (default 0.15; 0: none)",
+    )
+    run.add_argument("--seed", type=int, default=0)
+    run.add_argument("--out", help="write the first run as a twin-pilot/1 CSV here")
+    run.add_argument("--rrd", help="save e, u, theta, forcing functions and felt motion (.rrd)")
+    run.add_argument("--json", action="store_true")
+    run.set_defaults(func=_cmd_run)
+    exp = cmds.add_parser("experiment", help="the eight Table 6.3 conditions, pilot fixed")
+    exp.add_argument("--runs", type=int, default=5, help="runs per condition (default 5)")
+    exp.add_argument("--seed", type=int, default=0)
+    exp.add_argument("--plot", help="save a figure of the measures per condition (PNG)")
+    exp.add_argument("--json", action="store_true")
+    exp.set_defaults(func=_cmd_experiment)
+    ide = cmds.add_parser("identify", help="FC, ARX and MLE on a twin-pilot/1 CSV")
+    ide.add_argument("csv", metavar="RUN_CSV", help="t,ft,fd,e,u,theta[,theta_felt] (rad)")
+    ide.add_argument(
+        "--config",
+        default="condition-1",
+        help="motion configuration the run was flown with (default condition-1)",
+    )
+    ide.add_argument("--json", action="store_true")
+    ide.set_defaults(func=_cmd_identify)
+    mc = cmds.add_parser("montecarlo", help="Chapter 2 Monte-Carlo: FC versus ARX (§2.5)")
+    mc.add_argument("--runs", type=int, default=1000, help="closed-loop runs (default 1000)")
+    mc.add_argument("--fit-runs", type=int, default=0, help="pilot-model fits per batch")
+    mc.add_argument("--seed", type=int, default=0)
+    mc.add_argument("--json", action="store_true")
+    mc.set_defaults(func=_cmd_montecarlo)
+    lead = cmds.add_parser("lead", help="vestibular lead through a configuration (§7.4)")
+    lead.add_argument("config", metavar="CONFIG", help=", ".join(config_names()))
+    lead.add_argument(
+        "--margin-deg",
+        type=float,
+        default=45.0,
+        help="allowed lag behind an integrator over 0.06-2.8 Hz (default 45)",
+    )
+    lead.add_argument("--json", action="store_true")
+    lead.set_defaults(func=_cmd_lead)
+
+
+def _progress(message: str) -> None:
+    print(f"  {message}", file=sys.stderr)
+
+
+def _check_runs(runs: int) -> None:
+    from twin.errors import SignalError
+
+    if runs < 1:
+        raise SignalError(f"--runs must be >= 1; got {runs}")
+
+
+def _cmd_run(args: argparse.Namespace) -> int:
+    from twin.chain.config import motion_system
+    from twin.errors import SignalError
+    from twin.pilot.experiment import pitch_remnant_scale
+    from twin.pilot.forcing import pitch_task
+    from twin.pilot.pitch import PitchPilot, open_loops, simulate_pitch, variance_decomposition
+    from twin.pilot.records import write_pilot_csv
+
+    if args.model == "full":
+        raise SignalError(
+            "the full MuJoCo platform in the pilot loop is not available yet; "
+            "use --model reduced (the configuration's Eq 5.11)"
+        )
+    _check_runs(args.runs)
+    if not 0 <= args.remnant < 1:
+        raise SignalError(f"--remnant must be in [0, 1); got {args.remnant}")
+    cfg = motion_system(args.config)
+    pilot = PitchPilot()
+    scale = pitch_remnant_scale(pilot, args.remnant, args.seed) if args.remnant else 0.0
+    r = simulate_pitch(pilot, cfg, args.runs, args.seed, scale)
+    fd, ft = pitch_task()
+    ol = open_loops(pilot, cfg)
+    out = {
+        "config": cfg.to_meta(),
+        "runs": args.runs,
+        "variance_deg2": {
+            n: {k: v * DEG2 for k, v in variance_decomposition(getattr(r, n), fd, ft).items()}
+            for n in ("e", "u", "theta")
+        },
+        "open_loops": ol.__dict__,
+    }
+    if args.out:
+        write_pilot_csv(
+            args.out,
+            {
+                "t": r.t,
+                "ft": r.ft,
+                "fd": r.fd,
+                "e": r.e[0],
+                "u": r.u[0],
+                "theta": r.theta[0],
+                "theta_felt": r.theta_felt[0],
+            },
+        )
+    if args.rrd:
+        from twin.record import record_series
+
+        record_series(
+            args.rrd,
+            f"pilot {cfg.name}",
+            r.t,
+            {
+                "task/e": r.e[0],
+                "task/u": r.u[0],
+                "task/theta": r.theta[0],
+                "forcing/ft": r.ft,
+                "forcing/fd": r.fd,
+                "motion/theta_felt": r.theta_felt[0],
+            },
+        )
+    if args.json:
+        print(json.dumps(out, indent=2))
+    else:
+        print(f"pitch task through {cfg.name} ({args.runs} run(s), reduced motion model)")
+        for n, parts in out["variance_deg2"].items():
+            print(f"  var({n}) " + ", ".join(f"{k} {v:.3f}" for k, v in parts.items()) + " deg^2")
+        print(
+            f"  disturbance loop: crossover {ol.crossover_d:.2f} rad/s, phase margin "
+            f"{ol.phase_margin_d:.1f} deg; target loop: {ol.crossover_t:.2f} rad/s, "
+            f"{ol.phase_margin_t:.1f} deg; felt-motion lag at crossover "
+            f"{ol.motion_lead_phase_deg:.1f} deg"
+        )
+    return 0
+
+
+def _cmd_experiment(args: argparse.Namespace) -> int:
+    from twin.pilot.experiment import run_experiment
+
+    _check_runs(args.runs)
+    r = run_experiment(runs=args.runs, seed=args.seed, progress=_progress)
+    if args.plot:
+        _plot_experiment(r, args.plot)
+    if args.json:
+        print(json.dumps({"conditions": r.conditions, "effects": r.effects}, indent=2))
+    else:
+        print(r.format_table())
+    return 0
+
+
+def _plot_experiment(r, path: str) -> None:
+    import matplotlib.pyplot as plt
+
+    names = (
+        ("var_e", "var(e) [deg^2]"),
+        ("var_u", "var(u) [deg^2]"),
+        ("crossover_d", "crossover, disturbance [rad/s]"),
+        ("phase_margin_d", "phase margin, disturbance [deg]"),
+    )
+    fig, axes = plt.subplots(1, 4, figsize=(13, 3.2))
+    conds = list(r.conditions)
+    for ax, (m, label) in zip(axes, names, strict=True):
+        ax.bar([str(c) for c in conds], [r.conditions[c][m] for c in conds])
+        ax.set_title(label, fontsize=9)
+        ax.set_xlabel("condition (Table 6.3)")
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def _cmd_identify(args: argparse.Namespace) -> int:
+    from twin.chain.config import motion_system
+    from twin.errors import SignalError
+    from twin.pilot.arx import ARX_RATE_HZ, decimate, select_orders
+    from twin.pilot.fc import fc_estimate
+    from twin.pilot.forcing import MEASUREMENT_S, pitch_task
+    from twin.pilot.mle import fit_pitch_pilot
+    from twin.pilot.records import read_pilot_csv
+
+    cfg = motion_system(args.config)
+    d = read_pilot_csv(args.csv)
+    rate = float(d["rate_hz"])
+    n = round(MEASUREMENT_S * rate)
+    if d["t"].size < n:
+        raise SignalError(
+            f"{args.csv}: needs at least {MEASUREMENT_S} s of data; has {d['t'].size / rate:.2f} s"
+        )
+    w = {k: v[-n:] for k, v in d.items() if k != "rate_hz"}
+    felt = w.get("theta_felt", w["theta"])
+    fd, ft = pitch_task()
+    fc = fc_estimate(w["e"][None], w["u"][None], felt[None], fd, ft, w["fd"], w["ft"])
+    arx = select_orders(
+        *(decimate(s, rate, ARX_RATE_HZ) for s in (w["u"], w["e"], felt)), rate_hz=ARX_RATE_HZ
+    )
+    h_pe, h_px = arx.responses(fc.omega_rad_s)
+    mle = fit_pitch_pilot(w["ft"], w["fd"], w["u"], cfg, rate)
+    out = {
+        "omega_rad_s": fc.omega_rad_s.tolist(),
+        "fc": {
+            "h_pe_gain": np.abs(fc.h_pe[0]).tolist(),
+            "h_pe_phase_deg": np.degrees(np.angle(fc.h_pe[0])).tolist(),
+            "h_ptheta_gain": np.abs(fc.h_px[0]).tolist(),
+            "h_ptheta_phase_deg": np.degrees(np.angle(fc.h_px[0])).tolist(),
+        },
+        "arx": {
+            "orders": arx.orders.__dict__,
+            "h_pe_gain": np.abs(h_pe).tolist(),
+            "h_ptheta_gain": np.abs(h_px).tolist(),
+        },
+        "mle": mle.to_dict(),
+    }
+    if args.json:
+        print(json.dumps(out, indent=2))
+    else:
+        p = mle.pilot
+        print(
+            f"{args.csv}: MLE fit (Eq 6.5-6.7, closed loop through {cfg.name}), "
+            f"VAF {mle.vaf_percent:.1f} %"
+        )
+        for name, sd in mle.crlb.items():
+            print(f"  {name:9s} {getattr(p, name):8.4f}  (CRLB sd {sd:.4f})")
+        print(
+            f"  ARX structure {arx.orders}; FC and ARX responses at "
+            f"{fc.omega_rad_s.size} lines in --json"
+        )
+    return 0
+
+
+def _cmd_montecarlo(args: argparse.Namespace) -> int:
+    from twin.pilot.fit import parameter_errors
+    from twin.pilot.model import RollPilot
+    from twin.pilot.montecarlo import monte_carlo
+
+    r = monte_carlo(args.runs, args.seed, fit_runs=args.fit_runs, progress=_progress)
+    out = {"runs": r.runs, "omega_rad_s": r.omega_rad_s.tolist(), "arx_orders": r.orders.__dict__}
+    for resp in ("pe", "px"):
+        out[resp] = {
+            "fc_std_gain": r.sample_std_mag("fc", resp).tolist(),
+            "arx_std_gain": r.sample_std_mag("arx", resp).tolist(),
+            "arx_analytic_std_gain": r.arx_std_mag[resp].tolist(),
+        }
+    if args.fit_runs:
+        out["parameter_errors"] = {
+            m: parameter_errors(r.pilots[m], RollPilot()) for m in ("fc", "arx")
+        }
+    if args.json:
+        print(json.dumps(out, indent=2))
+    else:
+        print(f"Chapter 2 Monte-Carlo: {r.runs} runs, ARX {r.orders}")
+        for resp in ("pe", "px"):
+            ratio = r.sample_std_mag("fc", resp) / r.sample_std_mag("arx", resp)
+            print(
+                f"  H_{resp}: FC std / ARX std at the 24 lines: {ratio.min():.1f}-{ratio.max():.1f}"
+            )
+        if args.fit_runs:
+            for m, errs in out["parameter_errors"].items():
+                print(
+                    f"  {m:3s} mean |error|: " + ", ".join(f"{k} {v:.3g}" for k, v in errs.items())
+                )
+    return 0
+
+
+def _cmd_lead(args: argparse.Namespace) -> int:
+    from twin.chain.config import motion_system
+    from twin.pilot.lead import SENSORS, analyse_lead
+
+    cfg = motion_system(args.config)
+    res = [analyse_lead(cfg, s, args.margin_deg) for s in SENSORS]
+    if args.json:
+        print(json.dumps([r.__dict__ for r in res], indent=2))
+    else:
+        print(
+            f"lead channel through {cfg.name} (criterion: at most {args.margin_deg:g} deg "
+            "behind an integrator over 0.06-2.8 Hz)"
+        )
+        for r in res:
+            print(
+                f"  {r.sensor:8s}: thresholds {r.break_hz_threshold:.2f} Hz, "
+                f"{r.delay_threshold_s * 1e3:.0f} ms; this configuration: worst phase "
+                f"{r.config_worst_phase_deg:.1f} deg -> {'meets' if r.config_meets else 'fails'}"
+            )
+    return 0
