@@ -2,13 +2,16 @@
 
 10,000 closed-loop runs of the roll task with fresh remnant, each identified with the FC
 method and a MISO ARX model (structure chosen once by FPE): wall time (goal <= 60 s on this
-2-core machine) and runs per second. Pass a number to run fewer (e.g. ``1000``).
+2-core machine) and runs per second. Pass a number to run fewer (e.g. ``1000``). Then one 90 s
+pitch-task run with the full MuJoCo platform in the loop, and with the reduced one: real-time
+factors.
 """
 
 import sys
 import time
 
 from twin.pilot.montecarlo import monte_carlo
+from twin.pilot.pitch import PitchPilot, simulate_pitch
 
 
 def main():
@@ -21,6 +24,14 @@ def main():
         f"Ch 2 Monte-Carlo: {runs} runs + FC + ARX {r.orders} in {wall:.1f} s{goal}; "
         f"{runs / wall:.0f} runs/s"
     )
+    for model in ("full", "reduced"):
+        t0 = time.perf_counter()
+        simulate_pitch(PitchPilot(), "condition-8", 1, 0, model=model)
+        wall = time.perf_counter() - t0
+        print(
+            f"one 90 s pitch-task run, {model} platform in the loop: {wall:.2f} s, "
+            f"real-time factor {90.0 / wall:.0f}x"
+        )
 
 
 if __name__ == "__main__":

@@ -39,7 +39,7 @@ def test_montecarlo_and_lead_json(capsys):
     [
         (["pilot", "run", "nosuch"], "unknown configuration"),
         (["pilot", "run", "srs", "--runs", "0"], "--runs must be"),
-        (["pilot", "run", "srs", "--model", "full"], "not available yet"),
+        (["pilot", "run", "srs", "--remnant", "1.5"], "--remnant must be"),
         (["pilot", "identify", "/no/such.csv"], "no such pilot-run file"),
     ],
 )

@@ -23,7 +23,7 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
         "--model",
         choices=("reduced", "full"),
         default="reduced",
-        help="motion model in the loop (only reduced so far)",
+        help="platform in the loop: reduced (Eq 5.11, default) or full (MuJoCo)",
     )
     run.add_argument("--runs", type=int, default=1, help="runs with fresh remnant (default 1)")
     run.add_argument(
@@ -89,18 +89,13 @@ def _cmd_run(args: argparse.Namespace) -> int:
     from twin.pilot.pitch import PitchPilot, open_loops, simulate_pitch, variance_decomposition
     from twin.pilot.records import write_pilot_csv
 
-    if args.model == "full":
-        raise SignalError(
-            "the full MuJoCo platform in the pilot loop is not available yet; "
-            "use --model reduced (the configuration's Eq 5.11)"
-        )
     _check_runs(args.runs)
     if not 0 <= args.remnant < 1:
         raise SignalError(f"--remnant must be in [0, 1); got {args.remnant}")
     cfg = motion_system(args.config)
     pilot = PitchPilot()
     scale = pitch_remnant_scale(pilot, args.remnant, args.seed) if args.remnant else 0.0
-    r = simulate_pitch(pilot, cfg, args.runs, args.seed, scale)
+    r = simulate_pitch(pilot, cfg, args.runs, args.seed, scale, model=args.model)
     fd, ft = pitch_task()
     ol = open_loops(pilot, cfg)
     out = {
@@ -144,7 +139,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
     if args.json:
         print(json.dumps(out, indent=2))
     else:
-        print(f"pitch task through {cfg.name} ({args.runs} run(s), reduced motion model)")
+        print(f"pitch task through {cfg.name} ({args.runs} run(s), {args.model} platform)")
         for n, parts in out["variance_deg2"].items():
             print(f"  var({n}) " + ", ".join(f"{k} {v:.3f}" for k, v in parts.items()) + " deg^2")
         print(

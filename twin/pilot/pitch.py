@@ -3,20 +3,20 @@
 The task (§6.3.1, Fig 6.3): the Cessna Citation pitch dynamics of Eq 6.3 behind the stick gain
 K = -0.2865, the disturbance f_d acting on the control signal and the target f_t of Table 6.2,
 the compensatory display 25 ms late. The pilot (Eq 6.5-6.7) sees the error and feels the motion
-the motion system actually produces: the pitch attitude after the configuration's platform
-filter and delay (the reduced model of Eq 5.11), plus the heave noise of Eq 5.10 at the pilot
-station, 3.2 m ahead of the c.g., where a heave offset z reads as a pitch attitude -z / l (the
-model's single motion response combines pitch and pitch-heave, §6.3.5):
+the motion system actually produces (:mod:`twin.pilot.motion`): the pitch attitude after the
+configuration's platform filter and delay on the reduced (Eq 5.11) or the full MuJoCo platform,
+plus the heave noise of Eq 5.10 at the pilot station, 3.2 m ahead of the c.g., where a heave
+offset z reads as a pitch attitude -z / l (the model's single motion response combines pitch
+and pitch-heave, §6.3.5):
 
     u = H_pe e_display - H_ptheta theta_felt + n,   theta = K H_theta,de (u + f_d)
 
 Runs are simulated at 100 Hz, vectorised over runs (as :mod:`twin.pilot.loop`). Crossover
 frequencies and phase margins of the disturbance and target open loops come from
-python-control's ``stability_margins`` on the analytic open loops.
+python-control's ``stability_margins`` on the analytic open loops (Eq 5.11 motion).
 
-What it leaves out: the full MuJoCo platform in the loop (the motion is the reduced model's),
-the c.g. heave (negligible, §6.3.1), and any adaptation of the pilot: the pilot model is fixed
-across conditions, so the effects are those of the motion alone.
+What it leaves out: the c.g. heave (negligible, §6.3.1) and any adaptation of the pilot: the
+pilot model is fixed across conditions, so the effects are those of the motion alone.
 """
 
 from __future__ import annotations
@@ -35,6 +35,7 @@ from twin.frames import DOF_NAMES
 from twin.pilot.forcing import MEASUREMENT_S, RATE_HZ, RUN_IN_S, ForcingFunction, pitch_task
 from twin.pilot.loop import _Filter
 from twin.pilot.model import REMNANT_FILTER
+from twin.pilot.motion import FullMotion, ReducedMotion
 
 FloatArray = NDArray[np.float64]
 ComplexArray = NDArray[np.complex128]
@@ -182,6 +183,7 @@ def simulate_pitch(
     seed: int = 0,
     remnant_scale: float = 0.0,
     rate_hz: float = RATE_HZ,
+    model: str = "reduced",
 ) -> PitchRuns:
     """Fly the pitch task through a motion configuration (run-in 8.08 s, window 81.92 s).
 
@@ -199,9 +201,14 @@ def simulate_pitch(
         Gain on the Eq 2.21-shaped unit remnant (0: none).
     rate_hz : float
         Simulation rate [Hz].
+    model : str
+        ``"reduced"`` (Eq 5.11) or ``"full"`` (the MuJoCo platform in the loop); see
+        :mod:`twin.pilot.motion`.
 
     """
     cfg = motion_system(config) if isinstance(config, str) else config
+    if model not in ("reduced", "full"):
+        raise SignalError(f"model must be 'reduced' or 'full'; got {model!r}")
     if runs < 1:
         raise SignalError(f"runs must be >= 1; got {runs}")
     fd, ft = pitch_task()
@@ -224,34 +231,24 @@ def simulate_pitch(
     pm = _Filter(*signal.bilinear(pilot.k_m * w2 * np.array([1.0, 0.0]), nm_den, fs=rate_hz),
                  runs)  # fmt: skip
     nf = _Filter(*signal.bilinear(*REMNANT_FILTER, fs=rate_hz), runs)
-    motion = None
-    if cfg.filter_break_hz is not None:
-        wb = 2 * np.pi * cfg.filter_break_hz
-        motion = _Filter(*signal.bilinear([1.0], [1 / wb**2, 2 / wb, 1.0], fs=rate_hz), runs)
     noise = np.zeros((runs, t.size))
     if cfg.noise:
         gen = MotionNoise(highpass_hz=cfg.noise_highpass_hz)
-        for i in range(runs):  # heave position noise at the pilot station, as pitch attitude
-            z = gen.generate(
-                t[-1] + 1.0, np.random.default_rng(np.random.SeedSequence([seed, 3, i]))
-            )
-            noise[i] = -np.interp(t, z.t, z.position) / PILOT_STATION_M
+        for i in range(runs):  # heave position noise, one seeded stream per run
+            stream = np.random.default_rng(np.random.SeedSequence([seed, 3, i]))
+            z = gen.generate(t[-1] + 1.0, stream)
+            noise[i] = np.interp(t, z.t, z.position)
+    motion_class = {"reduced": ReducedMotion, "full": FullMotion}[model]
+    motion = motion_class(cfg, runs, rate_hz, PILOT_STATION_M)
     d_v, d_m = round((pilot.tau_v + DISPLAY_DELAY_S) * rate_hz), round(pilot.tau_m * rate_hz)
-    delay = cfg.delay_s * rate_hz  # motion-system delay in samples (fractional)
-    d0, frac = int(np.floor(delay)), delay - np.floor(delay)
-    hist = max(d_v, d_m + d0 + 2) + 1
-    e_hist, th_hist = np.zeros((hist, runs)), np.zeros((hist, runs))
-    felt_hist = np.zeros((hist, runs))
+    hist = max(d_v, d_m) + 1
+    e_hist, felt_hist = np.zeros((hist, runs)), np.zeros((hist, runs))
     zeros = np.zeros(runs)
     out = {k: np.empty((runs, n_keep)) for k in ("e", "u", "theta", "theta_felt", "n")}
     for k in range(t.size):
         theta = (cd @ state)[0]
         e = f_t[k] - theta
-        filtered = motion.step(theta) if motion is not None else theta
-        th_hist[k % hist] = filtered
-        a = th_hist[(k - d0) % hist] if k >= d0 else zeros
-        b = th_hist[(k - d0 - 1) % hist] if k >= d0 + 1 else zeros
-        felt = (1 - frac) * a + frac * b + noise[:, k]
+        felt = motion.step(theta, noise[:, k])
         e_hist[k % hist], felt_hist[k % hist] = e, felt
         ye = pe.step(e_hist[(k - d_v) % hist] if k >= d_v else zeros)
         ym = pm.step(felt_hist[(k - d_m) % hist] if k >= d_m else zeros)
