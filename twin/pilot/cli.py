@@ -155,7 +155,7 @@ def _cmd_experiment(args: argparse.Namespace) -> int:
     from twin.pilot.experiment import run_experiment
 
     _check_runs(args.runs)
-    r = run_experiment(runs=args.runs, seed=args.seed, progress=_progress)
+    r = run_experiment(runs=args.runs, seed=args.seed, progress=_progress, fit=True)
     if args.plot:
         _plot_experiment(r, args.plot)
     if args.json:
@@ -166,22 +166,38 @@ def _cmd_experiment(args: argparse.Namespace) -> int:
 
 
 def _plot_experiment(r, path: str) -> None:
+    """Measures per condition as Fig 6.5-6.9: variances, open loops, estimated parameters."""
     import matplotlib.pyplot as plt
 
-    names = (
-        ("var_e", "var(e) [deg^2]"),
-        ("var_u", "var(u) [deg^2]"),
-        ("crossover_d", "crossover, disturbance [rad/s]"),
-        ("phase_margin_d", "phase margin, disturbance [deg]"),
-    )
-    fig, axes = plt.subplots(1, 4, figsize=(13, 3.2))
     conds = list(r.conditions)
-    for ax, (m, label) in zip(axes, names, strict=True):
-        ax.bar([str(c) for c in conds], [r.conditions[c][m] for c in conds])
-        ax.set_title(label, fontsize=9)
-        ax.set_xlabel("condition (Table 6.3)")
+    panels = [
+        ("var_e", "var(e) [deg^2] (Fig 6.5a)"),
+        ("var_u", "var(u) [deg^2] (Fig 6.5b)"),
+        ("vaf_percent", "VAF [%] (Fig 6.6)"),
+        ("crossover_d", "crossover d [rad/s] (Fig 6.7)"),
+        ("phase_margin_d", "phase margin d [deg] (Fig 6.7)"),
+        ("crossover_t", "crossover t [rad/s] (Fig 6.7)"),
+    ]
+    params = ("k_v", "t_lead", "t_lag", "k_m", "tau_v", "tau_m", "omega_nm", "zeta_nm")
+    fig, axes = plt.subplots(2, 7, figsize=(20, 5.5))
+    for ax, (m, label) in zip(axes[0], panels, strict=False):
+        ax.bar([str(c) for c in conds], [r.conditions[c].get(m, float("nan")) for c in conds])
+        ax.set_title(label, fontsize=8)
+    for ax, name in zip([*axes[0][len(panels) :], *axes[1]], params, strict=False):
+        ax.bar(
+            [str(c) for c in conds],
+            [r.conditions[c].get("estimated", {}).get(name, float("nan")) for c in conds],
+        )
+        ax.set_title(f"{name} (Fig 6.8-6.9)", fontsize=8)
+    for ax in axes.flat:
+        ax.tick_params(labelsize=7)
+    fig.suptitle(
+        "Table 6.3 conditions (x axis), pilot model fixed; estimated parameters from "
+        "each condition's first run",
+        fontsize=9,
+    )
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    fig.savefig(path, dpi=110)
     plt.close(fig)
 
 

@@ -10,6 +10,7 @@ a 2x2x2 factorial design.
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
@@ -18,6 +19,7 @@ import numpy as np
 from twin.chain.config import motion_system
 from twin.errors import SignalError
 from twin.pilot.forcing import pitch_task
+from twin.pilot.mle import fit_pitch_pilot
 from twin.pilot.pitch import PitchPilot, open_loops, simulate_pitch, variance_decomposition
 from twin.thesis import TABLE_6_3
 
@@ -85,8 +87,13 @@ def run_experiment(
     remnant_ratio: float = 0.15,
     conditions: Sequence[int] = tuple(TABLE_6_3),
     progress: Callable[[str], None] | None = None,
+    fit: bool = False,
 ) -> ExperimentResult:
-    """Fly every condition ``runs`` times and compute the measures and factor effects."""
+    """Fly every condition ``runs`` times and compute the measures and factor effects.
+
+    With ``fit``, the pilot model is also estimated (closed-loop MLE, :mod:`twin.pilot.mle`)
+    from each condition's first run, as the thesis did per condition (Fig 6.6, 6.8, 6.9).
+    """
     p = pilot or PitchPilot()
     fd, ft = pitch_task()
     scale = pitch_remnant_scale(p, remnant_ratio, seed)
@@ -109,6 +116,10 @@ def run_experiment(
             "phase_margin_t": ol.phase_margin_t,
             "motion_lead_phase_deg": ol.motion_lead_phase_deg,
         }
+        if fit:  # the pilot as an experimenter would identify it from the first run (Fig 6.8-6.9)
+            est = fit_pitch_pilot(r.ft, r.fd, r.u[0], cfg)
+            out[n]["estimated"] = dataclasses.asdict(est.pilot)
+            out[n]["vaf_percent"] = est.vaf_percent
         if progress:
             progress(f"condition {n} done")
     effects = {}
