@@ -28,6 +28,12 @@ ESTIMATED = ("k_v", "tau_lead", "tau_v", "k_m", "tau_m", "zeta_nm", "omega_nm")
 REMNANT_FILTER = (np.array([0.6, 0.2]), np.polymul([1.5, 1.0], [0.4, 1.0]))
 
 
+def neuromuscular(w: ArrayLike, omega_nm: float, zeta_nm: float) -> ComplexArray:
+    """Return the neuromuscular dynamics of Eq 2.20 / Eq 6.6 at ``w`` [rad/s]."""
+    s = 1j * np.asarray(w, dtype=float)
+    return omega_nm**2 / (omega_nm**2 + 2 * zeta_nm * omega_nm * s + s**2)
+
+
 @dataclass(frozen=True)
 class RollPilot:
     """Table 2.1's pilot model parameters (defaults: the thesis' values).
@@ -71,8 +77,7 @@ class RollPilot:
 
     def nm(self, w: ArrayLike) -> ComplexArray:
         """H_nm of Eq 2.20 at ``w`` [rad/s]."""
-        s = 1j * np.asarray(w, dtype=float)
-        return self.omega_nm**2 / (self.omega_nm**2 + 2 * self.zeta_nm * self.omega_nm * s + s**2)
+        return neuromuscular(w, self.omega_nm, self.zeta_nm)
 
     def h_pe(self, w: ArrayLike) -> ComplexArray:
         """Visual response to the error at ``w`` [rad/s]."""

@@ -34,7 +34,7 @@ from twin.errors import SignalError
 from twin.frames import DOF_NAMES
 from twin.pilot.forcing import MEASUREMENT_S, RATE_HZ, RUN_IN_S, ForcingFunction, pitch_task
 from twin.pilot.loop import _Filter
-from twin.pilot.model import REMNANT_FILTER
+from twin.pilot.model import REMNANT_FILTER, neuromuscular
 from twin.pilot.motion import FullMotion, ReducedMotion
 
 FloatArray = NDArray[np.float64]
@@ -77,8 +77,7 @@ class PitchPilot:
 
     def nm(self, w: ArrayLike) -> ComplexArray:
         """H_nm of Eq 6.6."""
-        s = 1j * np.asarray(w, dtype=float)
-        return self.omega_nm**2 / (s**2 + 2 * self.zeta_nm * self.omega_nm * s + self.omega_nm**2)
+        return neuromuscular(w, self.omega_nm, self.zeta_nm)
 
     def h_pe(self, w: ArrayLike) -> ComplexArray:
         """Eq 6.5 (without the display latency)."""
