@@ -26,7 +26,12 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from twin.agard.describing_function import LagDelayFit, describing_function, fit_lag_delay
+from twin.agard.describing_function import (
+    LagDelayFit,
+    describing_function,
+    fit_lag_delay,
+    phase_deg,
+)
 from twin.chain.config import MotionSystem, motion_system
 from twin.chain.reduced import ReducedPlatform
 from twin.chain.simulate import Platform, make_platform, simulate
@@ -276,10 +281,10 @@ class Comparison:
             fa = np.geomspace(f.min(), max(f.max(), 10.0), 200)
             ha = self.config.frequency_response(fa)[:, DOF_NAMES.index(dof)]
             axes[0, j].semilogx(fa, 20 * np.log10(np.abs(ha)), "k-", lw=0.8, label="Eq 5.11")
-            axes[1, j].semilogx(fa, np.degrees(np.unwrap(np.angle(ha))), "k-", lw=0.8)
+            axes[1, j].semilogx(fa, phase_deg(ha), "k-", lw=0.8)
             for h, style, label in ((r.full, "o", "full"), (r.reduced, "x", "reduced")):
                 axes[0, j].semilogx(f, 20 * np.log10(np.abs(h)), style, label=label)
-                axes[1, j].semilogx(f, np.degrees(np.unwrap(np.angle(h))), style)
+                axes[1, j].semilogx(f, phase_deg(h), style)
             axes[0, j].set_title(dof)
             axes[1, j].set_xlabel("frequency [Hz]")
         axes[0, 0].set_ylabel("gain [dB]")

@@ -22,6 +22,11 @@ DOF_NAMES = ("surge", "sway", "heave", "roll", "pitch", "yaw")
 """Names of the six pose degrees of freedom, in the order of Eq A.1."""
 
 
+def acceleration_unit(dof: str) -> str:
+    """Return the acceleration unit of a DOF: ``m/s^2`` (translations) or ``rad/s^2``."""
+    return "rad/s^2" if DOF_NAMES.index(dof) >= 3 else "m/s^2"
+
+
 def rotation_matrix(angles: ArrayLike) -> NDArray[np.float64]:
     """Return T_c^b of Eq A.2 for Euler angles (roll, pitch, yaw) in radians.
 

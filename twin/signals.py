@@ -27,7 +27,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from twin.errors import SignalError, SignalLimitError
-from twin.frames import DOF_NAMES
+from twin.frames import DOF_NAMES, acceleration_unit
 from twin.thesis import TABLE_5_2
 from twin.trajectory import Trajectory
 
@@ -282,7 +282,7 @@ def single_sine(
     """
     if dof not in DOF_NAMES:
         raise SignalError(f"unknown DOF {dof!r}; expected one of {', '.join(DOF_NAMES)}")
-    unit = "rad/s^2" if DOF_NAMES.index(dof) >= 3 else "m/s^2"
+    unit = acceleration_unit(dof)
     ms = MultiSine(np.array([float(frequency_hz)]), np.array([float(amplitude)]))
     label = f"sine {frequency_hz:g} Hz, {amplitude:g} {unit}"
     return periodic_signal(ms, dof, rate_hz, settle_s, window_s, label)

@@ -16,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
+from twin.agard.describing_function import phase_deg
 from twin.agard.df import DfResult, run_df
 from twin.agard.measure import Bench, configure
 from twin.agard.session import Session
@@ -75,7 +76,7 @@ def run_demo(out: Path, progress: Callable[[str], None] | None = None) -> str:
             )
             ax_p.semilogx(
                 r.frequencies_hz,
-                np.degrees(np.unwrap(np.angle(r.analytic()))),
+                phase_deg(r.analytic()),
                 "-",
                 color=f"C{j}",
                 lw=0.7,

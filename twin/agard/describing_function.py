@@ -30,6 +30,11 @@ FloatArray = NDArray[np.float64]
 ComplexArray = NDArray[np.complex128]
 
 
+def phase_deg(h: ArrayLike) -> FloatArray:
+    """Return the phase of a response [deg], unwrapped from its first element."""
+    return np.degrees(np.unwrap(np.angle(np.asarray(h))))
+
+
 def fourier_coefficients(
     t: ArrayLike, x: ArrayLike, frequencies_hz: ArrayLike, window: tuple[float, float]
 ) -> ComplexArray:

@@ -31,6 +31,7 @@ from twin.agard.describing_function import (
     fit_delay,
     fourier_coefficients,
     neighbour_noise,
+    phase_deg,
 )
 from twin.agard.measure import Bench, Measurement, driven_dof
 from twin.agard.session import Session, signal_meta
@@ -94,7 +95,7 @@ class DfResult:
     @property
     def phase_deg(self) -> FloatArray:
         """Phase of H [deg], unwrapped from the lowest frequency."""
-        return np.degrees(np.unwrap(np.angle(self.response)))
+        return phase_deg(self.response)
 
     @property
     def snr_db(self) -> FloatArray:
@@ -124,12 +125,12 @@ class DfResult:
             "snr_db": self.snr_db.tolist(),
             "analytic": {
                 "gain": np.abs(a).tolist(),
-                "phase_deg": np.degrees(np.unwrap(np.angle(a))).tolist(),
+                "phase_deg": phase_deg(a).tolist(),
             },
             "cross": {
                 dof: {
                     "gain": np.abs(h).tolist(),
-                    "phase_deg": np.degrees(np.unwrap(np.angle(h))).tolist(),
+                    "phase_deg": phase_deg(h).tolist(),
                 }
                 for dof, h in self.cross.items()
             },
@@ -143,7 +144,7 @@ class DfResult:
             f"{'f [Hz]':>7} {'gain dB':>8} {'phase':>7} {'Eq 5.11 dB':>10} {'phase':>7} "
             f"{'SNR dB':>7}",
         ]
-        phase_a = np.degrees(np.unwrap(np.angle(a)))
+        phase_a = phase_deg(a)
         for f, g, p, ga, pa, snr in zip(
             self.frequencies_hz,
             self.gain,
@@ -186,12 +187,12 @@ class DfResult:
             fa = np.geomspace(min(f.min(), 0.05), max(f.max(), 10.0), 300)
             ha = config.frequency_response(fa)[:, k]
             ax_g.semilogx(fa, 20 * np.log10(np.abs(ha)), "k-", lw=0.8, label="Eq 5.11")
-            ax_p.semilogx(fa, np.degrees(np.unwrap(np.angle(ha))), "k-", lw=0.8)
+            ax_p.semilogx(fa, phase_deg(ha), "k-", lw=0.8)
             h0 = config.replace(delay_s=0.0).frequency_response(fa)[:, k]
             hf = h0 * np.exp(-2j * np.pi * fa * self.delay_s)
             ax_p.semilogx(
                 fa,
-                np.degrees(np.unwrap(np.angle(hf))),
+                phase_deg(hf),
                 "C1--",
                 lw=0.8,
                 label=f"fitted delay {self.delay_s * 1e3:.1f} ms",

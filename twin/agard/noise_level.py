@@ -34,8 +34,7 @@ from numpy.typing import NDArray
 from twin.agard.measure import Measurement, driven_dof
 from twin.agard.session import Session
 from twin.errors import SignalError
-from twin.frames import DOF_NAMES
-from twin.signals import single_sine
+from twin.frames import DOF_NAMES, acceleration_unit
 
 FloatArray = NDArray[np.float64]
 
@@ -215,7 +214,7 @@ class NoiseLevelResult:
         if not self.points:
             return "no amplitude could be run: " + "; ".join(self.skipped.values())
         p0 = self.points[0]
-        unit = "rad/s^2" if DOF_NAMES.index(p0.dof) >= 3 else "m/s^2"
+        unit = acceleration_unit(p0.dof)
         lines = [
             f"half-Hertz noise level, {p0.dof} at {p0.frequency_hz:g} Hz ({p0.source})",
             f"{'A [' + unit + ']':>14} {'2nd-3rd':>8} {'4th+':>8} {'stoch.':>8} {'rough.':>8} "
@@ -260,7 +259,7 @@ class NoiseLevelResult:
         ax.set_yscale("log")
         if self.points:
             p0 = self.points[0]
-            unit = "rad/s^2" if DOF_NAMES.index(p0.dof) >= 3 else "m/s^2"
+            unit = acceleration_unit(p0.dof)
             ax.set_xlabel(f"input amplitude [{unit}]")
             ax.set_title(
                 f"noise levels at {p0.frequency_hz:g} Hz, {p0.dof}: {p0.source}", fontsize=9
@@ -284,15 +283,13 @@ def run_noise(
 
     Amplitudes whose signal would break a platform limit are skipped and reported.
     """
-    from twin.errors import SignalLimitError
-
     points, skipped = [], {}
     for a in sorted(amplitudes):
-        sig = single_sine(dof, frequency_hz, a, window_s=window_s)
-        try:
-            m = session.measure(sig, f"sine-{dof}-{frequency_hz:g}Hz-{a:g}")
-        except SignalLimitError as e:
-            skipped[float(a)] = str(e)
-            continue
-        points.append(analyse_noise(m, dof))
+        m = session.measure_sine(
+            dof, frequency_hz, a, window_s, f"sine-{dof}-{frequency_hz:g}Hz-{a:g}"
+        )
+        if isinstance(m, str):
+            skipped[float(a)] = m
+        else:
+            points.append(analyse_noise(m, dof))
     return NoiseLevelResult(points, skipped)

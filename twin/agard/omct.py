@@ -31,12 +31,11 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from twin.agard.describing_function import describing_function
+from twin.agard.describing_function import describing_function, phase_deg
 from twin.agard.measure import Measurement, driven_dof
 from twin.agard.session import Session
-from twin.errors import SignalError, SignalLimitError, TwinError
+from twin.errors import SignalError, TwinError
 from twin.frames import DOF_NAMES
-from twin.signals import single_sine
 
 FloatArray = NDArray[np.float64]
 ComplexArray = NDArray[np.complex128]
@@ -166,7 +165,7 @@ class OmctResult:
     @property
     def phase_deg(self) -> FloatArray:
         """Phase [deg], unwrapped from the lowest frequency."""
-        return np.degrees(np.unwrap(np.angle(self.response)))
+        return phase_deg(self.response)
 
     def check(self, bounds: OmctBounds) -> list[bool]:
         """Whether each point lies inside the boundaries."""
@@ -190,7 +189,7 @@ class OmctResult:
             "gain": self.gain.tolist(),
             "phase_deg": self.phase_deg.tolist(),
             "analytic_gain": np.abs(self.analytic).tolist(),
-            "analytic_phase_deg": np.degrees(np.unwrap(np.angle(self.analytic))).tolist(),
+            "analytic_phase_deg": phase_deg(self.analytic).tolist(),
             "skipped": {str(w): why for w, why in self.skipped.items()},
         }
         if bounds is not None:
@@ -206,7 +205,7 @@ class OmctResult:
             f"{'w [rad/s]':>10} {'gain':>7} {'phase':>7} {'Eq 5.11':>8} {'phase':>7}"
             + ("  inside" if bounds is not None else ""),
         ]
-        pa = np.degrees(np.unwrap(np.angle(self.analytic)))
+        pa = phase_deg(self.analytic)
         for w, g, p, ga, pha, ok in zip(
             self.w_rad_s, self.gain, self.phase_deg, np.abs(self.analytic), pa, inside, strict=True
         ):
@@ -285,11 +284,9 @@ def run_omct(
     ws, hs, skipped = [], [], {}
     for w in w_rad_s:
         amp = default_amplitude(dof, w, cfg.platform, fraction)
-        sig = single_sine(dof, w / (2 * np.pi), amp, window_s=window_s)
-        try:
-            m = session.measure(sig, f"omct-{dof}-{w:.3g}rad_s")
-        except SignalLimitError as e:
-            skipped[float(w)] = str(e)
+        m = session.measure_sine(dof, w / (2 * np.pi), amp, window_s, f"omct-{dof}-{w:.3g}rad_s")
+        if isinstance(m, str):
+            skipped[float(w)] = m
             continue
         wi, h = analyse_omct_point(m, dof)
         ws.append(wi)

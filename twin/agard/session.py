@@ -14,7 +14,8 @@ from collections.abc import Callable
 from pathlib import Path
 
 from twin.agard.measure import Bench, Measurement
-from twin.signals import DescribingSignal, StepSignal
+from twin.errors import SignalLimitError
+from twin.signals import DescribingSignal, StepSignal, single_sine
 from twin.simulate_cli import execute
 
 
@@ -101,6 +102,16 @@ class Session:
             raise
         self._offset += sig.commands.duration + 1.0
         return self.bench.measure(sim, {"signal": meta["signal"]})
+
+    def measure_sine(
+        self, dof: str, frequency_hz: float, amplitude: float, window_s: float, name: str
+    ) -> Measurement | str:
+        """Run a single sine (Eq 3.4); return its measurement, or the limit it would break."""
+        sig = single_sine(dof, frequency_hz, amplitude, window_s=window_s)
+        try:
+            return self.measure(sig, name)
+        except SignalLimitError as e:
+            return str(e)
 
     def close(self) -> None:
         """Finish the recording (if any)."""

@@ -24,9 +24,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from twin.agard.noise_level import NoiseLevelPoint, analyse_noise
 from twin.agard.session import Session
-from twin.errors import SignalLimitError
-from twin.frames import DOF_NAMES
-from twin.signals import single_sine
+from twin.frames import DOF_NAMES, acceleration_unit
 
 FloatArray = NDArray[np.float64]
 
@@ -137,7 +135,7 @@ class SnrResult:
             lw=1.2,
             label="system limit",
         )
-        unit = "rad/s^2" if DOF_NAMES.index(self.dof) >= 3 else "m/s^2"
+        unit = acceleration_unit(self.dof)
         ax.set_xlabel("log10 frequency [Hz]")
         ax.set_ylabel(f"log10 amplitude [{unit}]")
         ax.set_title(f"signal-to-noise, {self.dof}: {self.source}", fontsize=9)
@@ -163,13 +161,11 @@ def run_snr(
         limit = float(system_limit(platform, dof, f))
         for frac in fractions:
             amp = frac * limit
-            sig = single_sine(dof, f, amp, window_s=window_s)
-            try:
-                m = session.measure(sig, f"snr-{dof}-{f:g}Hz-{amp:.3g}")
-            except SignalLimitError as e:
-                skipped.append((float(f), float(amp), str(e)))
-                continue
-            points.append(analyse_noise(m, dof))
+            m = session.measure_sine(dof, f, amp, window_s, f"snr-{dof}-{f:g}Hz-{amp:.3g}")
+            if isinstance(m, str):
+                skipped.append((float(f), float(amp), m))
+            else:
+                points.append(analyse_noise(m, dof))
         if progress:
             progress(f"signal-to-noise {dof}: {f:g} Hz done")
     return SnrResult(dof, platform, points, skipped, session.bench.name)

@@ -24,7 +24,7 @@ from twin.agard.session import Session
 from twin.chain.config import MotionSystem
 from twin.chain.spline_filter import filter_spline
 from twin.errors import SignalError
-from twin.frames import DOF_NAMES
+from twin.frames import DOF_NAMES, acceleration_unit
 from twin.signals import square_steps
 from twin.trajectory import Trajectory
 
@@ -162,7 +162,7 @@ class ThresholdResult:
     def format_table(self) -> str:
         """Plain-text summary."""
         a, f = self.analytic_fit, self.fit
-        unit = "rad/s^2" if DOF_NAMES.index(self.dof) >= 3 else "m/s^2"
+        unit = acceleration_unit(self.dof)
         return "\n".join(
             [
                 f"dynamic threshold, {self.dof}: steps of {self.amplitude:g} {unit} lasting "
@@ -190,7 +190,7 @@ class ThresholdResult:
             "C3--",
             label=f"Eq 3.7: tau_d {f.delay_s * 1e3:.0f} ms, tau {f.tau_s * 1e3:.0f} ms",
         )
-        unit = "rad/s^2" if DOF_NAMES.index(self.dof) >= 3 else "m/s^2"
+        unit = acceleration_unit(self.dof)
         ax.set_xlabel("time [s]")
         ax.set_ylabel(f"{self.dof} acceleration [{unit}]")
         ax.set_title(f"dynamic threshold: {self.source}", fontsize=9)
