@@ -91,24 +91,61 @@ class ArxModel:
     fpe: float
     rate_hz: float
 
-    def _parts(self, w: FloatArray) -> tuple[ComplexArray, ...]:
+    def _parts(self, w: FloatArray, theta: FloatArray | None = None) -> tuple[ComplexArray, ...]:
         o = self.orders
+        t = self.theta if theta is None else theta
         z1 = np.exp(-1j * np.asarray(w, dtype=float) / self.rate_hz)  # z^-1
-        a = self.theta[: o.na]
-        be = self.theta[o.na : o.na + o.nb_e]
-        bx = self.theta[o.na + o.nb_e :]
+        a = t[..., : o.na]
+        be = t[..., o.na : o.na + o.nb_e]
+        bx = t[..., o.na + o.nb_e :]
         pa = z1[:, None] ** np.arange(1, o.na + 1)
         pe = z1[:, None] ** (o.nk_e + np.arange(o.nb_e))
         px = z1[:, None] ** (o.nk_x + np.arange(o.nb_x))
-        return 1 + pa @ a, pe @ be, px @ bx, pa, pe, px
+        return 1 + a @ pa.T, be @ pe.T, bx @ px.T, pa, pe, px
 
-    def responses(self, w: FloatArray) -> tuple[ComplexArray, ComplexArray]:
-        """H_pe and H_px at ``w`` [rad/s] (Eq 2.13, 2.14; H_px with the loop's sign)."""
-        A, Be, Bx, *_ = self._parts(w)
+    def responses(
+        self, w: FloatArray, theta: FloatArray | None = None
+    ) -> tuple[ComplexArray, ComplexArray]:
+        """H_pe and H_px at ``w`` [rad/s] (Eq 2.13, 2.14; H_px with the loop's sign).
+
+        ``theta`` (shape (..., size)) evaluates other parameter vectors than the fitted one;
+        the result then has shape (..., len(w)).
+        """
+        A, Be, Bx, *_ = self._parts(w, theta)
         return Be / A, -Bx / A
 
+    def sampled_std(
+        self, w: FloatArray, draws: int = 400, seed: int | tuple[int, ...] = 0
+    ) -> dict[str, tuple[FloatArray, FloatArray]]:
+        """Return the standard deviations of |H| and of the phase [deg], propagating P exactly.
+
+        Eq 2.16-2.18 propagate the parameter covariance P to H = B/A to first order. Where
+        the relative spread of H is 10-30 % (the Chapter 2 pilot at 10 % remnant) that
+        linearisation misjudges the Monte-Carlo spread by up to 40 % at single lines, because
+        H is a ratio of polynomials in the parameters. Here parameter vectors are drawn from
+        N(theta, P) (seeded) and passed through the exact H; with 400 draws the sampling
+        error of the standard deviation is about 3.5 %.
+        """
+        rng = np.random.default_rng(seed)
+        # draws from N(theta, P) through P's Cholesky factor (P is positive definite: it is
+        # sigma^2 (Phi^T Phi)^-1 of a full-rank regression)
+        chol = np.linalg.cholesky(self.covariance)
+        thetas = self.theta + rng.standard_normal((draws, self.theta.size)) @ chol.T
+        h = dict(zip(("pe", "px"), self.responses(w, thetas), strict=True))
+        h0 = dict(zip(("pe", "px"), self.responses(w), strict=True))
+        return {
+            k: (
+                np.abs(h[k]).std(axis=0, ddof=1),
+                np.degrees(np.angle(h[k] / h0[k])).std(axis=0, ddof=1),
+            )
+            for k in h
+        }
+
     def std(self, w: FloatArray) -> dict[str, tuple[FloatArray, FloatArray]]:
-        """Return the standard deviations of |H| and of the phase [deg] (Eq 2.16-2.18)."""
+        """Return the standard deviations of |H| and of the phase [deg] (Eq 2.16-2.18).
+
+        First-order propagation of P, as in the thesis; see :meth:`sampled_std`.
+        """
         A, Be, Bx, pa, pe, px = self._parts(w)
         o = self.orders
         out = {}

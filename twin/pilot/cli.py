@@ -271,6 +271,7 @@ def _cmd_montecarlo(args: argparse.Namespace) -> int:
             "fc_std_gain": r.sample_std_mag("fc", resp).tolist(),
             "arx_std_gain": r.sample_std_mag("arx", resp).tolist(),
             "arx_analytic_std_gain": r.arx_std_mag[resp].tolist(),
+            "arx_sampled_std_gain": r.arx_sampled_std_mag[resp].tolist(),
         }
     if args.fit_runs:
         out["parameter_errors"] = {
@@ -285,6 +286,13 @@ def _cmd_montecarlo(args: argparse.Namespace) -> int:
             print(
                 f"  H_{resp}: FC std / ARX std at the 24 lines: {ratio.min():.1f}-{ratio.max():.1f}"
             )
+            for label, std in (
+                ("Eq 2.16", r.arx_std_mag),
+                ("P through exact H", r.arx_sampled_std_mag),
+            ):
+                q = std[resp] / r.sample_std_mag("arx", resp)
+                span = f"{q.min():.2f}-{q.max():.2f}"
+                print(f"  H_{resp}: ARX analytic ({label}) / Monte-Carlo std: {span}")
         if args.fit_runs:
             for m, errs in out["parameter_errors"].items():
                 print(

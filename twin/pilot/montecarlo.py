@@ -3,8 +3,9 @@
 N closed-loop runs of the roll task with the Table 2.1 pilot and fresh remnant (10 % of the
 power of u by default) are identified with both methods; the sample standard deviation and bias
 of the estimates at the 24 input frequencies are compared, and the ARX model's analytic
-standard deviation (Eq 2.16-2.17) is averaged over the runs for comparison with the sample one
-(Fig 2.9). Runs are simulated in batches, vectorised, on two threads.
+standard deviation (Eq 2.16-2.17, and the same parameter covariance propagated through the exact
+H(theta) by sampling) is averaged over the runs for comparison with the sample one (Fig 2.9).
+Runs are simulated in batches, vectorised, on two threads.
 """
 
 from __future__ import annotations
@@ -27,6 +28,10 @@ from twin.pilot.model import RollPilot
 FloatArray = NDArray[np.float64]
 ComplexArray = NDArray[np.complex128]
 
+#: Parameter draws per run for the sampled standard deviation (averaged over many runs, so
+#: fewer than a single-run estimate needs).
+SAMPLED_DRAWS = 100
+
 
 @dataclass(frozen=True, eq=False)
 class MonteCarloResult:
@@ -40,6 +45,9 @@ class MonteCarloResult:
         ``pe`` and ``px`` estimates of each method.
     arx_std_mag, arx_std_phase : dict of str to ndarray, shape (m,)
         The ARX model's analytic standard deviations (Eq 2.16, 2.17), averaged over the runs.
+    arx_sampled_std_mag, arx_sampled_std_phase : dict of str to ndarray, shape (m,)
+        The same parameter covariance propagated through the exact H(theta) by sampling
+        (:meth:`~twin.pilot.arx.ArxModel.sampled_std`), averaged over the runs.
     truth : dict of str to ndarray of complex
         The pilot model's true responses.
     orders : ArxOrders
@@ -54,6 +62,8 @@ class MonteCarloResult:
     arx: dict[str, ComplexArray]
     arx_std_mag: dict[str, FloatArray]
     arx_std_phase: dict[str, FloatArray]
+    arx_sampled_std_mag: dict[str, FloatArray]
+    arx_sampled_std_phase: dict[str, FloatArray]
     truth: dict[str, ComplexArray]
     orders: ArxOrders
     pilots: dict[str, list[RollPilot]]
@@ -79,20 +89,18 @@ def _batch(pilot, fd, ft, runs, seed, scale, orders, fit_runs):
     w = fc.omega_rad_s
     u, e, x = (decimate(s, d.rate_hz) for s in (d.u, d.e, d.x))
     pe, px = np.empty((runs, w.size), complex), np.empty((runs, w.size), complex)
-    sm = {"pe": np.zeros(w.size), "px": np.zeros(w.size)}
-    sp = {"pe": np.zeros(w.size), "px": np.zeros(w.size)}
+    # sums of the analytic standard deviations: (linear, sampled) x (mag, phase) x response
+    sums = np.zeros((2, 2, 2, w.size))
     pilots = {"fc": [], "arx": []}
     for i in range(runs):
         m = fit_arx(u[i], e[i], x[i], orders, ARX_RATE_HZ)
         pe[i], px[i] = m.responses(w)
-        std = m.std(w)
-        for k in ("pe", "px"):
-            sm[k] += std[k][0]
-            sp[k] += std[k][1]
+        for j, std in enumerate((m.std(w), m.sampled_std(w, SAMPLED_DRAWS, (seed, i)))):
+            sums[j] += [[std["pe"][0], std["px"][0]], [std["pe"][1], std["px"][1]]]
         if i < fit_runs:
             pilots["fc"].append(fit_pilot(w, fc.h_pe[i], fc.h_px[i], pilot))
             pilots["arx"].append(fit_pilot(w, pe[i], px[i], pilot))
-    return w, fc.h_pe, fc.h_px, pe, px, sm, sp, pilots
+    return w, fc.h_pe, fc.h_px, pe, px, sums, pilots
 
 
 def monte_carlo(
@@ -151,8 +159,8 @@ def monte_carlo(
     w = parts[0][0]
     fc = {"pe": np.vstack([q[1] for q in parts]), "px": np.vstack([q[2] for q in parts])}
     arx = {"pe": np.vstack([q[3] for q in parts]), "px": np.vstack([q[4] for q in parts])}
-    sm = {k: sum(q[5][k] for q in parts) / runs for k in ("pe", "px")}
-    sp = {k: sum(q[6][k] for q in parts) / runs for k in ("pe", "px")}
-    pilots = {m: [pp for q in parts for pp in q[7][m]] for m in ("fc", "arx")}
+    mean = sum(q[5] for q in parts) / runs
+    std = [[dict(zip(("pe", "px"), mean[j, k], strict=True)) for k in (0, 1)] for j in (0, 1)]
+    pilots = {m: [pp for q in parts for pp in q[6][m]] for m in ("fc", "arx")}
     truth = {"pe": p.h_pe(w), "px": p.h_px(w)}
-    return MonteCarloResult(w, fc, arx, sm, sp, truth, orders, pilots)
+    return MonteCarloResult(w, fc, arx, *std[0], *std[1], truth, orders, pilots)
