@@ -172,6 +172,9 @@ def build_parser() -> argparse.ArgumentParser:
     from twin.pilot.cli import add_parser as add_pilot
 
     add_pilot(sub, _Parser)
+    from twin.diagnose.cli import add_parser as add_diagnose
+
+    add_diagnose(sub)
     return parser
 
 

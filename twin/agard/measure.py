@@ -84,15 +84,8 @@ def from_imu(
 def from_run(run: RecordedRun | str | Path) -> Measurement:
     """Return the :class:`Measurement` of a recorded ``twin-run/1`` folder (validated)."""
     rec = run if isinstance(run, RecordedRun) else read_run(run)
-    cfg = rec.meta["platform_config"]
-    config = MotionSystem(
-        name=str(cfg.get("name", "recorded")),
-        platform=rec.meta["platform"],
-        filter_break_hz=cfg["filter_break_hz"],
-        delay_s=float(cfg["delay_s"]),
-        noise=bool(cfg["noise"]),
-        resonance=bool(cfg.get("resonance", False)),
-        description=f"from {rec.path}/meta.json",
+    config = MotionSystem.from_meta(
+        rec.meta["platform"], rec.meta["platform_config"], f"from {rec.path}/meta.json"
     )
     imu = ImuRecord(rec.imu_t, rec.imu[:, :3], rec.imu[:, 3:])
     return from_imu(rec.commands, imu, str(rec.path), config, dict(rec.meta))

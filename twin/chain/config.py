@@ -29,20 +29,25 @@ Examples
 from __future__ import annotations
 
 import dataclasses
+import json
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from twin.chain.delay import Delay
-from twin.chain.filter import PlatformFilter
+from twin.chain.extensions import Extension
+from twin.chain.filter import PerDofFilter, PlatformFilter
 from twin.chain.noise import MotionNoise
 from twin.chain.resonance import Resonance
-from twin.errors import UnknownPlatformError
+from twin.errors import SignalError, UnknownPlatformError
 from twin.platforms import PLATFORMS, load_facts
 from twin.thesis import TABLE_6_3
 
-Block = PlatformFilter | Delay | Resonance
+Block = PlatformFilter | PerDofFilter | Delay | Resonance | Extension
+#: Format tag of a configuration file (``twin diagnose --save-config``).
+CONFIG_FORMAT = "twin-config/1"
 
 
 @dataclass(frozen=True)
@@ -67,6 +72,8 @@ class MotionSystem:
         Whether the SRS resonance terms (Eq 5.12, 5.13) are applied.
     description : str
         Where the configuration comes from.
+    extensions : tuple of Extension
+        Model extensions (:mod:`twin.chain.extensions`), e.g. found by ``twin diagnose``.
 
     """
 
@@ -78,6 +85,7 @@ class MotionSystem:
     noise_highpass_hz: float = 1.0
     resonance: bool = False
     description: str = ""
+    extensions: tuple[Extension, ...] = ()
 
     def __post_init__(self) -> None:
         """Check the values."""
@@ -90,6 +98,27 @@ class MotionSystem:
         Delay(self.delay_s)
         if self.noise:
             MotionNoise(highpass_hz=self.noise_highpass_hz)
+        for ext in self.extensions:
+            if not isinstance(ext, Extension):
+                raise SignalError(f"extensions must be Extension objects; got {ext!r}")
+
+    def of(self, effect: str) -> list[Extension]:
+        """Return the extensions of one effect type."""
+        return [e for e in self.extensions if e.effect == effect]
+
+    @property
+    def noise_scale(self) -> float:
+        """Factor on every noise source (product of the ``noise`` extensions)."""
+        return float(np.prod([e.value("scale") for e in self.of("noise")]))
+
+    @property
+    def breaks_hz(self) -> tuple[float | None, ...]:
+        """Platform-filter break frequency per DOF, ``platform_filter`` extensions applied."""
+        out = [self.filter_break_hz] * 6
+        for e in self.of("platform_filter"):
+            for k in np.flatnonzero(e.dof_mask):
+                out[k] = e.value("break_hz")
+        return tuple(out)
 
     def replace(self, **changes: object) -> MotionSystem:
         """Return a copy with some fields changed (and the name marked as modified)."""
@@ -107,19 +136,28 @@ class MotionSystem:
 
         """
         out: list[Block] = []
-        if self.filter_break_hz is not None:
-            out.append(PlatformFilter(self.filter_break_hz))
+        breaks = self.breaks_hz
+        if len(set(breaks)) == 1:
+            if breaks[0] is not None:
+                out.append(PlatformFilter(breaks[0]))
+        else:
+            out.append(PerDofFilter(breaks))
         lag = np.broadcast_to(np.asarray(platform_lag_s, dtype=float), (6,))
-        delay = np.maximum(self.delay_s - lag, 0.0)
+        extra = sum((e.value("extra_delay_s") * e.dof_mask for e in self.of("delay")), np.zeros(6))
+        delay = np.maximum(self.delay_s + extra - lag, 0.0)
         if np.any(delay > 0):
             out.append(Delay(tuple(float(d) for d in delay)))
         if self.resonance:
             out.append(Resonance())
+        for effect in ("gain", "resonance", "lead", "backlash"):
+            out.extend(self.of(effect))
         return out
 
     def noise_block(self, imu_rate_hz: float = 819.2) -> MotionNoise | None:
         """Return the heave-noise generator, or None if this configuration has no noise."""
-        return MotionNoise(imu_rate_hz, self.noise_highpass_hz) if self.noise else None
+        if not self.noise:
+            return None
+        return MotionNoise(imu_rate_hz, self.noise_highpass_hz, self.noise_scale)
 
     def frequency_response(self, f: ArrayLike) -> NDArray[np.complex128]:
         """Return the reduced model (Eq 5.11 and the optional resonance) at ``f`` [Hz].
@@ -131,7 +169,12 @@ class MotionSystem:
         """
         h = np.ones((np.size(f), 6), dtype=complex)
         for block in self.blocks():
-            h = h * block.frequency_response(f)
+            if not isinstance(block, Extension):
+                h = h * block.frequency_response(f)
+        for ext in self.extensions:
+            if ext.effect in ("gain", "resonance", "lead", "sensor_filter"):
+                mask = ext.dof_mask if ext.effect != "sensor_filter" else _sensed(ext)
+                h[:, mask] = h[:, mask] * ext.response(f)[:, None]
         return h
 
     def to_meta(self) -> dict[str, object]:
@@ -143,7 +186,90 @@ class MotionSystem:
             "noise": self.noise,
             "noise_highpass_hz": self.noise_highpass_hz,
             "resonance": self.resonance,
+            "extensions": [e.to_json() for e in self.extensions],
         }
+
+    @classmethod
+    def from_meta(cls, platform: str, cfg: object, description: str = "") -> MotionSystem:
+        """Build a configuration from a ``platform_config`` entry (of ``meta.json`` or a file).
+
+        Raises
+        ------
+        SignalError
+            For a missing or malformed key (the message names it).
+
+        """
+        if not isinstance(cfg, dict):
+            raise SignalError(f"platform_config must be an object; got {cfg!r}")
+        for key in ("filter_break_hz", "delay_s", "noise"):
+            if key not in cfg:
+                raise SignalError(f"platform_config lacks {key!r}")
+        fb = cfg["filter_break_hz"]
+        if fb is not None and (isinstance(fb, bool) or not isinstance(fb, int | float)):
+            raise SignalError(
+                f"platform_config filter_break_hz must be a number or null; got {fb!r}"
+            )
+        if isinstance(cfg["delay_s"], bool) or not isinstance(cfg["delay_s"], int | float):
+            raise SignalError(f"platform_config delay_s must be a number; got {cfg['delay_s']!r}")
+        exts = cfg.get("extensions", [])
+        if not isinstance(exts, list):
+            raise SignalError(f"platform_config extensions must be a list; got {exts!r}")
+        return cls(
+            name=str(cfg.get("name", "recorded")),
+            platform=platform,
+            filter_break_hz=None if fb is None else float(fb),
+            delay_s=float(cfg["delay_s"]),
+            noise=bool(cfg["noise"]),
+            noise_highpass_hz=float(cfg.get("noise_highpass_hz", 1.0)),
+            resonance=bool(cfg.get("resonance", False)),
+            description=description,
+            extensions=tuple(Extension.from_json(e) for e in exts),
+        )
+
+    def save(self, path: str | Path) -> Path:
+        """Write this configuration as a ``twin-config/1`` JSON file (atomically)."""
+        path = Path(path)
+        data = {
+            "format": CONFIG_FORMAT,
+            "platform": self.platform,
+            "description": self.description,
+            "platform_config": self.to_meta(),
+        }
+        tmp = path.with_name(path.name + ".tmp")
+        tmp.write_text(json.dumps(data, indent=2) + "\n")
+        tmp.replace(path)
+        return path
+
+
+def _sensed(ext: Extension) -> NDArray[np.bool_]:
+    """DOFs whose measured acceleration comes from a sensor_filter's channels."""
+    from twin.chain.extensions import DOF_CHANNEL
+
+    channels = ext.parameters["channels"]
+    return np.array([DOF_CHANNEL[d] in channels for d in DOF_CHANNEL])  # type: ignore[operator]
+
+
+def load_config(path: str | Path) -> MotionSystem:
+    """Read a ``twin-config/1`` file (written by :meth:`MotionSystem.save`)."""
+    path = Path(path)
+    try:
+        data = json.loads(path.read_text())
+    except (OSError, UnicodeDecodeError) as exc:
+        raise SignalError(f"{path}: cannot read the configuration file ({exc})") from exc
+    except json.JSONDecodeError as exc:
+        raise SignalError(f"{path}: not valid JSON ({exc.msg}, line {exc.lineno})") from exc
+    if not isinstance(data, dict) or data.get("format") != CONFIG_FORMAT:
+        raise SignalError(
+            f"{path}: not a {CONFIG_FORMAT} file (its 'format' must be {CONFIG_FORMAT!r})"
+        )
+    if data.get("platform") not in PLATFORMS:
+        raise UnknownPlatformError(
+            f"{path}: unknown platform {data.get('platform')!r}; "
+            f"expected one of {', '.join(PLATFORMS)}"
+        )
+    return MotionSystem.from_meta(
+        data["platform"], data.get("platform_config"), str(data.get("description", path))
+    )
 
 
 def _from_facts(platform: str, name: str, description: str) -> MotionSystem:
@@ -180,7 +306,8 @@ def motion_system(name: str) -> MotionSystem:
 
     ``mpi`` (1 Hz filter, 35 ms, noise; §5.5), ``mpi-2008`` (1 Hz, 100 ms, no noise: the MPI
     before its software update, Ch 3), ``srs`` (no filter, 25 ms; §6.2.2) and
-    ``condition-1`` ... ``condition-8`` (Table 6.3).
+    ``condition-1`` ... ``condition-8`` (Table 6.3); a path to a ``twin-config/1`` JSON file
+    (:meth:`MotionSystem.save`, ``twin diagnose --save-config``) loads that file.
 
     Raises
     ------
@@ -188,6 +315,8 @@ def motion_system(name: str) -> MotionSystem:
         For an unknown name (the message lists the known ones).
 
     """
+    if name.endswith(".json") or Path(name).is_file():
+        return load_config(name)
     if name == "mpi":
         return _from_facts("mpi", "mpi", "MPI Stewart platform, reduced model Eq 5.11 (§5.5)")
     if name == "srs":
@@ -198,5 +327,6 @@ def motion_system(name: str) -> MotionSystem:
     if name.startswith("condition-") and name[10:].isdigit() and int(name[10:]) in TABLE_6_3:
         return _condition(int(name[10:]))
     raise UnknownPlatformError(
-        f"unknown configuration {name!r}; expected one of {', '.join(config_names())}"
+        f"unknown configuration {name!r}; expected one of {', '.join(config_names())} "
+        "or a twin-config/1 .json file"
     )

@@ -60,3 +60,50 @@ class PlatformFilter:
             )
         wb = 2 * np.pi * self.break_hz
         return tr.replace(filter_spline(tr, [1.0], [1 / wb**2, 2 / wb, 1.0]))
+
+
+@dataclass(frozen=True)
+class PerDofFilter:
+    """The Eq 5.1 filter with its own break frequency per DOF (None: that DOF unfiltered).
+
+    Attributes
+    ----------
+    breaks_hz : tuple of (float or None), length 6
+        Break frequency per DOF [Hz].
+
+    """
+
+    breaks_hz: tuple[float | None, ...]
+
+    def __post_init__(self) -> None:
+        """Check the break frequencies."""
+        if len(self.breaks_hz) != 6:
+            raise SignalError(f"need six break frequencies; got {len(self.breaks_hz)}")
+        for b in self.breaks_hz:
+            if b is not None:
+                PlatformFilter(b)
+
+    @property
+    def name(self) -> str:
+        """Short description."""
+        return (
+            "platform filter "
+            + "/".join("-" if b is None else f"{b:g}" for b in self.breaks_hz)
+            + " Hz"
+        )
+
+    def frequency_response(self, f: ArrayLike) -> NDArray[np.complex128]:
+        """Continuous-time response at frequencies ``f`` [Hz], shape (len(f), 6)."""
+        h = np.ones((np.size(f), 6), dtype=complex)
+        for k, b in enumerate(self.breaks_hz):
+            if b is not None:
+                h[:, k] = PlatformFilter(b).frequency_response(f)[:, k]
+        return h
+
+    def __call__(self, tr: Trajectory) -> Trajectory:
+        """Filter each DOF with its own break frequency."""
+        out = tr.values.copy()
+        for b in {b for b in self.breaks_hz if b is not None}:
+            cols = [k for k, bk in enumerate(self.breaks_hz) if bk == b]
+            out[:, cols] = PlatformFilter(b)(tr).values[:, cols]
+        return tr.replace(out)

@@ -86,11 +86,14 @@ class MotionNoise:
     highpass_hz : float or None
         Spectrum set to zero below this frequency (1 Hz as on the SRS); None keeps it all
         (acceleration only).
+    scale : float
+        Factor on the noise amplitude (1: Eq 5.10 as identified).
 
     """
 
     rate_hz: float = 819.2
     highpass_hz: float | None = 1.0
+    scale: float = 1.0
 
     def __post_init__(self) -> None:
         """Check rate and high-pass."""
@@ -101,6 +104,8 @@ class MotionNoise:
                 f"noise high-pass must be None or between 0 and {self.rate_hz / 2:g} Hz; "
                 f"got {self.highpass_hz}"
             )
+        if not np.isfinite(self.scale) or self.scale < 0:
+            raise SignalError(f"noise scale must be >= 0; got {self.scale}")
 
     @property
     def name(self) -> str:
@@ -116,7 +121,7 @@ class MotionNoise:
         p1, p2 = EQ_5_10["poles_s"]
         zeros = [-1.0 / EQ_5_10["zero_s"]]
         poles = [-1.0 / p1, -1.0 / p2]
-        gain = EQ_5_10["gain"] * EQ_5_10["zero_s"] / (p1 * p2)
+        gain = self.scale * EQ_5_10["gain"] * EQ_5_10["zero_s"] / (p1 * p2)
         if self.highpass_hz is None:
             outputs = [(np.array(zeros), 0)]
         else:

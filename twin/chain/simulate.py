@@ -11,12 +11,14 @@ Examples
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from twin.chain.config import MotionSystem, motion_system
+from twin.chain.extensions import SensorFilterStream
 from twin.chain.imu import ImuRecord, ImuSpec, VirtualImu
 from twin.chain.limits import LimitReport
 from twin.chain.noise import MotionNoise, NoiseStream
@@ -125,8 +127,17 @@ class Run:
         """Yield (response, IMU) chunk pairs; memory stays bounded for any duration."""
         imu_seed = np.random.default_rng(np.random.SeedSequence([self.seed, 1]))
         imu = VirtualImu(self.imu_spec, imu_seed)
+        filters = [
+            SensorFilterStream(e, self.imu_spec.rate_hz) for e in self.config.of("sensor_filter")
+        ]
         for chunk in self.platform.run(self.platform_input, self.noise_stream(), self.limits):
-            yield chunk, imu.feed(chunk)
+            rec = imu.feed(chunk)
+            if filters:
+                values = np.hstack([rec.accel, rec.gyro])
+                for filt in filters:
+                    values = filt(values)
+                rec = ImuRecord(rec.t, values[:, :3], values[:, 3:], rec.saturated)
+            yield chunk, rec
 
     def collect(self) -> Simulation:
         """Run all chunks and return the joined :class:`Simulation`."""
@@ -189,6 +200,11 @@ def prepare(
     for block in ms.blocks(plat.own_lag_s):
         shaped = block(shaped)
     spec = imu if imu is not None else default_imu(ms.platform)
+    if ms.noise_scale != 1.0:
+        k = ms.noise_scale
+        spec = dataclasses.replace(
+            spec, accel_noise_sd=spec.accel_noise_sd * k, gyro_noise_sd=spec.gyro_noise_sd * k
+        )
     noise = ms.noise_block(spec.rate_hz)
     limits = LimitReport(plat.limits.mode, plat.rate_hz)
     return Run(ms, plat.kind, int(seed), commands, shaped, spec, limits, notes, plat, noise)

@@ -1,0 +1,236 @@
+"""twin diagnose: hide an effect in a run, require the diagnosis to name it and measure the gain.
+
+The generator (:mod:`twin.diagnose.hidden`) draws, from the seed alone, a platform (MPI or SRS
+with their nominal noise), a DOF (heave or pitch) and one effect with random parameters, kept
+only where the two Table 5.2 runs could reveal it (expected BIC improvement >= 3x the naming
+threshold and Cramér-Rao sd <= 1/3 of the tolerance). The default suite checks one seed per
+effect type; the slow suite checks many and states the pass rate.
+"""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from twin.chain.config import motion_system
+from twin.chain.extensions import EFFECTS, Extension
+from twin.cli import main
+from twin.diagnose.diagnosis import diagnose
+from twin.diagnose.hidden import (
+    RELATIVE_TOLERANCE,
+    TOLERANCE,
+    clean,
+    draw,
+    record,
+    record_runs,
+)
+from twin.errors import RunFormatError
+
+
+def _check(hidden, d) -> list[str]:
+    """Return what is wrong with a diagnosis of a hidden effect (empty: passed)."""
+    if not d.findings:
+        return ["no finding"]
+    top = d.findings[0]
+    if top.extension.effect != hidden.extension.effect:
+        return [f"named {top.extension.describe()} for {hidden.extension.describe()}"]
+    errors = []
+    for name, true in hidden.extension.parameters.items():
+        if name == "channels":
+            if tuple(true) != tuple(top.extension.parameters[name]):
+                errors.append(f"channels {top.extension.parameters[name]} for {true}")
+            continue
+        tol = TOLERANCE.get(name, RELATIVE_TOLERANCE * abs(true))
+        if abs(top.extension.value(name) - true) > tol:
+            errors.append(f"{name} {top.extension.value(name):.4g} for {true:.4g} (tol {tol:.3g})")
+    g = top.gain  # the gain on held-out data is positive whenever a true effect is found
+    if not g["loglik_per_bin_after"] > g["loglik_per_bin_before"]:
+        errors.append(f"held-out log-likelihood fell: {g}")
+    if hidden.extension.effect != "noise" and not g["vaf_after"] > g["vaf_before"]:
+        errors.append(f"held-out VAF fell: {g['vaf_before']:.2f} -> {g['vaf_after']:.2f}")
+    return errors
+
+
+def _hidden(seed: int, effect: str, tmp_path):
+    h = draw(seed, effect)
+    return h, diagnose(record(h, tmp_path), seed=seed)
+
+
+@pytest.mark.parametrize("effect", list(EFFECTS))
+def test_a_hidden_effect_is_named_and_its_parameter_recovered(effect, tmp_path):
+    """One seed per effect type: named first; delay within 5 ms, others within 20 %."""
+    h, d = _hidden(1000 * list(EFFECTS).index(effect), effect, tmp_path)
+    assert _check(h, d) == [], h
+
+
+@pytest.mark.slow
+def test_hidden_effects_over_many_seeds(tmp_path):
+    """Eight seeds per effect type (64 cases): every one named and recovered."""
+    failures = []
+    for effect in EFFECTS:
+        for i in range(1, 9):
+            h, d = _hidden(
+                1000 * list(EFFECTS).index(effect) + i, effect, tmp_path / f"{effect}{i}"
+            )
+            failures += [f"{effect} seed {h.seed}: {e}" for e in _check(h, d)]
+    assert failures == []
+
+
+def _clean_finds(seed: int, tmp_path) -> list[str]:
+    h = clean(seed)
+    d = diagnose(record(h, tmp_path), seed=seed)
+    return [f.extension.describe() for f in d.findings]
+
+
+def test_clean_runs_yield_no_finding(tmp_path):
+    """Four clean cases (MPI/SRS, heave/pitch) in the default suite."""
+    assert {clean(s).config.name + clean(s).dof for s in (100, 101, 102, 103)} == {
+        "srspitch", "mpipitch", "mpiheave", "srsheave"
+    }  # fmt: skip
+    found = {s: _clean_finds(s, tmp_path / str(s)) for s in (100, 101, 102, 103)}
+    assert all(not f for f in found.values()), found
+
+
+@pytest.mark.slow
+def test_clean_runs_false_finding_rate(tmp_path):
+    """40 clean cases: a finding in at most 5 % (the issue's >= 95 % clean)."""
+    found = {s: _clean_finds(s, tmp_path / str(s)) for s in range(100, 140)}
+    bad = {s: f for s, f in found.items() if f}
+    assert len(bad) <= 2, bad
+
+
+# --- the thesis' own cases -----------------------------------------------------------------
+
+
+def test_2008_mpi_software_against_the_35_ms_nominal_is_a_65_ms_delay(tmp_path):
+    """Ch 3 / §5.5.2: the MPI ran with 100 ms before its software update; nominal 35 ms.
+
+    Pitch: within 5 ms. Heave behind the 1 Hz filter is noisier (the diagnosis reports a
+    Cramér-Rao sd of about 5 ms there): within three of its own standard deviations.
+    """
+    for dof, seed in (("pitch", 11), ("heave", 12)):
+        runs = record_runs(
+            motion_system("mpi-2008"), motion_system("mpi"), dof, tmp_path / dof, seed
+        )
+        d = diagnose(runs)
+        top = d.findings[0]
+        assert top.extension.effect == "delay"
+        sd = top.evidence["parameter_std"]["extra_delay_s"]
+        tol = 0.005 if dof == "pitch" else 3 * sd
+        assert top.extension.value("extra_delay_s") == pytest.approx(0.065, abs=tol), (dof, sd)
+        # the 2008 software had no noise model either: at most that, named after the delay
+        assert [f.extension.effect for f in d.findings[1:]] in ([], ["noise"])
+
+
+def test_srs_resonance_of_eq_5_12_against_an_ideal_srs(tmp_path):
+    """§5.6.1: the SRS baseline's heave response 1 + 0.023 s (Eq 5.12) -> lead in heave."""
+    srs = motion_system("srs")
+    runs = record_runs(srs.replace(resonance=True), srs, "heave", tmp_path, 12)
+    top = diagnose(runs).findings[0]
+    assert top.extension.effect in ("lead", "resonance")
+    assert top.extension.dofs == ("heave",)
+    if top.extension.effect == "lead":
+        assert top.extension.value("time_constant_s") == pytest.approx(0.023, rel=0.2)
+
+
+def test_imu_with_internal_filtering_in_pitch_is_a_sensor_filter(tmp_path):
+    """§5.6.1: the SRS IMU attenuated pitch above 1 Hz and added delay (internal filtering)."""
+    srs = motion_system("srs")
+    filt = Extension("sensor_filter", {"cutoff_hz": 3.0, "channels": ("p", "q", "r")}, ())
+    runs = record_runs(srs.replace(extensions=(filt,)), srs, "pitch", tmp_path, 13)
+    top = diagnose(runs).findings[0]
+    assert top.extension.effect == "sensor_filter"
+    assert "q" in top.extension.parameters["channels"]
+    assert top.extension.value("cutoff_hz") == pytest.approx(3.0, rel=0.2)
+
+
+@pytest.mark.slow
+def test_full_mpi_model_against_the_reduced_nominal_has_no_finding_below_10_hz(tmp_path):
+    """§5.5: the reduced model (Eq 5.11) describes the full MPI below 10 Hz."""
+    mpi = motion_system("mpi")
+    for dof in ("heave", "pitch"):
+        runs = record_runs(mpi, mpi, dof, tmp_path / dof, 14, model="full")
+        d = diagnose(runs, max_hz=10.0)
+        assert d.findings == [], [f.extension.describe() for f in d.findings]
+
+
+# --- CLI, Python API details -----------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def delay_runs(tmp_path_factory):
+    tmp = tmp_path_factory.mktemp("delay")
+    mpi = motion_system("mpi")
+    truth = mpi.replace(extensions=(Extension("delay", {"extra_delay_s": 0.03}, ("heave",)),))
+    runs = record_runs(truth, mpi, "heave", tmp / "fit", 21)
+    val = record_runs(truth, mpi, "heave", tmp / "val", 22, signals=(2,))
+    return runs, val
+
+
+def test_cli_json_report_config_and_validation(delay_runs, tmp_path, capsys):
+    runs, val = delay_runs
+    cfg = tmp_path / "mpi-measured.json"
+    code = main(["diagnose", *map(str, runs), "--json", "--out", str(tmp_path / "rep"),
+                 "--save-config", str(cfg), "--validate", *map(str, val)])  # fmt: skip
+    assert code == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert set(doc) >= {"findings", "nominal"}
+    f = doc["findings"][0]
+    assert f["effect"] == "delay" and set(f["parameters"]) == {"extra_delay_s"}
+    assert f["parameters"]["extra_delay_s"] == pytest.approx(0.03, abs=0.005)
+    assert set(f["gain"]) >= {"vaf_before", "vaf_after", "df_error_db_before", "df_error_db_after"}
+    assert f["gain"]["held_out"] == "validation run(s)"
+    assert f["gain"]["vaf_after"] > f["gain"]["vaf_before"]
+    for name in (
+        "summary.md",
+        "diagnosis.json",
+        "df_heave.png",
+        "residual_heave.png",
+        "diagnosis.rrd",
+    ):
+        assert (tmp_path / "rep" / name).is_file(), name
+    # the extended configuration is a configuration: the twin simulates it, and a diagnosis
+    # against it finds nothing more
+    ext = motion_system(str(cfg))
+    assert ext.of("delay")[0].value("extra_delay_s") == pytest.approx(0.03, abs=0.005)
+    assert diagnose(runs, config=str(cfg)).findings == []
+
+
+def test_no_finding_exits_zero_and_says_so(tmp_path, capsys):
+    runs = record(clean(102), tmp_path)
+    assert main(["diagnose", *map(str, runs), "--out", str(tmp_path / "rep"), "--no-figures"]) == 0
+    assert "no finding" in capsys.readouterr().out
+
+
+def test_malformed_runs_exit_2_with_one_line(tmp_path, delay_runs, capsys):
+    assert main(["diagnose", str(tmp_path / "missing")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("twin: error:") and "\n" not in err
+    bad = tmp_path / "bad"
+    bad.mkdir()
+    for name in ("commands.csv", "imu.csv"):
+        (bad / name).write_bytes((delay_runs[0][0] / name).read_bytes())
+    meta = json.loads((delay_runs[0][0] / "meta.json").read_text())
+    meta["platform_config"]["extensions"] = [{"effect": "wobble", "parameters": {}}]
+    (bad / "meta.json").write_text(json.dumps(meta))
+    with pytest.raises(RunFormatError, match="unknown effect 'wobble'"):
+        diagnose([bad])
+    assert main(["diagnose", str(bad)]) == 2
+    assert not (tmp_path / "out").exists()
+
+
+def test_same_seed_same_diagnosis(delay_runs):
+    a = diagnose(delay_runs[0][:1], seed=3).to_json_safe()
+    b = diagnose(delay_runs[0][:1], seed=3).to_json_safe()
+    assert json.dumps(a) == json.dumps(b)
+
+
+def test_runs_without_signal_design_are_diagnosed_too(tmp_path):
+    """A recorded run has no ``signal`` in meta.json: lines and window are inferred."""
+    h = draw(7, "gain")
+    runs = record(h, tmp_path, with_signal_meta=False)
+    d = diagnose(runs, seed=7)
+    assert _check(h, d) == []
+    assert np.isfinite(d.dofs[h.dof].lines.db).all()

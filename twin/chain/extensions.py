@@ -1,0 +1,294 @@
+"""Model extensions: blocks a diagnosis can add to a motion-system configuration.
+
+Each extension has a fixed name and fixed parameter names (the JSON vocabulary of ``twin
+diagnose``) and acts on some DOFs:
+
+==================  ==============================  =============================================
+effect              parameters                      block
+==================  ==============================  =============================================
+``delay``           ``extra_delay_s``               e^{-d s} on top of the configuration's delay
+                                                    (negative: less delay, never below zero)
+``gain``            ``gain``                        g
+``platform_filter`` ``break_hz``                    replaces the Eq 5.1 filter (or adds one)
+``resonance``       ``frequency_hz``, ``damping``   w^2 / (s^2 + 2 z w s + w^2), a structural mode
+``lead``            ``time_constant_s``             1 + T s (the form of Eq 5.12 / 5.13)
+``sensor_filter``   ``cutoff_hz``, ``channels``     1 / (1 + s / w_c) inside the IMU, on the
+                                                    named channels (ax ay az p q r), noise included
+``backlash``        ``play``                        dead band of width ``play`` [m or rad] on the
+                                                    platform input (after filter and delay)
+``noise``           ``scale``                       every noise source (Eq 5.10 and the IMU's)
+                                                    times ``scale``
+==================  ==============================  =============================================
+
+Command-side blocks act on the platform input in the order of the table (after the
+configuration's own filter and delay); ``sensor_filter`` acts on the IMU samples and ``noise``
+on the noise generators, so all of them run on the full and the reduced platform alike.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy import signal
+
+from twin.chain.spline_filter import filter_spline
+from twin.errors import SignalError
+from twin.frames import DOF_NAMES
+from twin.trajectory import Trajectory
+
+FloatArray = NDArray[np.float64]
+ComplexArray = NDArray[np.complex128]
+
+#: The fixed vocabulary: effect -> parameter names.
+EFFECTS: Mapping[str, tuple[str, ...]] = {
+    "delay": ("extra_delay_s",),
+    "gain": ("gain",),
+    "platform_filter": ("break_hz",),
+    "resonance": ("frequency_hz", "damping"),
+    "lead": ("time_constant_s",),
+    "sensor_filter": ("cutoff_hz", "channels"),
+    "backlash": ("play",),
+    "noise": ("scale",),
+}
+IMU_CHANNELS = ("ax", "ay", "az", "p", "q", "r")
+#: The IMU channel that measures each DOF's acceleration (after App. C.2.3 processing).
+DOF_CHANNEL = dict(zip(DOF_NAMES, IMU_CHANNELS, strict=True))
+#: Effects that are linear, time-invariant responses of the commanded DOF.
+LINEAR = ("delay", "gain", "platform_filter", "resonance", "lead", "sensor_filter")
+
+
+@dataclass(frozen=True)
+class Extension:
+    """One model extension.
+
+    Attributes
+    ----------
+    effect : str
+        A key of :data:`EFFECTS`.
+    parameters : mapping
+        Its parameters (numbers; ``channels`` a list of IMU channel names).
+    dofs : tuple of str
+        DOFs it acts on (all six if empty). ``sensor_filter`` and ``noise`` ignore it.
+
+    Examples
+    --------
+    >>> Extension("delay", {"extra_delay_s": 0.065}, ("heave",)).describe()
+    'delay: extra_delay_s 0.065 (heave)'
+
+    """
+
+    effect: str
+    parameters: Mapping[str, object]
+    dofs: tuple[str, ...] = field(default=())
+
+    def __post_init__(self) -> None:
+        """Check the effect, its parameters and the DOFs."""
+        if self.effect not in EFFECTS:
+            raise SignalError(
+                f"unknown effect {self.effect!r}; expected one of {', '.join(EFFECTS)}"
+            )
+        names = EFFECTS[self.effect]
+        if set(self.parameters) != set(names):
+            raise SignalError(
+                f"effect {self.effect!r} takes parameters {', '.join(names)}; "
+                f"got {', '.join(sorted(self.parameters)) or 'none'}"
+            )
+        for dof in self.dofs:
+            if dof not in DOF_NAMES:
+                raise SignalError(f"unknown DOF {dof!r}; expected one of {', '.join(DOF_NAMES)}")
+        for name in names:
+            if name != "channels":
+                self._number(name)
+        p = self.value
+        checks = {
+            "gain": p("gain", 0) > 0,
+            "platform_filter": p("break_hz", 0) > 0,
+            "resonance": p("frequency_hz", 0) > 0 and p("damping", 0) > 0,
+            "lead": p("time_constant_s", -1) >= 0,
+            "sensor_filter": p("cutoff_hz", 0) > 0,
+            "backlash": p("play", -1) >= 0,
+            "noise": p("scale", -1) >= 0,
+        }
+        if not checks.get(self.effect, True):
+            raise SignalError(f"{self.describe()}: out of range ({_RANGES[self.effect]})")
+        if self.effect == "sensor_filter":
+            ch = self.parameters["channels"]
+            if (
+                isinstance(ch, str)
+                or not isinstance(ch, Sequence)
+                or not ch
+                or any(c not in IMU_CHANNELS for c in ch)
+            ):
+                raise SignalError(
+                    f"sensor_filter channels must be a non-empty list of {', '.join(IMU_CHANNELS)};"
+                    f" got {ch!r}"
+                )
+
+    def _number(self, name: str) -> float:
+        v = self.parameters[name]
+        if isinstance(v, bool) or not isinstance(v, int | float | np.floating | np.integer):
+            raise SignalError(f"{self.effect} parameter {name} must be a number; got {v!r}")
+        if not np.isfinite(v):
+            raise SignalError(f"{self.effect} parameter {name} must be finite; got {v}")
+        return float(v)
+
+    def value(self, name: str, default: float = 0.0) -> float:
+        """Return a numeric parameter."""
+        return float(self.parameters[name]) if name in self.parameters else default  # type: ignore[arg-type]
+
+    @property
+    def dof_mask(self) -> NDArray[np.bool_]:
+        """Boolean mask over the six DOFs it acts on."""
+        if not self.dofs:
+            return np.ones(6, dtype=bool)
+        return np.array([d in self.dofs for d in DOF_NAMES])
+
+    def describe(self) -> str:
+        """One line, e.g. ``delay: extra_delay_s 0.065 (heave)``."""
+        pars = ", ".join(
+            f"{k} {v:.4g}" if isinstance(v, float | int) else f"{k} {v}"
+            for k, v in self.parameters.items()
+        )
+        where = f" ({', '.join(self.dofs)})" if self.dofs else ""
+        return f"{self.effect}: {pars}{where}"
+
+    def to_json(self) -> dict[str, object]:
+        """Return the JSON form ``{"effect", "parameters", "dofs"}``."""
+        pars = {k: (list(v) if k == "channels" else float(v)) for k, v in self.parameters.items()}  # type: ignore[arg-type]
+        return {"effect": self.effect, "parameters": pars, "dofs": list(self.dofs)}
+
+    @classmethod
+    def from_json(cls, data: object) -> Extension:
+        """Parse the JSON form (raises :class:`SignalError` on anything malformed)."""
+        if not isinstance(data, Mapping) or "effect" not in data or "parameters" not in data:
+            raise SignalError(f"an extension needs 'effect' and 'parameters'; got {data!r}")
+        pars = data["parameters"]
+        if not isinstance(pars, Mapping):
+            raise SignalError(f"extension parameters must be an object; got {pars!r}")
+        dofs = data.get("dofs", [])
+        if not isinstance(dofs, list | tuple):
+            raise SignalError(f"extension dofs must be a list; got {dofs!r}")
+        pars = {k: (tuple(v) if isinstance(v, list) else v) for k, v in pars.items()}
+        return cls(str(data["effect"]), pars, tuple(dofs))
+
+    # --- frequency responses of the linear effects ------------------------------------------
+
+    def response(self, f: ArrayLike, nominal_break_hz: float | None = None) -> ComplexArray:
+        """Return the factor the extension multiplies a DOF's response by, at ``f`` [Hz].
+
+        ``platform_filter`` is relative to the configuration's own filter (``nominal_break_hz``;
+        None: no filter). Non-linear effects (``backlash``, ``noise``) have none.
+        """
+        s = 2j * np.pi * np.asarray(f, dtype=float)
+        p = self.value
+        if self.effect == "delay":
+            return np.exp(-s * p("extra_delay_s"))
+        if self.effect == "gain":
+            return np.full(s.shape, p("gain"), dtype=complex)
+        if self.effect == "platform_filter":
+            new = 1.0 / (1.0 + s / (2 * np.pi * p("break_hz"))) ** 2
+            old = (
+                1.0
+                if nominal_break_hz is None
+                else 1.0 / (1.0 + s / (2 * np.pi * nominal_break_hz)) ** 2
+            )
+            return new / old
+        if self.effect == "resonance":
+            w = 2 * np.pi * p("frequency_hz")
+            return w**2 / (s**2 + 2 * p("damping") * w * s + w**2)
+        if self.effect == "lead":
+            return 1.0 + s * p("time_constant_s")
+        if self.effect == "sensor_filter":
+            return 1.0 / (1.0 + s / (2 * np.pi * p("cutoff_hz")))
+        raise SignalError(f"{self.effect} is not a linear effect; it has no frequency response")
+
+    # --- blocks --------------------------------------------------------------------------------
+
+    def __call__(self, tr: Trajectory) -> Trajectory:
+        """Apply a command-side extension to a trajectory (the DOFs it acts on)."""
+        mask = self.dof_mask
+        p = self.value
+        v = tr.values.copy()
+        if self.effect == "gain":
+            v[:, mask] *= p("gain")
+        elif self.effect == "resonance":
+            w = 2 * np.pi * p("frequency_hz")
+            v[:, mask] = filter_spline(tr, [1.0], [1 / w**2, 2 * p("damping") / w, 1.0])[:, mask]
+        elif self.effect == "lead":
+            v[:, mask] += p("time_constant_s") * tr.at(tr.t, 1)[:, mask]
+        elif self.effect == "backlash":
+            for k in np.flatnonzero(mask):
+                v[:, k] = backlash(v[:, k], p("play"))
+        else:
+            raise SignalError(f"{self.effect} is not applied to the commands")
+        return tr.replace(v)
+
+
+_RANGES = {
+    "gain": "gain > 0",
+    "platform_filter": "break_hz > 0",
+    "resonance": "frequency_hz > 0, damping > 0",
+    "lead": "time_constant_s >= 0",
+    "sensor_filter": "cutoff_hz > 0",
+    "backlash": "play >= 0",
+    "noise": "scale >= 0",
+}
+
+
+def backlash(x: ArrayLike, play: float) -> FloatArray:
+    """Dead-band (play) operator: the output moves only when the input pushes it.
+
+    The output stays put while the input travels inside a band of width ``play`` around it
+    and follows the input at the band's edge otherwise; it starts centred on the input.
+
+    Examples
+    --------
+    >>> backlash([0.0, 1.0, 2.0, 1.5, 0.0], 1.0).tolist()
+    [0.0, 0.5, 1.5, 1.5, 0.5]
+
+    """
+    xx = np.asarray(x, dtype=float)
+    h = 0.5 * float(play)
+    out = np.empty_like(xx)
+    y = xx[0] if xx.size else 0.0
+    for i, xi in enumerate(xx):
+        if xi - y > h:
+            y = xi - h
+        elif y - xi > h:
+            y = xi + h
+        out[i] = y
+    return out
+
+
+class SensorFilterStream:
+    """First-order low-pass on some IMU channels, sample by sample across chunks.
+
+    Discretised at the IMU rate (bilinear); starts in steady state at the first sample, so
+    the static 1 g does not ring.
+    """
+
+    def __init__(self, extension: Extension, rate_hz: float) -> None:
+        wc = 2 * np.pi * extension.value("cutoff_hz")
+        if extension.value("cutoff_hz") >= rate_hz / 2:
+            raise SignalError(
+                f"sensor_filter cutoff {extension.value('cutoff_hz'):g} Hz must be below the "
+                f"IMU's Nyquist frequency ({rate_hz / 2:g} Hz)"
+            )
+        self.b, self.a = signal.bilinear([wc], [1.0, wc], rate_hz)
+        channels = extension.parameters["channels"]
+        self.columns = [IMU_CHANNELS.index(c) for c in channels]  # type: ignore[union-attr]
+        self._state: FloatArray | None = None
+
+    def __call__(self, values: FloatArray) -> FloatArray:
+        """Filter the chosen columns of an (n, 6) chunk (in place) and return it."""
+        if values.shape[0] == 0:
+            return values
+        cols = values[:, self.columns]
+        if self._state is None:
+            self._state = signal.lfilter_zi(self.b, self.a)[:, None] * cols[0]
+        out, self._state = signal.lfilter(self.b, self.a, cols, axis=0, zi=self._state)
+        values[:, self.columns] = out
+        return values

@@ -1,0 +1,74 @@
+"""``twin diagnose RUN_DIR ...``: what the twin gets wrong about recorded runs, and why."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    """Add ``twin diagnose`` to the ``twin`` parser."""
+    p = sub.add_parser(
+        "diagnose",
+        help="compare recorded runs with the nominal twin, name the cause, extend the model",
+        description="Simulate the nominal twin with the runs' own commands, compare the measured "
+        "IMU signals (describing-function ratios, harmonics, residual noise), fit candidate "
+        "extensions (delay, gain, platform_filter, resonance, lead, sensor_filter, backlash, "
+        "noise), name those the data support (BIC) and measure their gain on held-out data.",
+    )
+    p.add_argument("runs", nargs="+", metavar="RUN_DIR", help="twin-run/1 folders (same platform)")
+    p.add_argument("--config", help="nominal configuration (name or twin-config/1 file); "
+                   "default: the runs' meta.json")  # fmt: skip
+    p.add_argument("--model", choices=("reduced", "full"), default="reduced",
+                   help="nominal platform model (default reduced)")  # fmt: skip
+    p.add_argument("--validate", nargs="+", default=[], metavar="RUN_DIR",
+                   help="runs only for measuring the gain (default: held-out halves)")  # fmt: skip
+    p.add_argument("--save-config", metavar="FILE", help="write the extended configuration (JSON)")
+    p.add_argument("--out", help="report folder (default out/diagnose-<first run's name>)")
+    p.add_argument("--max-hz", type=float, default=15.0, help="top of the band (default 15 Hz)")
+    p.add_argument("--dof", nargs="+", help="DOFs to analyse (default: the driven ones)")
+    p.add_argument("--seed", type=int, default=0, help="seed of the simulated noise (default 0)")
+    p.add_argument("--no-figures", action="store_true", help="skip figures and the .rrd")
+    p.add_argument("--json", action="store_true", help="print the findings as JSON")
+    p.set_defaults(func=_cmd_diagnose)
+
+
+def _progress(message: str) -> None:
+    print(f"  {message}", file=sys.stderr)
+
+
+def _cmd_diagnose(args: argparse.Namespace) -> int:
+    from twin.diagnose.diagnosis import diagnose
+    from twin.diagnose.report import write_report
+    from twin.errors import SignalError
+
+    if args.seed < 0:
+        raise SignalError(f"--seed must be >= 0; got {args.seed}")
+    quiet = args.json
+    d = diagnose(
+        args.runs, args.config, args.model, args.validate, args.max_hz, args.seed, args.dof,
+        progress=None if quiet else _progress,
+    )  # fmt: skip
+    out = Path(args.out) if args.out else Path("out") / f"diagnose-{Path(args.runs[0]).name}"
+    write_report(d, out, figures=not args.no_figures, rrd=not args.no_figures)
+    if args.save_config:
+        d.extended_config.save(args.save_config)
+    if args.json:
+        print(json.dumps(d.to_json_safe(), indent=2))
+        return 0
+    if not d.findings:
+        print("no finding: the runs agree with the nominal model within their noise")
+    for i, f in enumerate(d.findings, 1):
+        g = f.gain
+        print(
+            f"{i}. {f.extension.describe()}  (BIC +{f.evidence['delta_bic']:.0f}; held out: "
+            f"VAF {g['vaf_before']:.1f} -> {g['vaf_after']:.1f} %, "
+            f"DF error {g['df_error_db_before']:.2f} -> {g['df_error_db_after']:.2f} dB, "
+            f"{g['df_error_deg_before']:.1f} -> {g['df_error_deg_after']:.1f} deg)"
+        )
+    print(f"report: {out}/summary.md")
+    if args.save_config:
+        print(f"extended configuration: {args.save_config}")
+    return 0

@@ -1,0 +1,292 @@
+"""What a diagnosis compares: a recorded run, the nominal twin's prediction and its noise.
+
+For every run and every driven DOF a :class:`Channel` holds, on the App. C.2.3 grid (100 Hz):
+the measured acceleration of the DOF (the IMU channel that measures it, post-processed), the
+nominal twin's noise-free prediction of it (the run's own commands through the nominal
+configuration, ideal IMU), and ``NOISE_REALISATIONS`` realisations of the nominal noise (the
+same run with the configuration's noise and the IMU's noise, minus the noise-free one). The
+noise realisations give the nominal noise spectrum of any segment of the run, with no model of
+the post-processing needed.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+
+from twin.agard.df import periodic_design
+from twin.agard.measure import Measurement, from_imu, from_run
+from twin.chain.config import MotionSystem, motion_system
+from twin.chain.imu import ImuSpec
+from twin.chain.simulate import MODELS, default_imu, prepare
+from twin.errors import RunFormatError, SignalError
+from twin.frames import DOF_NAMES
+from twin.runs import read_run
+from twin.trajectory import Trajectory
+
+FloatArray = NDArray[np.float64]
+#: Noise realisations simulated per run for the nominal noise spectrum.
+NOISE_REALISATIONS = 8
+#: A DOF is analysed when its commanded acceleration has at least this fraction of the RMS of
+#: the most-driven DOF (in its own units).
+DRIVEN_FRACTION = 0.05
+
+
+@dataclass(frozen=True, eq=False)
+class Channel:
+    """One DOF of one run: measured, nominal prediction, nominal noise.
+
+    Attributes
+    ----------
+    run : str
+        Run folder.
+    dof : str
+        DOF name.
+    t : ndarray, shape (n,)
+        Time [s] (100 Hz).
+    measured, nominal : ndarray, shape (n,)
+        Measured acceleration and the nominal twin's noise-free prediction [m/s^2 or rad/s^2].
+    noise : ndarray, shape (k, n)
+        Realisations of the nominal noise on the same grid.
+    lines_hz : ndarray
+        Excited frequencies.
+    window : tuple of float
+        Measurement window [s] (whole periods of the signal).
+    commands : Trajectory
+        The run's command trajectory (for re-simulation).
+
+    """
+
+    run: str
+    dof: str
+    t: FloatArray
+    measured: FloatArray
+    nominal: FloatArray
+    noise: FloatArray
+    lines_hz: FloatArray
+    window: tuple[float, float]
+    commands: Trajectory = field(repr=False)
+
+    @property
+    def index(self) -> int:
+        """DOF index."""
+        return DOF_NAMES.index(self.dof)
+
+    @property
+    def rate_hz(self) -> float:
+        """Sample rate [Hz]."""
+        return 1.0 / float(self.t[1] - self.t[0])
+
+    def halves(self) -> tuple[tuple[float, float], tuple[float, float]]:
+        """Return the two halves of the measurement window."""
+        a, b = self.window
+        mid = a + 0.5 * (b - a)
+        return (a, mid), (mid, b)
+
+
+@dataclass(frozen=True, eq=False)
+class Case:
+    """Runs to diagnose against one nominal configuration.
+
+    Attributes
+    ----------
+    config : MotionSystem
+        Nominal configuration.
+    model : str
+        ``"reduced"`` or ``"full"``.
+    imu : ImuSpec
+        The nominal IMU (mount and rate from the run's ``meta.json``).
+    channels : list of Channel
+        Every driven DOF of every run.
+    seed : int
+        Seed of the noise realisations.
+
+    """
+
+    config: MotionSystem
+    model: str
+    imu: ImuSpec
+    channels: list[Channel]
+    seed: int
+
+    @property
+    def clean(self) -> MotionSystem:
+        """The nominal configuration without noise (for noise-free predictions)."""
+        return clean_config(self.config)
+
+    @property
+    def dofs(self) -> list[str]:
+        """Analysed DOFs, in DOF order."""
+        return [d for d in DOF_NAMES if any(c.dof == d for c in self.channels)]
+
+    def of(self, dof: str) -> list[Channel]:
+        """Channels of one DOF."""
+        return [c for c in self.channels if c.dof == dof]
+
+
+def clean_config(config: MotionSystem) -> MotionSystem:
+    """Return the configuration without noise (for noise-free predictions)."""
+    return config.replace(
+        name=config.name,
+        noise=False,
+        extensions=tuple(e for e in config.extensions if e.effect != "noise"),
+    )
+
+
+def nominal_imu(meta: dict, platform: str) -> ImuSpec:
+    """Return the platform's ADIS16355 at the mount and rate of a run's ``meta.json``."""
+    spec = default_imu(platform)
+    imu = meta.get("imu", {})
+    return ImuSpec(
+        position_m=tuple(float(v) for v in imu.get("position_m", spec.position_m)),
+        rate_hz=float(imu.get("rate_hz", spec.rate_hz)),
+        accel_range=spec.accel_range,
+        gyro_range=spec.gyro_range,
+    )
+
+
+def driven_dofs(m: Measurement, dofs: Sequence[str] | None = None) -> list[int]:
+    """Return the indices of the DOFs a run drives (or of ``dofs``, checked)."""
+    if dofs:
+        bad = [d for d in dofs if d not in DOF_NAMES]
+        if bad:
+            raise SignalError(f"unknown DOF {bad[0]!r}; expected one of {', '.join(DOF_NAMES)}")
+        return [DOF_NAMES.index(d) for d in dofs]
+    rms = np.sqrt(np.mean(m.commanded**2, axis=0))
+    if not rms.any():
+        raise SignalError(f"{m.source}: the commands do not move; nothing to diagnose")
+    sig = m.meta.get("signal", {})
+    if sig.get("dof") in DOF_NAMES:
+        return [DOF_NAMES.index(sig["dof"])]
+    # translations and rotations in their own units: compare within each group
+    out = []
+    for group in (slice(0, 3), slice(3, 6)):
+        top = rms[group].max()
+        out += [
+            k + group.start
+            for k, v in enumerate(rms[group])
+            if top > 0 and v >= DRIVEN_FRACTION * top
+        ]
+    return sorted(out)
+
+
+def simulate_measurement(
+    config: MotionSystem, commands: Trajectory, t: FloatArray, model: str, seed: int, imu: ImuSpec
+) -> FloatArray:
+    """Run commands through a configuration; the post-processed accelerations at ``t``.
+
+    Returns
+    -------
+    ndarray, shape (len(t), 6)
+        As :attr:`twin.agard.measure.Measurement.measured`, interpolated onto ``t`` when the
+        simulated IMU's grid differs (a recorded IMU may start elsewhere on the clock).
+
+    """
+    sim = prepare(config, commands, model, seed, imu).collect()
+    out = from_imu(sim.commands, sim.imu, f"{config.name} ({model})", config, {})
+    if out.t.shape == t.shape and np.allclose(out.t, t, atol=1e-9):
+        return out.measured
+    return np.column_stack([np.interp(t, out.t, out.measured[:, k]) for k in range(6)])
+
+
+def measurement_channels(
+    m: Measurement,
+    nominal: MotionSystem,
+    model: str,
+    imu: ImuSpec,
+    seed: int = 0,
+    offset: int = 0,
+    dofs: Sequence[str] | None = None,
+    realisations: int = NOISE_REALISATIONS,
+) -> list[Channel]:
+    """Return the channels of one measurement: nominal prediction and noise per driven DOF.
+
+    Noise realisation ``i`` is simulated with seed ``seed + offset + i + 1``.
+    """
+    pred = simulate_measurement(clean_config(nominal), m.commands, m.t, model, seed, imu.ideal())
+    noisy = [
+        simulate_measurement(nominal, m.commands, m.t, model, seed + offset + i + 1, imu)
+        for i in range(realisations)
+    ]
+    out = []
+    for k in driven_dofs(m, dofs):
+        lines, window = periodic_design(m, k)
+        noise = np.array([n[:, k] - pred[:, k] for n in noisy])
+        out.append(Channel(m.source, DOF_NAMES[k], m.t, m.measured[:, k], pred[:, k], noise,
+                           lines, tuple(window), m.commands))  # fmt: skip
+    return out
+
+
+def load_case(
+    runs: Sequence[str | Path],
+    config: str | MotionSystem | None = None,
+    model: str = "reduced",
+    seed: int = 0,
+    dofs: Sequence[str] | None = None,
+    realisations: int = NOISE_REALISATIONS,
+    progress: Callable[[str], None] | None = None,
+) -> Case:
+    """Read runs, simulate the nominal twin on their commands and its noise.
+
+    Parameters
+    ----------
+    runs : sequence of path
+        ``twin-run/1`` folders of the same platform.
+    config : str or MotionSystem, optional
+        Nominal configuration; the first run's ``meta.json`` (``platform`` and
+        ``platform_config``) by default.
+    model : str
+        ``"reduced"`` (default) or ``"full"``.
+    seed : int
+        Seed of the simulated noise realisations.
+    dofs : sequence of str, optional
+        DOFs to analyse; the driven ones by default.
+    realisations : int
+        Noise realisations per run.
+    progress : callable, optional
+        Called with a message per run.
+
+    Raises
+    ------
+    RunFormatError
+        A run folder is malformed (also for a malformed ``platform_config``).
+    SignalError
+        Unknown model, platforms that differ, nothing driven.
+
+    """
+    if model not in MODELS:
+        raise SignalError(f"unknown model {model!r}; expected one of {', '.join(MODELS)}")
+    if not runs:
+        raise SignalError("give at least one run folder to diagnose")
+    if realisations < 2:
+        raise SignalError(f"need at least 2 noise realisations; got {realisations}")
+    measurements = []
+    for path in runs:
+        rec = read_run(path)
+        try:
+            measurements.append(from_run(rec))
+        except SignalError as e:
+            raise RunFormatError(f"{path}/meta.json: {e}") from e
+    platforms = {m.config.platform for m in measurements}
+    if len(platforms) > 1:
+        raise SignalError(f"the runs are of different platforms ({', '.join(sorted(platforms))})")
+    if config is None:
+        nominal = measurements[0].config
+    else:
+        nominal = motion_system(config) if isinstance(config, str) else config
+        if nominal.platform not in platforms:
+            raise SignalError(
+                f"configuration {nominal.name!r} is of the {nominal.platform} platform; the runs "
+                f"are of the {platforms.pop()}"
+            )
+    imu = nominal_imu(measurements[0].meta, nominal.platform)
+    channels = []
+    for r, m in enumerate(measurements):
+        if progress:
+            progress(f"nominal twin on {m.source} ({model})")
+        channels += measurement_channels(m, nominal, model, imu, seed, 1000 * r, dofs, realisations)
+    return Case(nominal, model, imu, channels, seed)

@@ -1,0 +1,243 @@
+"""The diagnosis of recorded runs: the Python entry point of ``twin diagnose``.
+
+Examples
+--------
+>>> d = diagnose(["out/run1", "out/run2"])  # doctest: +SKIP
+>>> [f.extension.describe() for f in d.findings]  # doctest: +SKIP
+['delay: extra_delay_s 0.065 (heave)']
+>>> d.extended_config.save("mpi-measured.json")  # doctest: +SKIP
+
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from twin.chain.config import MotionSystem
+from twin.diagnose.candidates import Model
+from twin.diagnose.data import NOISE_REALISATIONS, Case, load_case
+from twin.diagnose.detect import smallest_detectable
+from twin.diagnose.residuals import (
+    MAX_HZ,
+    LineRatios,
+    PowerTest,
+    decomposition,
+    line_ratios,
+    residual_bands,
+    segment,
+)
+from twin.diagnose.select import BIC_MARGIN, Finding, held_out_gain, scores, select
+from twin.errors import SignalError
+
+
+@dataclass(eq=False)
+class DofReport:
+    """What the nominal model gets wrong in one DOF, and what was found.
+
+    Attributes
+    ----------
+    dof : str
+        The DOF.
+    lines : LineRatios
+        Describing-function ratio measured / nominal.
+    extended_lines : LineRatios
+        The same against the extended model.
+    harmonics : list of PowerTest
+        Residual power at harmonics and elsewhere (per run).
+    residual_noise : list of PowerTest
+        Residual power per octave band (per run).
+    detectable : dict
+        Smallest effects the data could have revealed.
+    nominal_scores, extended_scores : dict
+        VAF and describing-function error over the whole window (fitting data).
+    findings : list of Finding
+        Causes named, most important first.
+    model : Model
+        Nominal + the findings.
+
+    """
+
+    dof: str
+    lines: LineRatios
+    extended_lines: LineRatios
+    harmonics: list[list[PowerTest]]
+    residual_noise: list[list[PowerTest]]
+    detectable: dict[str, object]
+    nominal_scores: dict[str, float]
+    extended_scores: dict[str, float]
+    findings: list[Finding]
+    model: Model
+
+    def to_json(self) -> dict[str, object]:
+        """Return the DOF's part of ``nominal``."""
+        return {
+            "describing_function_ratio": self.lines.to_json(),
+            "harmonics": [[t.to_json() for t in run] for run in self.harmonics],
+            "residual_noise": [[t.to_json() for t in run] for run in self.residual_noise],
+            "smallest_detectable": self.detectable,
+            "fit_window_scores": self.nominal_scores,
+        }
+
+
+@dataclass(eq=False)
+class Diagnosis:
+    """Result of :func:`diagnose`.
+
+    Attributes
+    ----------
+    case : Case
+        Runs, nominal configuration and model.
+    dofs : dict of str to DofReport
+        Per analysed DOF.
+    runs : list of str
+        Run folders.
+    validation : list of str
+        Validation run folders (empty: held-out halves were used).
+    max_hz : float
+        Top of the analysis band.
+
+    """
+
+    case: Case
+    dofs: dict[str, DofReport]
+    runs: list[str]
+    validation: list[str]
+    max_hz: float
+
+    @property
+    def findings(self) -> list[Finding]:
+        """Every finding, most important (largest BIC improvement) first."""
+        out = [f for r in self.dofs.values() for f in r.findings]
+        return sorted(out, key=lambda f: -float(f.evidence["delta_bic"]))  # type: ignore[arg-type]
+
+    @property
+    def extended_config(self) -> MotionSystem:
+        """The nominal configuration with every finding added."""
+        cfg = self.case.config
+        exts = tuple(f.extension for f in self.findings)
+        if not exts:
+            return cfg
+        names = "+".join(sorted({e.effect for e in exts}))
+        return cfg.replace(
+            name=f"{cfg.name}+{names}",
+            extensions=(*cfg.extensions, *exts),
+            description=f"{cfg.name} extended by twin diagnose of {', '.join(self.runs)}",
+        )
+
+    def to_json(self) -> dict[str, object]:
+        """Return the ``--json`` document: ``findings`` and ``nominal``."""
+        return {
+            "findings": [f.to_json() for f in self.findings],
+            "nominal": {
+                "platform": self.case.config.platform,
+                "platform_config": self.case.config.to_meta(),
+                "model": self.case.model,
+                "runs": self.runs,
+                "validation_runs": self.validation,
+                "band_hz": [None, self.max_hz],
+                "criterion": "forward selection by BIC; a cause is named when BIC improves by "
+                f"> {BIC_MARGIN:g}",
+                "dofs": {d: r.to_json() for d, r in self.dofs.items()},
+            },
+            "extended_config": self.extended_config.to_meta(),
+        }
+
+    def to_json_safe(self) -> dict[str, object]:
+        """:meth:`to_json` with plain Python numbers and non-finite values as null."""
+        return _plain(self.to_json())  # type: ignore[return-value]
+
+
+def _plain(v: object) -> object:
+    """Turn numpy scalars into Python ones and NaN/inf into None, recursively."""
+    if isinstance(v, dict):
+        return {str(k): _plain(x) for k, x in v.items()}
+    if isinstance(v, list | tuple):
+        return [_plain(x) for x in v]
+    if isinstance(v, np.ndarray):
+        return _plain(v.tolist())
+    if isinstance(v, bool | np.bool_):
+        return bool(v)
+    if isinstance(v, int | np.integer):
+        return int(v)
+    if isinstance(v, float | np.floating):
+        return float(v) if np.isfinite(v) else None
+    return v
+
+
+def diagnose(
+    runs: Sequence[str | Path],
+    config: str | MotionSystem | None = None,
+    model: str = "reduced",
+    validate: Sequence[str | Path] = (),
+    max_hz: float = MAX_HZ,
+    seed: int = 0,
+    dofs: Sequence[str] | None = None,
+    realisations: int = NOISE_REALISATIONS,
+    progress: Callable[[str], None] | None = None,
+) -> Diagnosis:
+    """Diagnose recorded runs against the nominal twin.
+
+    Parameters
+    ----------
+    runs : sequence of path
+        ``twin-run/1`` folders (same platform), e.g. Table 5.2's two multi-sines.
+    config : str or MotionSystem, optional
+        Nominal configuration; ``meta.json``'s by default.
+    model : str
+        ``"reduced"`` (default) or ``"full"``.
+    validate : sequence of path
+        Runs used only to measure the gain (else the halves of the measurement window).
+    max_hz : float
+        Top of the analysis band [Hz].
+    seed : int
+        Seed of the simulated noise realisations.
+    dofs : sequence of str, optional
+        DOFs to analyse (the driven ones by default).
+    realisations : int
+        Noise realisations per run for the nominal noise spectrum.
+    progress : callable, optional
+        Called with a message at each step.
+
+    """
+    if not np.isfinite(max_hz) or not 0.5 < max_hz <= 45.0:
+        raise SignalError(
+            f"max_hz must be in (0.5, 45] Hz (below the 50 Hz Nyquist frequency of the 100 Hz "
+            f"grid); got {max_hz}"
+        )
+    case = load_case(runs, config, model, seed, dofs, realisations, progress)
+    val = None
+    if validate:
+        val = load_case(validate, case.config, model, seed + 1, dofs, realisations, progress)
+    reports = {}
+    for dof in case.dofs:
+        channels = case.of(dof)
+        segs = [segment(c, max_hz=max_hz) for c in channels]
+        findings, fitted = select(case, dof, max_hz, progress=progress)
+        for f, g in zip(
+            findings, held_out_gain(case, dof, findings, max_hz, val, fitted), strict=True
+        ):
+            f.gain = g
+        preds = [fitted.predict(c) for c in channels]
+        base = Model(case, dof)
+        reports[dof] = DofReport(
+            dof,
+            line_ratios(channels),
+            line_ratios(channels, preds),
+            [decomposition(s) for s in segs],
+            [residual_bands(s) for s in segs],
+            smallest_detectable(base, segs),
+            _mean_scores(base, segs),
+            _mean_scores(fitted, segs),
+            findings,
+            fitted,
+        )
+    return Diagnosis(case, reports, [str(r) for r in runs], [str(v) for v in validate], max_hz)
+
+
+def _mean_scores(model: Model, segs: Sequence) -> dict[str, float]:
+    rows = [scores(model, s.channel, s) for s in segs]
+    return {k: float(np.mean([r[k] for r in rows])) for k in rows[0]}

@@ -1,0 +1,207 @@
+"""The diagnosis report folder: Markdown summary, JSON, figures and a Rerun recording.
+
+Written to a temporary folder and renamed when complete, so a failure leaves nothing.
+"""
+
+from __future__ import annotations
+
+import json
+import shutil
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from twin.diagnose.diagnosis import Diagnosis, DofReport
+from twin.diagnose.residuals import segment
+
+HALVES = "the other half of the measurement window (two-fold)"
+
+
+def _fmt(v: object) -> str:
+    if isinstance(v, float):
+        return f"{v:.4g}"
+    if isinstance(v, list | tuple):
+        return ", ".join(_fmt(x) for x in v)
+    return str(v)
+
+
+def _pm(std: object, k: str) -> str:
+    v = std.get(k) if isinstance(std, dict) else None
+    return f" ± {v:.2g}" if isinstance(v, float) and np.isfinite(v) else ""
+
+
+def summary(d: Diagnosis) -> str:
+    """Return the Markdown summary."""
+    cfg = d.case.config
+    out = [
+        "# Diagnosis",
+        "",
+        f"- runs: {', '.join(d.runs)}",
+        f"- nominal: `{cfg.name}` on the {cfg.platform} platform ({d.case.model} model); "
+        f"filter {f'{cfg.filter_break_hz:g} Hz' if cfg.filter_break_hz else 'none'}, "
+        f"delay {cfg.delay_s * 1e3:.1f} ms, "
+        f"noise {'on' if cfg.noise else 'off'}",
+        f"- band: up to {d.max_hz:g} Hz; criterion: a cause is named when the BIC improves "
+        "by more than 10 (forward selection)",
+        "- gain measured on: "
+        + ("validation runs " + ", ".join(d.validation) if d.validation else HALVES),
+        "",
+        "## Findings",
+        "",
+    ]
+    if not d.findings:
+        out += [
+            "No finding: the runs are consistent with the nominal model within their noise.",
+            "",
+        ]
+    for i, f in enumerate(d.findings, 1):
+        std = f.evidence.get("parameter_std", {})
+        pars = ", ".join(
+            f"{k} = {_fmt(v)}" + _pm(std, k) for k, v in f.extension.parameters.items()
+        )
+        g = {k: v for k, v in f.gain.items() if isinstance(v, float)}
+        nan = float("nan")
+
+        def pair(key: str, fmt: str, g: dict = g, nan: float = nan) -> str:
+            a, b = g.get(f"{key}_before", nan), g.get(f"{key}_after", nan)
+            return f"{a:{fmt}} → {b:{fmt}}"
+
+        out += [
+            f"{i}. **{f.extension.effect}** in {', '.join(f.extension.dofs)}: {pars} "
+            f"(BIC improvement {f.evidence['delta_bic']:.1f})",
+            f"   - held out: VAF {pair('vaf', '.1f')} %, DF error {pair('df_error_db', '.2f')} dB, "
+            f"{pair('df_error_deg', '.1f')} deg",
+        ]
+    out.append("")
+    for dof, r in d.dofs.items():
+        out += _dof_section(dof, r)
+    return "\n".join(out) + "\n"
+
+
+def _dof_section(dof: str, r: DofReport) -> list[str]:
+    lo, hi = r.lines.ci_db()
+    out = [
+        f"## {dof}: measured / nominal",
+        "",
+        "| f [Hz] | ratio [dB] | 95 % CI [dB] | phase [deg] | ± [deg] | significant "
+        "| smallest detectable [dB / deg] |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    ci = r.lines.ci_deg()
+    for i, f in enumerate(r.lines.f):
+        out.append(
+            f"| {f:.2f} | {r.lines.db[i]:+.2f} | {lo[i]:+.2f} … {hi[i]:+.2f} "
+            f"| {r.lines.deg[i]:+.1f} | "
+            f"{ci[i]:.1f} | {'**yes**' if r.lines.significant[i] else 'no'} | "
+            f"{r.lines.min_db[i]:.2f} / {r.lines.min_deg[i]:.1f} |"
+        )
+    out += ["", "Residual power against the nominal noise (per run):", ""]
+    for run, (h, n) in enumerate(zip(r.harmonics, r.residual_noise, strict=True)):
+        tests = ", ".join(
+            f"{t.name} ×{t.ratio:.2f} (p={t.p_value:.2g}{', significant' if t.significant else ''})"
+            for t in [*h, *n]
+            if t.bins
+        )
+        out.append(f"- run {run + 1}: {tests}")
+    det = r.detectable
+    out += [
+        "",
+        "A clean bill of health in this DOF excludes (expected BIC improvement > 10): "
+        + "; ".join(f"{k} {_fmt(v)}" for k, v in det.items()),
+        "",
+    ]
+    return out
+
+
+def _figures(d: Diagnosis, folder: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    for dof, r in d.dofs.items():
+        fig, (a1, a2) = plt.subplots(2, 1, figsize=(7, 6), sharex=True)
+        lo, hi = r.lines.ci_db()
+        a1.errorbar(r.lines.f, r.lines.db, yerr=[r.lines.db - lo, hi - r.lines.db], fmt="o",
+                    label="measured / nominal (95 % CI)")  # fmt: skip
+        a1.plot(
+            r.extended_lines.f, r.extended_lines.db, "s", mfc="none", label="measured / extended"
+        )
+        f = np.geomspace(r.lines.f.min() / 2, d.max_hz, 300)
+        h = r.model.response(f)
+        a1.semilogx(f, 20 * np.log10(np.abs(h)), "k-", lw=1, label="extended / nominal (model)")
+        a1.axhline(0, color="0.6", lw=0.5)
+        a1.set_ylabel("magnitude [dB]")
+        a1.legend(fontsize=8)
+        a2.errorbar(r.lines.f, r.lines.deg, yerr=r.lines.ci_deg(), fmt="o")
+        a2.plot(r.extended_lines.f, r.extended_lines.deg, "s", mfc="none")
+        a2.semilogx(f, np.degrees(np.angle(h)), "k-", lw=1)
+        a2.axhline(0, color="0.6", lw=0.5)
+        a2.set_ylabel("phase [deg]")
+        a2.set_xlabel("frequency [Hz]")
+        a1.set_title(f"{dof}: describing function, measured against the models")
+        fig.tight_layout()
+        fig.savefig(folder / f"df_{dof}.png", dpi=110)
+        plt.close(fig)
+
+        fig, ax = plt.subplots(figsize=(7, 4))
+        ch = d.case.of(dof)[0]
+        seg = segment(ch, max_hz=d.max_hz)
+        k = np.ones(9) / 9
+        cases = (("measured - nominal", ch.nominal, "C0-"),
+                 ("measured - extended", r.model.predict(ch), "C1-"))  # fmt: skip
+        for label, pred, style in cases:
+            p = np.abs(seg.measured - seg.spectrum(pred)) ** 2
+            ax.loglog(seg.f, np.convolve(p, k, "same"), style, lw=1, label=label)
+        ax.loglog(seg.f, seg.noise_psd, "k--", lw=1, label="nominal noise model")
+        ax.loglog(
+            seg.f,
+            seg.noise_psd * r.model.psd_factor(seg.f),
+            "k:",
+            lw=1,
+            label="extended noise model",
+        )
+        ax.set_xlabel("frequency [Hz]")
+        ax.set_ylabel("periodogram (9-bin mean)")
+        ax.set_title(f"{dof}: residual spectrum, run 1")
+        ax.legend(fontsize=8)
+        fig.tight_layout()
+        fig.savefig(folder / f"residual_{dof}.png", dpi=110)
+        plt.close(fig)
+
+
+def _recording(d: Diagnosis, path: Path) -> None:
+    from twin.record import record_series
+
+    series = {}
+    t = None
+    for dof, r in d.dofs.items():
+        ch = d.case.of(dof)[0]
+        t = ch.t
+        series[f"{dof}/measured"] = ch.measured
+        series[f"{dof}/nominal"] = ch.nominal
+        series[f"{dof}/extended"] = r.model.predict(ch)
+    if t is not None:
+        record_series(path, "twin diagnose", t, series)
+
+
+def write_report(d: Diagnosis, out: str | Path, figures: bool = True, rrd: bool = True) -> Path:
+    """Write ``summary.md``, ``diagnosis.json``, figures and ``diagnosis.rrd`` to ``out``."""
+    out = Path(out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.", dir=out.parent))
+    try:
+        (tmp / "summary.md").write_text(summary(d))
+        (tmp / "diagnosis.json").write_text(json.dumps(d.to_json_safe(), indent=2) + "\n")
+        if figures:
+            _figures(d, tmp)
+        if rrd:
+            _recording(d, tmp / "diagnosis.rrd")
+        if out.exists():
+            shutil.rmtree(out)
+        tmp.replace(out)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+    return out
