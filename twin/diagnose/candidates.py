@@ -28,7 +28,7 @@ from scipy import optimize
 
 from twin.chain.extensions import DOF_CHANNEL, EFFECTS, LINEAR, Extension
 from twin.diagnose.data import Case, Channel, simulate_measurement
-from twin.diagnose.residuals import TAPER_CORRELATION, Segment
+from twin.diagnose.residuals import TAPER_CORRELATION, Segment, line_bins
 from twin.errors import SignalError
 from twin.frames import DOF_NAMES
 
@@ -217,28 +217,73 @@ def fit_candidate(
         x = np.clip(x, [b[0] for b in space.bounds], [b[1] for b in space.bounds])
         return -model.with_(make_extension(effect, space.names, x, model.dof)).loglik(segments)
 
-    if start is None:
+    if start is not None:
+        x0 = np.asarray(start, dtype=float)
+    elif effect == "backlash":
+        x0 = _backlash_start(model, segments, space)
+    else:
         grid = np.array(np.meshgrid(*space.grids, indexing="ij")).reshape(len(space.names), -1).T
         costs = np.array([cost(x) for x in grid])
         x0 = grid[int(np.argmin(costs))]
-    else:
-        x0 = np.asarray(start, dtype=float)
-    x = _refine(cost, x0, space, effect)
+    x = _refine(cost, x0, space, effect, 2.0 if start is None else 1.25)
     ext = make_extension(effect, space.names, x, model.dof)
     std = _crlb(cost, x, space)
     return Fit(ext, -cost(x), dict(zip(space.names, std, strict=True)))
 
 
-def _refine(cost: Callable, x0: FloatArray, space: Space, effect: str) -> FloatArray:
+def _backlash_start(model: Model, segments: Sequence[Segment], space: Space) -> FloatArray:
+    """Return a start for the play: distortion power matched, or the grid's best.
+
+    The likelihood is often too narrow in the play for a coarse grid (the kinks must line up
+    in time), but the power a play adds off the excited lines grows smoothly with it: the
+    play that matches the measured excess power there (over the nominal noise, log-log
+    interpolation of the grid) is a start near the peak. Where that power is not monotonic
+    (large plays) the grid's best point is the better start: both are returned, and the
+    refinement scans near each.
+    """
+    grid = space.grids[0]
+    excess, predicted = 0.0, np.zeros(grid.size)
+    for seg in segments:
+        ch = seg.channel
+        off = np.ones(seg.size, dtype=bool)
+        k = line_bins(seg, ch.lines_hz)
+        for j in (-1, 0, 1):
+            off[np.clip(k[k >= 0] + j, 0, seg.size - 1)] = False
+        base = seg.spectrum(model.predict(ch))
+        noise = seg.noise_psd * model.psd_factor(seg.f)
+        excess += float(np.sum(np.abs(seg.measured - base)[off] ** 2 - noise[off]))
+        for i, p in enumerate(grid):
+            pred = model.with_(make_extension("backlash", ["play"], [p], model.dof)).predict(ch)
+            predicted[i] += float(np.sum(np.abs(seg.spectrum(pred) - base)[off] ** 2))
+    logp = np.log(np.maximum.accumulate(np.maximum(predicted, 1e-300)))
+    matched = float(np.exp(np.interp(np.log(max(excess, 1e-300)), logp, np.log(grid))))
+    # where the distortion power is not monotonic in the play (large plays), the grid's best
+    # point is the better start: return both
+    ll = [model.with_(make_extension("backlash", ["play"], [v], model.dof)).loglik(segments)
+          for v in grid]  # fmt: skip
+    return np.array([matched, grid[int(np.argmax(ll))]])
+
+
+def _refine(
+    cost: Callable, x0: FloatArray, space: Space, effect: str, span: float = 2.0
+) -> FloatArray:
+    """Refine a start value: bounded 1-D search, Nelder-Mead in log space for two parameters.
+
+    ``span`` is the factor around the start scanned for ``backlash``.
+    """
     if len(space.names) == 1:
         g = space.grids[0]
         i = int(np.argmin(np.abs(g - x0[0])))
         lo = g[max(i - 1, 0)] if g.size > 1 else space.bounds[0][0]
         hi = g[min(i + 1, g.size - 1)] if g.size > 1 else space.bounds[0][1]
-        if effect == "backlash":  # a coarse grid: search the neighbouring cells in log space
+        if effect == "backlash":  # the likelihood is narrow in the play: scan near x0 in
+            # steps of 10 %, then refine within one step
+            steps = 2 * round(np.log(span) / np.log(1.1)) + 1
+            local = np.concatenate([np.geomspace(v / span, v * span, steps) for v in x0])
+            best = local[int(np.argmin([cost([v]) for v in local]))]
             r = optimize.minimize_scalar(
-                lambda u: cost([np.exp(u)]), bounds=(np.log(lo), np.log(hi)), method="bounded",
-                options={"xatol": 0.01},
+                lambda u: cost([np.exp(u)]), bounds=(np.log(best / 1.1), np.log(best * 1.1)),
+                method="bounded", options={"xatol": 0.005},
             )  # fmt: skip
             return np.array([np.exp(r.x)])
         lo, hi = max(min(lo, x0[0]), space.bounds[0][0]), min(max(hi, x0[0]), space.bounds[0][1])

@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from twin.chain.config import MotionSystem
+from twin.chain.extensions import Extension
 from twin.diagnose.candidates import Model
 from twin.diagnose.data import NOISE_REALISATIONS, Case, load_case
 from twin.diagnose.detect import smallest_detectable
@@ -118,7 +119,12 @@ class Diagnosis:
     def extended_config(self) -> MotionSystem:
         """The nominal configuration with every finding added."""
         cfg = self.case.config
-        exts = tuple(f.extension for f in self.findings)
+        exts = [f.extension for f in self.findings if f.extension.effect != "noise"]
+        noise = [f.extension for f in self.findings if f.extension.effect == "noise"]
+        if noise:  # one factor on every noise source: the geometric mean over the DOFs
+            scale = float(np.exp(np.mean([np.log(e.value("scale")) for e in noise])))
+            dofs = tuple(d for e in noise for d in e.dofs)
+            exts.append(Extension("noise", {"scale": scale}, dofs))
         if not exts:
             return cfg
         names = "+".join(sorted({e.effect for e in exts}))
