@@ -188,7 +188,7 @@ class DfResult:
             ha = config.frequency_response(fa)[:, k]
             ax_g.semilogx(fa, 20 * np.log10(np.abs(ha)), "k-", lw=0.8, label="Eq 5.11")
             ax_p.semilogx(fa, phase_deg(ha), "k-", lw=0.8)
-            h0 = config.replace(delay_s=0.0).frequency_response(fa)[:, k]
+            h0 = config.without_delay().frequency_response(fa)[:, k]
             hf = h0 * np.exp(-2j * np.pi * fa * self.delay_s)
             ax_p.semilogx(
                 fa,
@@ -279,8 +279,8 @@ def analyse_df(m: Measurement, dof: str | None = None) -> DfResult:
         for j in range(6)
         if j != k
     }
-    model = m.config.replace(delay_s=0.0).frequency_response(f)[:, k]
-    return _result(DOF_NAMES[k], f, h, cross, model, m.config.delay_s, m.source, noise)
+    model = m.config.without_delay().frequency_response(f)[:, k]
+    return _result(DOF_NAMES[k], f, h, cross, model, m.config.delays_s[k], m.source, noise)
 
 
 def _result(dof, f, h, cross, model, delay, source, noise) -> DfResult:

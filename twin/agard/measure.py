@@ -194,9 +194,9 @@ def check_target(target: str) -> None:
     """Raise a clear error for a target that is neither a configuration nor a run folder."""
     if is_run_folder(target):
         return
-    if Path(target).exists():
+    if Path(target).is_dir():
         raise UnknownPlatformError(f"{target}: a folder without meta.json is not a twin-run/1 run")
-    motion_system(target)
+    motion_system(target)  # a name or a twin-config/1 file
 
 
 def driven_dof(m: Measurement, dof: str | None = None) -> int:

@@ -68,7 +68,8 @@ def _run(bench, dofs, tmp, rrd, progress, bounds):
         f"Configuration `{cfg.name}`: {cfg.description or 'custom'}; platform {cfg.platform}, "
         f"filter {f'{cfg.filter_break_hz:g} Hz' if cfg.filter_break_hz else 'none'}, "
         f"total delay {cfg.delay_s * 1e3:.1f} ms, "
-        f"noise {'on' if cfg.noise else 'off'}; model {bench.model}, seed {bench.seed}.",
+        f"noise {'on' if cfg.noise else 'off'}; model {bench.model}, seed {bench.seed}."
+        + "".join(f" Extension {e.describe()}." for e in cfg.extensions),
         "",
     ]
     with Session(bench, tmp, rrd, progress) as s:

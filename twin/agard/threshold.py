@@ -96,13 +96,14 @@ def fit_eq_3_7(
 
 def analytic_t63(config: MotionSystem, dof: str) -> float:
     """Exact 63 % time of the configuration's Eq 5.11 acceleration step response from rest [s]."""
-    if config.filter_break_hz is None:
-        return config.delay_s
-    w = 2 * np.pi * config.filter_break_hz
+    k = DOF_NAMES.index(dof)
+    delay, fb = float(config.delays_s[k]), config.breaks_hz[k]
+    if fb is None:
+        return delay
+    w = 2 * np.pi * fb
     # step response of 1 / (1 + s / w)^2: 1 - (1 + w t) e^{-w t}
     t = brentq(lambda x: 1 - (1 + w * x) * np.exp(-w * x) - (1 - np.exp(-1)), 0, 50 / w)
-    del dof
-    return config.delay_s + float(t)
+    return delay + float(t)
 
 
 @dataclass(frozen=True, eq=False)

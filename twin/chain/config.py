@@ -112,6 +112,17 @@ class MotionSystem:
         return float(np.prod([e.value("scale") for e in self.of("noise")]))
 
     @property
+    def delays_s(self) -> NDArray[np.float64]:
+        """Total delay per DOF [s]: ``delay_s`` plus the ``delay`` extensions (at least 0)."""
+        extra = sum((e.value("extra_delay_s") * e.dof_mask for e in self.of("delay")), np.zeros(6))
+        return np.maximum(self.delay_s + extra, 0.0)
+
+    def without_delay(self) -> MotionSystem:
+        """Return this configuration without any delay (``delay_s`` 0, no ``delay`` extension)."""
+        keep = tuple(e for e in self.extensions if e.effect != "delay")
+        return self.replace(name=self.name, delay_s=0.0, extensions=keep)
+
+    @property
     def breaks_hz(self) -> tuple[float | None, ...]:
         """Platform-filter break frequency per DOF, ``platform_filter`` extensions applied."""
         out = [self.filter_break_hz] * 6
@@ -143,8 +154,7 @@ class MotionSystem:
         else:
             out.append(PerDofFilter(breaks))
         lag = np.broadcast_to(np.asarray(platform_lag_s, dtype=float), (6,))
-        extra = sum((e.value("extra_delay_s") * e.dof_mask for e in self.of("delay")), np.zeros(6))
-        delay = np.maximum(self.delay_s + extra - lag, 0.0)
+        delay = np.maximum(self.delays_s - lag, 0.0)
         if np.any(delay > 0):
             out.append(Delay(tuple(float(d) for d in delay)))
         if self.resonance:
