@@ -156,6 +156,18 @@ def test_full_mpi_model_against_the_reduced_nominal_has_no_finding_below_10_hz(t
         assert d.findings == [], [f.extension.describe() for f in d.findings]
 
 
+@pytest.mark.slow
+def test_full_model_as_the_nominal(tmp_path):
+    """--model full: a full-model run with a hidden 30 ms delay in pitch, diagnosed against the
+    full MuJoCo nominal."""
+    mpi = motion_system("mpi")
+    truth = mpi.replace(extensions=(Extension("delay", {"extra_delay_s": 0.03}, ("pitch",)),))
+    runs = record_runs(truth, mpi, "pitch", tmp_path, 15, model="full")
+    top = diagnose(runs, model="full", realisations=4).findings[0]
+    assert top.extension.effect == "delay"
+    assert top.extension.value("extra_delay_s") == pytest.approx(0.03, abs=0.005)
+
+
 # --- CLI, Python API details -----------------------------------------------------------------
 
 
