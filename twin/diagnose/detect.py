@@ -25,14 +25,6 @@ from twin.diagnose.candidates import Model, make_extension
 from twin.diagnose.residuals import TAPER_CORRELATION, Segment
 from twin.diagnose.select import BIC_MARGIN
 
-#: Neutral value (no effect) of each one-parameter effect, and the direction(s) searched.
-NEUTRAL = {
-    "delay": ("extra_delay_s", 0.0),
-    "gain": ("gain", 1.0),
-    "lead": ("time_constant_s", 0.0),
-    "noise": ("scale", 1.0),
-}
-
 
 def _spectra(model: Model, seg: Segment) -> tuple[np.ndarray, np.ndarray]:
     return seg.spectrum(model.predict(seg.channel)), seg.noise_psd * model.psd_factor(seg.f)
@@ -96,9 +88,9 @@ def smallest_detectable(base: Model, segments: Sequence[Segment]) -> dict[str, o
     """Per one-parameter effect, the parameter values the data would have flagged.
 
     For ``delay``, ``gain``, ``lead`` and ``noise``: the value on each side of "no effect"
-    whose expected BIC improvement is ``BIC_MARGIN`` (none if not reached within the search
-    range); for ``platform_filter`` and ``sensor_filter``: the break/cut-off frequency below
-    which a filter would have been flagged.
+    whose expected BIC improvement is ``BIC_MARGIN`` (None if not reached within the search
+    range); for ``sensor_filter``: the cut-off frequency below which a first-order filter
+    would have been named.
     """
     out: dict[str, object] = {}
     dof = base.dof
