@@ -76,7 +76,7 @@ def _cmd_dynamics(args: argparse.Namespace) -> int:
 
 
 def _add_simulate(sub: argparse._SubParsersAction) -> None:
-    from twin.chain.config import config_names
+    from twin.chain.config import config_help
     from twin.signals import BUILTIN_HELP
 
     p = sub.add_parser(
@@ -86,7 +86,7 @@ def _add_simulate(sub: argparse._SubParsersAction) -> None:
         "full MuJoCo or the reduced platform) with pose commands and write the run in the "
         "twin-run/1 format (meta.json, commands.csv, imu.csv, actuators.csv).",
     )
-    p.add_argument("config", metavar="CONFIG", help="one of " + ", ".join(config_names()))
+    p.add_argument("config", metavar="CONFIG", help=config_help())
     p.add_argument(
         "--signal",
         required=True,

@@ -28,7 +28,7 @@ HELP = {
 
 def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
     """Add ``twin agard`` and its subcommands to the ``twin`` parser."""
-    from twin.chain.config import config_names
+    from twin.chain.config import config_help
 
     agard = sub.add_parser(
         "agard", help="AGARD-AR-144 and OMCT tests on a twin or a recorded run", description=__doc__
@@ -39,7 +39,7 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
         p.add_argument(
             "target",
             metavar="PLATFORM_OR_CONFIG",
-            help=f"{', '.join(config_names())}, or a twin-run/1 folder",
+            help=f"{config_help()}, or a twin-run/1 folder",
         )
         p.add_argument(
             "--dof",
@@ -86,7 +86,7 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
         description="Run df, noise, threshold, omct and snr for each DOF and "
         "write report.json, summary.md and figures into a folder.",
     )
-    rep.add_argument("target", metavar="CONFIG", help=", ".join(config_names()))
+    rep.add_argument("target", metavar="CONFIG", help=config_help())
     rep.add_argument(
         "--dof",
         nargs="+",

@@ -246,17 +246,20 @@ def periodic_design(m: Measurement, k: int) -> tuple[FloatArray, tuple[float, fl
     spec = np.abs(np.fft.rfft(mid * signal.windows.blackmanharris(mid.size), pad))
     freqs = np.fft.rfftfreq(pad, m.t[1] - m.t[0])
     peak = (spec[1:-1] > spec[:-2]) & (spec[1:-1] >= spec[2:]) & (spec[1:-1] > 0.01 * spec.max())
-    found = freqs[1:-1][peak]
-    if found.size == 0:
+    idx = np.flatnonzero(peak) + 1
+    if idx.size == 0:
         raise SignalError(f"{m.source}: no excited frequency found in the commands")
-    # the frequencies are multiples of a base frequency (§3.2.3.3): the largest that fits all
+    # parabolic interpolation of the log spectrum around each peak
+    a, b, c = (np.log(spec[idx + j] + 1e-300) for j in (-1, 0, 1))
+    found = freqs[idx] + 0.5 * (a - c) / np.where(a - 2 * b + c < 0, a - 2 * b + c, -1.0) * freqs[1]
+    # the frequencies are multiples of a base frequency (§3.2.3.3): the largest that fits all,
+    # each candidate refined by least squares on all lines before it is judged
     tol = 0.3 / (mid.size * (m.t[1] - m.t[0]))
     for k_div in range(1, 2001):
-        fb = found.min() / k_div
-        if np.all(np.abs(found / fb - np.round(found / fb)) * fb < tol):
+        harmonic = np.round(found / (found.min() / k_div))
+        fb = float(harmonic @ found / (harmonic @ harmonic))
+        if np.all(np.abs(found - harmonic * fb) < tol):
             break
-    harmonic = np.round(found / fb)
-    fb = float(harmonic @ found / (harmonic @ harmonic))  # refined on all lines
     f = np.unique(harmonic * fb)
     period = 1.0 / fb
     start, end = m.t[0] + 1.0 / f.min(), m.t[-1] - 1.0 / f.min()

@@ -311,6 +311,11 @@ def config_names() -> list[str]:
     return ["mpi", "mpi-2008", "srs", *(f"condition-{n}" for n in TABLE_6_3)]
 
 
+def config_help() -> str:
+    """Return the command-line help for a CONFIG argument."""
+    return f"one of {', '.join(config_names())}, or a twin-config/1 .json file"
+
+
 def motion_system(name: str) -> MotionSystem:
     """Return a named configuration.
 

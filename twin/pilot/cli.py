@@ -13,12 +13,12 @@ DEG2 = (180 / np.pi) ** 2
 
 def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
     """Add ``twin pilot`` and its subcommands to the ``twin`` parser."""
-    from twin.chain.config import config_names
+    from twin.chain.config import config_help
 
     pilot = sub.add_parser("pilot", help="pilot-in-the-loop tasks and identification")
     cmds = pilot.add_subparsers(dest="pilot_command", required=True, parser_class=parser_class)
     run = cmds.add_parser("run", help="fly the pitch task (§6.3) through a motion configuration")
-    run.add_argument("config", metavar="CONFIG", help=", ".join(config_names()))
+    run.add_argument("config", metavar="CONFIG", help=config_help())
     run.add_argument(
         "--model",
         choices=("reduced", "full"),
@@ -59,7 +59,7 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
     mc.add_argument("--json", action="store_true")
     mc.set_defaults(func=_cmd_montecarlo)
     lead = cmds.add_parser("lead", help="vestibular lead through a configuration (§7.4)")
-    lead.add_argument("config", metavar="CONFIG", help=", ".join(config_names()))
+    lead.add_argument("config", metavar="CONFIG", help=config_help())
     lead.add_argument(
         "--margin-deg",
         type=float,
