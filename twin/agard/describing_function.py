@@ -35,6 +35,22 @@ def phase_deg(h: ArrayLike) -> FloatArray:
     return np.degrees(np.unwrap(np.angle(np.asarray(h))))
 
 
+class ResponseMixin:
+    """``gain`` and ``phase_deg`` of a result holding a complex ``response``."""
+
+    response: ComplexArray
+
+    @property
+    def gain(self) -> FloatArray:
+        """|H| (ratio)."""
+        return np.abs(self.response)
+
+    @property
+    def phase_deg(self) -> FloatArray:
+        """Phase of H [deg], unwrapped from the lowest frequency."""
+        return phase_deg(self.response)
+
+
 def fourier_coefficients(
     t: ArrayLike, x: ArrayLike, frequencies_hz: ArrayLike, window: tuple[float, float]
 ) -> ComplexArray:

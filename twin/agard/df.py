@@ -27,6 +27,7 @@ from numpy.typing import NDArray
 from scipy import signal
 
 from twin.agard.describing_function import (
+    ResponseMixin,
     describing_function,
     fit_delay,
     fourier_coefficients,
@@ -46,7 +47,7 @@ LOW_SNR_DB = 6.0
 
 
 @dataclass(frozen=True, eq=False)
-class DfResult:
+class DfResult(ResponseMixin):
     """Describing functions of one driven DOF.
 
     Attributes
@@ -86,16 +87,6 @@ class DfResult:
     source: str
     noise: FloatArray
     delay_equal_weights_s: float
-
-    @property
-    def gain(self) -> FloatArray:
-        """|H| (ratio)."""
-        return np.abs(self.response)
-
-    @property
-    def phase_deg(self) -> FloatArray:
-        """Phase of H [deg], unwrapped from the lowest frequency."""
-        return phase_deg(self.response)
 
     @property
     def snr_db(self) -> FloatArray:

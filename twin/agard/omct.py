@@ -31,7 +31,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from twin.agard.describing_function import describing_function, phase_deg
+from twin.agard.describing_function import ResponseMixin, describing_function, phase_deg
 from twin.agard.measure import Measurement, driven_dof
 from twin.agard.session import Session
 from twin.errors import SignalError, TwinError
@@ -127,7 +127,7 @@ def read_bounds(path: str | Path = EXAMPLE_BOUNDS) -> OmctBounds:
 
 
 @dataclass(frozen=True, eq=False)
-class OmctResult:
+class OmctResult(ResponseMixin):
     """OMCT points of one DOF.
 
     Attributes
@@ -156,16 +156,6 @@ class OmctResult:
     source: str
     label: str
     skipped: dict[float, str] = field(default_factory=dict)
-
-    @property
-    def gain(self) -> FloatArray:
-        """|H|."""
-        return np.abs(self.response)
-
-    @property
-    def phase_deg(self) -> FloatArray:
-        """Phase [deg], unwrapped from the lowest frequency."""
-        return phase_deg(self.response)
 
     def check(self, bounds: OmctBounds) -> list[bool]:
         """Whether each point lies inside the boundaries."""

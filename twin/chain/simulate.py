@@ -190,10 +190,10 @@ def prepare(
         raise SignalError(f"seed must be an integer >= 0; got {seed!r}")
     plat = platform if platform is not None else make_platform(ms.platform, model, limit_mode)
     notes = []
-    short = ms.delay_s < plat.own_lag_s
+    short = ms.delays_s < plat.own_lag_s
     if short.any():
         notes.append(
-            f"delay {ms.delay_s * 1e3:.1f} ms is shorter than the full model's own lag "
+            f"delay {ms.delays_s.min() * 1e3:.1f} ms is shorter than the full model's own lag "
             f"({plat.own_lag_s.max() * 1e3:.1f} ms) in some DOFs; no delay added there"
         )
     shaped = commands
