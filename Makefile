@@ -37,7 +37,7 @@ lint: $(STAMP)
 	$(BIN)/ruff format --check twin tests bench
 
 models: $(STAMP)
-	$(BIN)/python -m twin.model_build
+	$(BIN)/python -m twin.platform.build
 
 bench: $(STAMP)
 	$(BIN)/python bench/kinematics_throughput.py

@@ -9,7 +9,7 @@ machine) and the reduced model, with the runs on both cores and on one.
 import time
 
 from twin.agard.df import sweep
-from twin.agard.measure import Bench, configure
+from twin.measurement.measure import Bench, configure
 from twin.signals import describing_signal
 
 

@@ -11,9 +11,9 @@ import time
 import mujoco
 import numpy as np
 
-from twin.geometry import load_geometry
-from twin.kinematics import forward, inverse, jacobian
-from twin.platforms import load_model
+from twin.platform.facts import load_model
+from twin.platform.geometry import load_geometry
+from twin.platform.kinematics import forward, inverse, jacobian
 
 
 def timed(fn, repeat=5):

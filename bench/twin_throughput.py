@@ -22,7 +22,7 @@ import mujoco
 import numpy as np
 
 from twin.chain.simulate import default_imu, prepare
-from twin.platforms import load_model
+from twin.platform.facts import load_model
 from twin.signals import describing_signal
 from twin.trajectory import Trajectory
 

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from twin.agard.omct import BoundsFileError, read_bounds
-from twin.cli import main
+from twin.cli.main import main
 
 
 def _json(capsys, argv):

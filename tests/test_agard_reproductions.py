@@ -8,12 +8,12 @@ import numpy as np
 import pytest
 
 from twin.agard.df import run_df, sweep
-from twin.agard.measure import Bench, configure
 from twin.agard.noise_level import analyse_noise
 from twin.agard.omct import OMCT_RAD_S, plot_omct, read_bounds, run_omct
 from twin.agard.session import Session
 from twin.agard.threshold import run_threshold
 from twin.chain.simulate import default_imu
+from twin.measurement.measure import Bench, configure
 from twin.signals import single_sine
 from twin.thesis import CHAPTER_3_4, TABLE_5_6_MPI_IMU
 
@@ -136,7 +136,7 @@ def test_df_of_a_run_folder_equals_the_df_of_the_simulation(model, tmp_path):
     import json
 
     from twin.agard.df import analyse_df
-    from twin.agard.measure import from_run
+    from twin.measurement.measure import from_run
 
     with Session(Bench(configure("mpi"), model), out=tmp_path) as s:
         live = run_df(s, "pitch", signals=(2,))

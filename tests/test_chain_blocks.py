@@ -3,13 +3,13 @@
 import numpy as np
 import pytest
 
-from twin.agard.describing_function import describing_function
 from twin.chain.config import config_names, motion_system
 from twin.chain.delay import Delay
 from twin.chain.filter import PlatformFilter
 from twin.chain.noise import MotionNoise
 from twin.chain.resonance import Resonance
 from twin.errors import SignalError, UnknownPlatformError
+from twin.measurement.describing_function import describing_function
 from twin.signals import describing_signal
 from twin.thesis import NOISE_SIGMA, TABLE_6_3
 

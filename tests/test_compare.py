@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
-from twin.compare import compare, platform_dynamics
+from twin.agard.compare import compare, platform_dynamics
 from twin.frames import DOF_NAMES
-from twin.platforms import load_facts
+from twin.platform.facts import load_facts
 from twin.thesis import TABLE_5_5
 
 

@@ -16,7 +16,7 @@ import pytest
 
 from twin.chain.config import motion_system
 from twin.chain.extensions import EFFECTS, Extension
-from twin.cli import main
+from twin.cli.main import main
 from twin.diagnose.diagnosis import diagnose
 from twin.diagnose.hidden import (
     RELATIVE_TOLERANCE,

@@ -8,12 +8,12 @@ import numpy as np
 import pytest
 
 from twin.agard.df import run_df
-from twin.agard.measure import Bench
 from twin.agard.session import Session
 from twin.chain.config import load_config, motion_system
 from twin.chain.extensions import EFFECTS, Extension, backlash
 from twin.chain.simulate import default_imu
 from twin.errors import SignalError, UnknownPlatformError
+from twin.measurement.measure import Bench
 
 LINEAR_CASES = [
     Extension("delay", {"extra_delay_s": 0.04}, ("heave",)),

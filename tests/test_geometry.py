@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 
 from twin.errors import ModelFileError, UnknownPlatformError
-from twin.geometry import geometry_from_model, load_geometry
-from twin.platforms import load_facts
+from twin.platform.facts import load_facts
+from twin.platform.geometry import geometry_from_model, load_geometry
 
 # Table B.2 (MPI) and Table B.4 (SRS), typed from the thesis: base x, y, cabin x, y per leg.
 TABLE_B2 = [

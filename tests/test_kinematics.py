@@ -7,8 +7,8 @@ from hypothesis import strategies as st
 
 from twin.errors import ForwardKinematicsError, OutOfStrokeError, PoseError
 from twin.frames import euler_rate_matrix, rotation_matrix
-from twin.geometry import load_geometry
-from twin.kinematics import (
+from twin.platform.geometry import load_geometry
+from twin.platform.kinematics import (
     actuator_trajectory,
     forward,
     inverse,

@@ -6,9 +6,9 @@ import pytest
 
 from twin.errors import ModelFileError
 from twin.frames import rotation_matrix
-from twin.geometry import load_geometry
-from twin.model_build import read_build_parameters, render
-from twin.platforms import PLATFORMS, load_model, model_dir, model_path
+from twin.platform.build import read_build_parameters, render
+from twin.platform.facts import PLATFORMS, load_model, model_dir, model_path
+from twin.platform.geometry import load_geometry
 
 PLATFORM_NAMES = list(PLATFORMS)
 LOOP_RESIDUAL_LIMIT = 1e-4  # m, issue 2

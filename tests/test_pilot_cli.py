@@ -4,7 +4,7 @@ import json
 
 import pytest
 
-from twin.cli import main
+from twin.cli.main import main
 
 
 def test_run_writes_a_csv_that_identify_reads(capsys, tmp_path):

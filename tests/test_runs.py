@@ -6,7 +6,7 @@ import shutil
 import numpy as np
 import pytest
 
-from twin.cli import main
+from twin.cli.main import main
 from twin.errors import RunFormatError
 from twin.record import read_entities
 from twin.runs import read_run

@@ -6,13 +6,13 @@ import sys
 
 import pytest
 
-from twin.cli import main
-from twin.geometry import load_geometry
-from twin.kinematics import workspace
-from twin.model_build import read_build_parameters
-from twin.neutral_fit import fit_neutral_height
-from twin.platforms import model_dir
-from twin.workspace_report import relative_errors
+from twin.cli.main import main
+from twin.platform.build import read_build_parameters
+from twin.platform.facts import model_dir
+from twin.platform.geometry import load_geometry
+from twin.platform.kinematics import workspace
+from twin.platform.neutral_fit import fit_neutral_height
+from twin.platform.workspace import relative_errors
 
 
 def test_srs_workspace_reproduces_every_table_5_1_range_within_1_percent():

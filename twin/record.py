@@ -25,7 +25,7 @@ from numpy.typing import NDArray
 from twin.chain.imu import ImuRecord
 from twin.chain.response import PlatformResponse
 from twin.frames import DOF_NAMES, MJ_FROM_THESIS, rotation_matrix
-from twin.geometry import Geometry
+from twin.platform.geometry import Geometry
 
 FloatArray = NDArray[np.float64]
 TIMELINE = "sim_time"

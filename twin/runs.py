@@ -30,7 +30,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from twin.errors import RunFormatError, SignalError
-from twin.platforms import PLATFORMS
+from twin.platform.facts import PLATFORMS
 from twin.trajectory import Trajectory, uniform_rate
 
 FloatArray = NDArray[np.float64]

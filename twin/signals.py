@@ -412,9 +412,9 @@ def check_signal(commands: Trajectory, platform: str, what: str = "the signal") 
         Name of the signal for the message.
 
     """
-    from twin.geometry import load_geometry
-    from twin.kinematics import actuator_trajectory
-    from twin.platforms import load_facts
+    from twin.platform.facts import load_facts
+    from twin.platform.geometry import load_geometry
+    from twin.platform.kinematics import actuator_trajectory
 
     geo, facts = load_geometry(platform), load_facts(platform)
     t = commands.t0 + np.arange(4 * (commands.n - 1) + 1) / (4 * commands.rate_hz)

@@ -16,10 +16,10 @@ from pathlib import Path
 
 import numpy as np
 
-from twin.agard.describing_function import phase_deg
 from twin.agard.df import DfResult, run_df
-from twin.agard.measure import Bench, configure
 from twin.agard.session import Session
+from twin.measurement.describing_function import phase_deg
+from twin.measurement.measure import Bench, configure
 
 BENCHES = (("mpi", "full"), ("mpi", "reduced"), ("srs", "full"))
 DOFS = ("pitch", "heave")

@@ -9,7 +9,7 @@ DOFs. A pure delay is fitted to the phase on top of the configuration's known dy
 
 Examples
 --------
->>> from twin.agard.measure import Bench, configure
+>>> from twin.measurement.measure import Bench, configure
 >>> res = run_df(Bench(configure("mpi"), "reduced"), "heave", signals=(2,))  # doctest: +SKIP
 >>> round(res.delay_s * 1e3)  # doctest: +SKIP
 35
@@ -26,7 +26,10 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy import signal
 
-from twin.agard.describing_function import (
+from twin.agard.session import Session, signal_meta
+from twin.errors import SignalError
+from twin.frames import DOF_NAMES
+from twin.measurement.describing_function import (
     ResponseMixin,
     describing_function,
     fit_delay,
@@ -34,10 +37,7 @@ from twin.agard.describing_function import (
     neighbour_noise,
     phase_deg,
 )
-from twin.agard.measure import Bench, Measurement, driven_dof
-from twin.agard.session import Session, signal_meta
-from twin.errors import SignalError
-from twin.frames import DOF_NAMES
+from twin.measurement.measure import Bench, Measurement, driven_dof
 from twin.signals import describing_signal
 
 FloatArray = NDArray[np.float64]
@@ -71,7 +71,7 @@ class DfResult(ResponseMixin):
         What was measured.
     noise : ndarray, shape (m,)
         Standard deviation of ``response`` at each frequency, from the neighbouring
-        non-excited bins (:func:`twin.agard.describing_function.neighbour_noise`).
+        non-excited bins (:func:`twin.measurement.describing_function.neighbour_noise`).
     delay_equal_weights_s : float
         The delay fitted with every frequency weighted equally (the thesis' fit) [s].
 

@@ -31,10 +31,10 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from twin.agard.measure import Measurement, driven_dof
 from twin.agard.session import Session
 from twin.errors import SignalError
 from twin.frames import DOF_NAMES, acceleration_unit
+from twin.measurement.measure import Measurement, driven_dof
 
 FloatArray = NDArray[np.float64]
 

@@ -31,11 +31,11 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from twin.agard.describing_function import ResponseMixin, describing_function, phase_deg
-from twin.agard.measure import Measurement, driven_dof
 from twin.agard.session import Session
 from twin.errors import SignalError, TwinError
 from twin.frames import DOF_NAMES
+from twin.measurement.describing_function import ResponseMixin, describing_function, phase_deg
+from twin.measurement.measure import Measurement, driven_dof
 
 FloatArray = NDArray[np.float64]
 ComplexArray = NDArray[np.complex128]

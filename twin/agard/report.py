@@ -17,9 +17,9 @@ from pathlib import Path
 import matplotlib.pyplot as plt
 
 from twin.agard import df, noise_level, omct, snr, threshold
-from twin.agard.measure import Bench
 from twin.agard.session import Session
 from twin.frames import DOF_NAMES
+from twin.measurement.measure import Bench
 
 
 def threshold_defaults(dof: str) -> tuple[float, float]:

@@ -13,10 +13,10 @@ import sys
 from collections.abc import Callable
 from pathlib import Path
 
-from twin.agard.measure import Bench, Measurement
+from twin.cli.simulate import execute
 from twin.errors import SignalLimitError
+from twin.measurement.measure import Bench, Measurement
 from twin.signals import DescribingSignal, StepSignal, single_sine
-from twin.simulate_cli import execute
 
 
 def signal_meta(sig: DescribingSignal | StepSignal) -> dict[str, object]:
@@ -70,7 +70,7 @@ class Session:
         self._offset = 0.0
         self.recorder = None
         if rrd is not None:
-            from twin.geometry import load_geometry
+            from twin.platform.geometry import load_geometry
             from twin.record import Recorder
 
             self.recorder = Recorder(load_geometry(bench.config.platform), bench.name, rrd=rrd)

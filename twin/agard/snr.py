@@ -41,9 +41,9 @@ def dof_limits(platform: str, dof: str) -> tuple[float, float, float]:
     actuator limits (Table 5.1) divided by the largest leg rate per unit DOF rate at neutral
     (the DOF's column of the Jacobian, Eq A.11).
     """
-    from twin.geometry import load_geometry
-    from twin.kinematics import jacobian, workspace
-    from twin.platforms import load_facts
+    from twin.platform.facts import load_facts
+    from twin.platform.geometry import load_geometry
+    from twin.platform.kinematics import jacobian, workspace
 
     geo, facts = load_geometry(platform), load_facts(platform)
     k = DOF_NAMES.index(dof)

@@ -19,12 +19,12 @@ from numpy.typing import NDArray
 from scipy import signal
 from scipy.optimize import brentq, least_squares
 
-from twin.agard.measure import Measurement, driven_dof
 from twin.agard.session import Session
 from twin.chain.config import MotionSystem
 from twin.chain.spline_filter import filter_spline
 from twin.errors import SignalError
 from twin.frames import DOF_NAMES, acceleration_unit
+from twin.measurement.measure import Measurement, driven_dof
 from twin.signals import square_steps
 from twin.trajectory import Trajectory
 

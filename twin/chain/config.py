@@ -42,7 +42,7 @@ from twin.chain.filter import PerDofFilter, PlatformFilter
 from twin.chain.noise import MotionNoise
 from twin.chain.resonance import Resonance
 from twin.errors import SignalError, UnknownPlatformError
-from twin.platforms import PLATFORMS, load_facts
+from twin.platform.facts import PLATFORMS, load_facts
 from twin.thesis import TABLE_6_3
 
 Block = PlatformFilter | PerDofFilter | Delay | Resonance | Extension

@@ -15,8 +15,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from twin.errors import ActuatorLimitError
-from twin.geometry import Geometry
-from twin.platforms import PlatformFacts
+from twin.platform.facts import PlatformFacts
+from twin.platform.geometry import Geometry
 
 FloatArray = NDArray[np.float64]
 MODES = ("limit", "strict")

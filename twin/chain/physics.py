@@ -26,9 +26,9 @@ from twin.chain.noise import NoiseStream
 from twin.chain.response import PlatformResponse
 from twin.errors import SignalError
 from twin.frames import euler_from_matrix, matrix_from_quat, rotation_matrix
-from twin.geometry import Geometry, load_geometry
-from twin.kinematics import leg_rates
-from twin.platforms import load_facts, load_model
+from twin.platform.facts import load_facts, load_model
+from twin.platform.geometry import Geometry, load_geometry
+from twin.platform.kinematics import leg_rates
 from twin.trajectory import Trajectory
 
 FloatArray = NDArray[np.float64]

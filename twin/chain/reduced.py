@@ -19,9 +19,9 @@ from twin.chain.limits import ActuatorLimits, LimitReport
 from twin.chain.noise import NoiseStream
 from twin.chain.physics import CHUNK_S, ReferenceChunk, reference_chunks
 from twin.chain.response import PlatformResponse, rigid_motion
-from twin.geometry import load_geometry
-from twin.kinematics import leg_rates
-from twin.platforms import load_facts
+from twin.platform.facts import load_facts
+from twin.platform.geometry import load_geometry
+from twin.platform.kinematics import leg_rates
 from twin.trajectory import Trajectory
 
 FloatArray = NDArray[np.float64]

@@ -43,7 +43,7 @@ def make_platform(platform: str, model: str = "full", limit_mode: str = "limit")
 
 def default_imu(platform: str) -> ImuSpec:
     """Return the ADIS16355 at the UGP with the platform's ``platform.toml`` rate and ranges."""
-    from twin.platforms import load_facts
+    from twin.platform.facts import load_facts
 
     f = load_facts(platform)
     return ImuSpec(rate_hz=f.imu_rate_hz, accel_range=f.imu_accel_range,

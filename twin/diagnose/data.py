@@ -19,12 +19,12 @@ import numpy as np
 from numpy.typing import NDArray
 
 from twin.agard.df import periodic_design
-from twin.agard.measure import Measurement, from_imu, from_run
 from twin.chain.config import MotionSystem, motion_system
 from twin.chain.imu import ImuSpec
 from twin.chain.simulate import MODELS, default_imu, prepare
 from twin.errors import RunFormatError, SignalError
 from twin.frames import DOF_NAMES
+from twin.measurement.measure import Measurement, from_imu, from_run
 from twin.runs import read_run
 from twin.trajectory import Trajectory
 
@@ -182,7 +182,7 @@ def simulate_measurement(
     Returns
     -------
     ndarray, shape (len(t), 6)
-        As :attr:`twin.agard.measure.Measurement.measured`, interpolated onto ``t`` when the
+        As :attr:`twin.measurement.measure.Measurement.measured`, interpolated onto ``t`` when the
         simulated IMU's grid differs (a recorded IMU may start elsewhere on the clock).
 
     """

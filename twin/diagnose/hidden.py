@@ -21,20 +21,20 @@ from pathlib import Path
 
 import numpy as np
 
-from twin.agard.measure import from_imu
 from twin.agard.session import signal_meta
 from twin.chain.config import MotionSystem, motion_system
 from twin.chain.extensions import DOF_CHANNEL, EFFECTS, Extension
 from twin.chain.imu import ImuSpec
 from twin.chain.simulate import prepare
+from twin.cli.simulate import execute
 from twin.diagnose.candidates import Model
 from twin.diagnose.data import Case, Channel, clean_config, measurement_channels, nominal_imu
 from twin.diagnose.detect import expected_delta_bic, fisher_std
 from twin.diagnose.residuals import segment
 from twin.diagnose.select import BIC_MARGIN
 from twin.errors import SignalError
+from twin.measurement.measure import from_imu
 from twin.signals import describing_signal
-from twin.simulate_cli import execute
 
 #: Expected evidence of a drawn effect, in multiples of the naming threshold.
 DETECTABLE_FACTOR = 3.0

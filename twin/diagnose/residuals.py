@@ -34,8 +34,8 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy import signal, stats
 
-from twin.agard.describing_function import fourier_coefficients, neighbour_noise
 from twin.diagnose.data import Channel
+from twin.measurement.describing_function import fourier_coefficients, neighbour_noise
 
 FloatArray = NDArray[np.float64]
 ComplexArray = NDArray[np.complex128]

@@ -26,8 +26,8 @@ from scipy import signal
 from twin.chain.config import MotionSystem
 from twin.chain.physics import FullPlatform
 from twin.frames import euler_from_matrix, matrix_from_quat
-from twin.kinematics import leg_rates
 from twin.pilot.loop import _Filter
+from twin.platform.kinematics import leg_rates
 
 FloatArray = NDArray[np.float64]
 _STATE = mujoco.mjtState.mjSTATE_FULLPHYSICS

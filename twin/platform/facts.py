@@ -1,7 +1,7 @@
 """The platforms the twin knows: where their models live and their non-physical facts.
 
 Physical facts (geometry, inertia, gains, stroke) live in each model's MJCF and are read from
-the compiled model (:mod:`twin.geometry`). Non-physical facts (actuator velocity and
+the compiled model (:mod:`twin.platform.geometry`). Non-physical facts (actuator velocity and
 acceleration limits, platform filter, delay, IMU rates) live in ``platform.toml`` beside it.
 
 The models folder is the repository's ``models/``; set ``TWIN_MODELS_DIR`` to use another.
@@ -26,7 +26,7 @@ PLATFORMS: dict[str, str] = {"mpi": "mpi_stewart", "srs": "simona_srs"}
 def models_root() -> Path:
     """Return the folder holding one sub-folder per platform model."""
     env = os.environ.get("TWIN_MODELS_DIR")
-    root = Path(env) if env else Path(__file__).resolve().parent.parent / "models"
+    root = Path(env) if env else Path(__file__).resolve().parents[2] / "models"
     if not root.is_dir():
         raise ModelFileError(
             f"models folder not found at {root}: install the twin from its repository "

@@ -124,8 +124,8 @@ def _progress(args: argparse.Namespace) -> Callable[[str], None] | None:
 
 
 def _bench(args: argparse.Namespace, target: str):
-    from twin.agard.measure import Bench, configure
     from twin.chain.simulate import default_imu
+    from twin.measurement.measure import Bench, configure
 
     config = configure(target, args.break_hz, args.delay_ms, False if args.no_noise else None)
     imu = default_imu(config.platform).ideal() if args.ideal_imu else None
@@ -161,7 +161,7 @@ def _analyse(args: argparse.Namespace):
     import numpy as np
 
     from twin.agard import df, noise_level, omct, snr, threshold
-    from twin.agard.measure import from_run
+    from twin.measurement.measure import from_run
 
     m = from_run(args.target)
     if args.test == "df":
@@ -183,7 +183,7 @@ def _analyse(args: argparse.Namespace):
 
 
 def _cmd_test(args: argparse.Namespace) -> int:
-    from twin.agard.measure import check_target, is_run_folder
+    from twin.measurement.measure import check_target, is_run_folder
 
     check_target(args.target)
     bounds = None
@@ -241,9 +241,9 @@ def _save(out: Path, test: str, result, payload: dict, config, bounds) -> None:
 
 
 def _cmd_report(args: argparse.Namespace) -> int:
-    from twin.agard.measure import check_target, is_run_folder
     from twin.agard.report import write_report
     from twin.errors import SignalError
+    from twin.measurement.measure import check_target, is_run_folder
 
     check_target(args.target)
     if is_run_folder(args.target):

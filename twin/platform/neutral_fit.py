@@ -4,7 +4,7 @@ The thesis gives no neutral height for the SRS. With the stroke centred on each 
 length, the App. B.3 workspace depends on that height alone; this module finds the height whose
 workspace best reproduces all Table 5.1 ranges (least squares on relative errors).
 
-Run ``python -m twin.neutral_fit srs`` to reproduce the value in ``build.toml``.
+Run ``python -m twin.platform.neutral_fit srs`` to reproduce the value in ``build.toml``.
 """
 
 from __future__ import annotations
@@ -16,11 +16,11 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import minimize_scalar
 
-from twin.geometry import Geometry
-from twin.kinematics import workspace
-from twin.model_build import BuildParameters, read_build_parameters
-from twin.platforms import model_dir
-from twin.workspace_report import relative_errors
+from twin.platform.build import BuildParameters, read_build_parameters
+from twin.platform.facts import model_dir
+from twin.platform.geometry import Geometry
+from twin.platform.kinematics import workspace
+from twin.platform.workspace import relative_errors
 
 
 def geometry_at_height(p: BuildParameters, height: float) -> Geometry:

@@ -15,7 +15,7 @@ from numpy.typing import NDArray
 
 from twin.errors import ModelFileError
 from twin.frames import MJ_FROM_THESIS, MJ_FROM_THESIS_QUAT
-from twin.platforms import load_model
+from twin.platform.facts import load_model
 
 N_LEGS = 6
 
@@ -75,7 +75,7 @@ def _site_pos(model: mujoco.MjModel, name: str, body: str) -> NDArray[np.float64
 def geometry_from_model(model: mujoco.MjModel, name: str = "") -> Geometry:
     """Read the geometry of a compiled platform model.
 
-    The model must follow the twin's conventions (see :mod:`twin.model_build`): bodies
+    The model must follow the twin's conventions (see :mod:`twin.platform.build`): bodies
     ``base`` (at the world origin) and ``cabin``, both in thesis orientation; sites
     ``base_gimbal_j`` and ``cabin_gimbal_j``; slide joints ``leg j`` whose range is the stroke.
 

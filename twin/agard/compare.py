@@ -26,17 +26,17 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from twin.agard.describing_function import (
-    LagDelayFit,
-    describing_function,
-    fit_lag_delay,
-    phase_deg,
-)
 from twin.chain.config import MotionSystem, motion_system
 from twin.chain.reduced import ReducedPlatform
 from twin.chain.simulate import Platform, make_platform, simulate
 from twin.errors import SignalError
 from twin.frames import DOF_NAMES
+from twin.measurement.describing_function import (
+    LagDelayFit,
+    describing_function,
+    fit_lag_delay,
+    phase_deg,
+)
 from twin.signals import describing_signal
 from twin.thesis import TABLE_5_5
 

@@ -27,10 +27,10 @@ class _Parser(argparse.ArgumentParser):
 
 
 def _cmd_workspace(args: argparse.Namespace) -> int:
-    from twin.geometry import load_geometry
-    from twin.kinematics import workspace
-    from twin.platforms import check_platform
-    from twin.workspace_report import format_table, to_json_dict
+    from twin.platform.facts import check_platform
+    from twin.platform.geometry import load_geometry
+    from twin.platform.kinematics import workspace
+    from twin.platform.workspace import format_table, to_json_dict
 
     check_platform(args.platform)
     ws = workspace(load_geometry(args.platform))
@@ -42,7 +42,7 @@ def _cmd_workspace(args: argparse.Namespace) -> int:
 
 
 def _cmd_simulate(args: argparse.Namespace) -> int:
-    from twin.simulate_cli import run_to_folder
+    from twin.cli.simulate import run_to_folder
 
     connect = None if args.connect is None else args.connect
     run_to_folder(args.config, args.signal, args.model, args.seed, args.out, args.rrd, connect,
@@ -56,7 +56,7 @@ def _progress(message: str) -> None:
 
 
 def _cmd_compare(args: argparse.Namespace) -> int:
-    from twin.compare import compare
+    from twin.agard.compare import compare
 
     cmp = compare(args.config, dofs=args.dofs or DOF_NAMES, progress=_progress)
     if args.plot:
@@ -66,8 +66,8 @@ def _cmd_compare(args: argparse.Namespace) -> int:
 
 
 def _cmd_dynamics(args: argparse.Namespace) -> int:
-    from twin.compare import platform_dynamics
-    from twin.platforms import check_platform
+    from twin.agard.compare import platform_dynamics
+    from twin.platform.facts import check_platform
 
     check_platform(args.platform)
     dyn = platform_dynamics(args.platform, dofs=args.dofs or DOF_NAMES, progress=_progress)
@@ -166,13 +166,13 @@ def build_parser() -> argparse.ArgumentParser:
     ws.set_defaults(func=_cmd_workspace)
     _add_simulate(sub)
     _add_analysis(sub)
-    from twin.agard.cli import add_parser as add_agard
+    from twin.cli.agard import add_parser as add_agard
 
     add_agard(sub, _Parser)
-    from twin.pilot.cli import add_parser as add_pilot
+    from twin.cli.pilot import add_parser as add_pilot
 
     add_pilot(sub, _Parser)
-    from twin.diagnose.cli import add_parser as add_diagnose
+    from twin.cli.diagnose import add_parser as add_diagnose
 
     add_diagnose(sub)
     return parser

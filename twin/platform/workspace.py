@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from twin.kinematics import DofRange
+from twin.platform.kinematics import DofRange
 from twin.thesis import table_5_1_targets
 
 

@@ -7,7 +7,7 @@ absolute [m]. Every function accepts any number of leading (time, batch) axes.
 Examples
 --------
 >>> import numpy as np
->>> from twin.geometry import load_geometry
+>>> from twin.platform.geometry import load_geometry
 >>> geo = load_geometry("mpi")
 >>> pose = np.array([0.0, 0.0, -0.1, 0.0, np.radians(5.0), 0.0])  # 10 cm up, 5 deg nose up
 >>> fk = forward(geo, inverse(geo, pose))
@@ -26,7 +26,7 @@ from scipy.optimize import brentq
 
 from twin.errors import ForwardKinematicsError, OutOfStrokeError, PoseError
 from twin.frames import DOF_NAMES, angular_motion, euler_rate_matrix, rotation_matrix
-from twin.geometry import Geometry
+from twin.platform.geometry import Geometry
 
 FloatArray = NDArray[np.float64]
 
@@ -342,7 +342,7 @@ class ActuatorTrajectory:
         geo : Geometry
             For the stroke limits.
         max_velocity, max_acceleration : float
-            Actuator limits [m/s, m/s^2] (Table 5.1; ``twin.platforms.load_facts``).
+            Actuator limits [m/s, m/s^2] (Table 5.1; ``twin.platform.facts.load_facts``).
 
         """
         out = []
