@@ -42,3 +42,15 @@ class RunFormatError(TwinError, ValueError):
 
 class SignalLimitError(SignalError):
     """A command signal would break a platform's stroke, velocity or acceleration limit."""
+
+
+class UsageError(TwinError, ValueError):
+    """A command-line value that is not allowed (a range, a combination, an output path)."""
+
+
+class ConfigError(SignalError):
+    """A motion-system configuration (name, file or override) that is malformed."""
+
+
+class DataError(SignalError):
+    """Recorded data (a run folder, a CSV, a pilot record) that cannot be used as given."""

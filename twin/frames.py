@@ -22,9 +22,31 @@ DOF_NAMES = ("surge", "sway", "heave", "roll", "pitch", "yaw")
 """Names of the six pose degrees of freedom, in the order of Eq A.1."""
 
 
+def dof_index(dof: str) -> int:
+    """Return the index (0-5) of a DOF name in :data:`DOF_NAMES`.
+
+    Raises
+    ------
+    ConfigError
+        For a name that is not a DOF (the message lists the six).
+
+    Examples
+    --------
+    >>> dof_index("pitch")
+    4
+
+    """
+    try:
+        return DOF_NAMES.index(dof)
+    except ValueError:
+        from twin.errors import ConfigError
+
+        raise ConfigError(f"unknown DOF {dof!r}; expected one of {', '.join(DOF_NAMES)}") from None
+
+
 def acceleration_unit(dof: str) -> str:
     """Return the acceleration unit of a DOF: ``m/s^2`` (translations) or ``rad/s^2``."""
-    return "rad/s^2" if DOF_NAMES.index(dof) >= 3 else "m/s^2"
+    return "rad/s^2" if dof_index(dof) >= 3 else "m/s^2"
 
 
 def rotation_matrix(angles: ArrayLike) -> NDArray[np.float64]:

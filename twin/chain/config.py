@@ -41,7 +41,7 @@ from twin.chain.extensions import Extension
 from twin.chain.filter import PerDofFilter, PlatformFilter
 from twin.chain.noise import MotionNoise
 from twin.chain.resonance import Resonance
-from twin.errors import SignalError, UnknownPlatformError
+from twin.errors import ConfigError, SignalError, UnknownPlatformError
 from twin.platform.facts import PLATFORMS, load_facts
 from twin.thesis import TABLE_6_3
 
@@ -135,6 +135,64 @@ class MotionSystem:
         """Return a copy with some fields changed (and the name marked as modified)."""
         changes.setdefault("name", f"{self.name}+custom")
         return dataclasses.replace(self, **changes)  # type: ignore[arg-type]
+
+    def override(
+        self,
+        break_hz: float | None = None,
+        delay_ms: float | None = None,
+        noise: bool | None = None,
+        resonance: bool | None = None,
+    ) -> MotionSystem:
+        """Return this configuration with the command-line overrides applied (None: keep).
+
+        The one place where ``--break-hz``, ``--delay-ms``, ``--no-noise`` and
+        ``--resonance`` change a configuration; the name gets a tag per change
+        (e.g. ``srs-fb1-60ms``).
+
+        Parameters
+        ----------
+        break_hz : float, optional
+            Platform-filter break frequency [Hz]; 0 removes the filter.
+        delay_ms : float, optional
+            Total motion-system delay [ms] (command to measured response, as §5.6.2.2
+            measures it: on the SRS, 25 ms is the SRS alone and 60 ms adds the MPI's 35 ms).
+        noise : bool, optional
+            Heave noise of Eq 5.10 on or off.
+        resonance : bool, optional
+            SRS resonance terms of Eq 5.12/5.13 on or off.
+
+        Raises
+        ------
+        ConfigError
+            For a negative or non-finite break frequency or delay.
+
+        Examples
+        --------
+        >>> motion_system("srs").override(break_hz=1.0, delay_ms=60).name
+        'srs-fb1-60ms'
+
+        """
+        changes: dict[str, object] = {}
+        tags = []
+        if break_hz is not None:
+            if not np.isfinite(break_hz) or break_hz < 0:
+                raise ConfigError(f"--break-hz must be >= 0 (0: no filter); got {break_hz}")
+            changes["filter_break_hz"] = float(break_hz) or None
+            tags.append(f"fb{break_hz:g}")
+        if delay_ms is not None:
+            if not np.isfinite(delay_ms) or delay_ms < 0:
+                raise ConfigError(f"--delay-ms must be >= 0; got {delay_ms}")
+            changes["delay_s"] = float(delay_ms) / 1e3
+            tags.append(f"{delay_ms:g}ms")
+        if noise is not None and noise != self.noise:
+            changes["noise"] = bool(noise)
+            tags.append("noise" if noise else "quiet")
+        if resonance is not None and resonance != self.resonance:
+            changes["resonance"] = bool(resonance)
+            tags.append("resonance" if resonance else "no-resonance")
+        if not changes:
+            return self
+        return self.replace(name="-".join([self.name, *tags]), **changes)
 
     def blocks(self, platform_lag_s: ArrayLike = 0.0) -> list[Block]:
         """Return the command blocks, in order, for a platform with the given own lag.

@@ -161,28 +161,7 @@ def configure(
         SRS resonance terms of Eq 5.12/5.13 on or off.
 
     """
-    ms = motion_system(name)
-    changes: dict[str, object] = {}
-    tags = []
-    if break_hz is not None:
-        if not np.isfinite(break_hz) or break_hz < 0:
-            raise SignalError(f"--break-hz must be >= 0 (0: no filter); got {break_hz}")
-        changes["filter_break_hz"] = float(break_hz) or None
-        tags.append(f"fb{break_hz:g}")
-    if delay_ms is not None:
-        if not np.isfinite(delay_ms) or delay_ms < 0:
-            raise SignalError(f"--delay-ms must be >= 0; got {delay_ms}")
-        changes["delay_s"] = float(delay_ms) / 1e3
-        tags.append(f"{delay_ms:g}ms")
-    if noise is not None and noise != ms.noise:
-        changes["noise"] = bool(noise)
-        tags.append("noise" if noise else "quiet")
-    if resonance is not None and resonance != ms.resonance:
-        changes["resonance"] = bool(resonance)
-        tags.append("resonance" if resonance else "no-resonance")
-    if not changes:
-        return ms
-    return ms.replace(name="-".join([ms.name, *tags]), **changes)
+    return motion_system(name).override(break_hz, delay_ms, noise, resonance)
 
 
 def is_run_folder(target: str | Path) -> bool:
