@@ -36,16 +36,16 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from twin.chain.block import Backlash, Block
 from twin.chain.delay import Delay
 from twin.chain.extensions import Extension
-from twin.chain.filter import PerDofFilter, PlatformFilter
+from twin.chain.filter import PlatformFilter
 from twin.chain.noise import MotionNoise
 from twin.chain.resonance import Resonance
 from twin.errors import ConfigError, SignalError, UnknownPlatformError
 from twin.platform.facts import PLATFORMS, load_facts
 from twin.thesis import TABLE_6_3
 
-Block = PlatformFilter | PerDofFilter | Delay | Resonance | Extension
 #: Format tag of a configuration file (``twin diagnose --save-config``).
 CONFIG_FORMAT = "twin-config/1"
 
@@ -206,11 +206,8 @@ class MotionSystem:
         """
         out: list[Block] = []
         breaks = self.breaks_hz
-        if len(set(breaks)) == 1:
-            if breaks[0] is not None:
-                out.append(PlatformFilter(breaks[0]))
-        else:
-            out.append(PerDofFilter(breaks))
+        if any(b is not None for b in breaks):
+            out.append(PlatformFilter(breaks))
         lag = np.broadcast_to(np.asarray(platform_lag_s, dtype=float), (6,))
         delay = np.maximum(self.delays_s - lag, 0.0)
         if np.any(delay > 0):
@@ -218,7 +215,7 @@ class MotionSystem:
         if self.resonance:
             out.append(Resonance())
         for effect in ("gain", "resonance", "lead", "backlash"):
-            out.extend(self.of(effect))
+            out.extend(e.block() for e in self.of(effect))
         return out
 
     def noise_block(self, imu_rate_hz: float = 819.2) -> MotionNoise | None:
@@ -237,12 +234,11 @@ class MotionSystem:
         """
         h = np.ones((np.size(f), 6), dtype=complex)
         for block in self.blocks():
-            if not isinstance(block, Extension):
+            if not isinstance(block, Backlash):
                 h = h * block.frequency_response(f)
-        for ext in self.extensions:
-            if ext.effect in ("gain", "resonance", "lead", "sensor_filter"):
-                mask = ext.dof_mask if ext.effect != "sensor_filter" else _sensed(ext)
-                h[:, mask] = h[:, mask] * ext.response(f)[:, None]
+        for ext in self.of("sensor_filter"):
+            mask = _sensed(ext)
+            h[:, mask] = h[:, mask] * ext.response(f)[:, None]
         return h
 
     def to_meta(self) -> dict[str, object]:

@@ -1,29 +1,36 @@
-"""Pure time delay e^{-tau s} (Eq 5.11), one delay per DOF or one for all."""
+"""Pure time delay e^{-tau s} (Eq 5.11), one delay per DOF or one for all, streamed.
+
+A delay of m + f samples (m whole, 0 <= f < 1) takes each output jet from the quintic between
+the input jets m + 1 and m samples back (:mod:`twin.chain.jets`), at 1 - f of that interval:
+causal for any delay >= 0, exact for whole samples, and for a trajectory's jets the same as
+evaluating its cubic spline at t - tau. Before the first sample the first value is held.
+"""
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from twin.chain.block import Block, ComplexArray
+from twin.chain.jets import held, hermite_eval
 from twin.errors import SignalError
-from twin.trajectory import Trajectory
+
+FloatArray = NDArray[np.float64]
 
 
 @dataclass(frozen=True)
-class Delay:
+class Delay(Block):
     """Delay every DOF by ``seconds`` (scalar or six values, each >= 0).
-
-    Samples between the command samples are taken from the trajectory's cubic spline, so any
-    delay is exact for signals well below the command Nyquist frequency; before the first
-    sample the first value is held.
 
     Examples
     --------
+    >>> from twin.chain.jets import JetSignal
     >>> from twin.trajectory import Trajectory
     >>> tr = Trajectory(100.0, np.outer(np.arange(10.0), np.ones(6)))
-    >>> Delay(0.02)(tr).values[:4, 0].tolist()
+    >>> Delay(0.02)(JetSignal.from_trajectory(tr)).jets[0, :4, 0, 0].tolist()
     [0.0, 0.0, 0.0, 1.0]
 
     """
@@ -42,29 +49,48 @@ class Delay:
         return np.broadcast_to(np.asarray(self.seconds, dtype=float), (6,)).copy()
 
     @property
-    def name(self) -> str:
+    def name(self) -> str:  # type: ignore[override]
         """Short description."""
         d = self.per_dof
         if np.all(d == d[0]):
             return f"delay {d[0] * 1e3:.1f} ms"
         return "delay " + "/".join(f"{x * 1e3:.1f}" for x in d) + " ms"
 
-    def frequency_response(self, f: ArrayLike) -> NDArray[np.complex128]:
+    def frequency_response(self, f: ArrayLike) -> ComplexArray:
         """Response at frequencies ``f`` [Hz], shape (len(f), 6)."""
         w = 2 * np.pi * np.asarray(f, dtype=float)
         return np.exp(-1j * np.outer(w, self.per_dof))
 
-    def __call__(self, tr: Trajectory) -> Trajectory:
-        """Delay ``tr``."""
-        d = self.per_dof
-        out = np.empty_like(tr.values)
-        t = tr.t
-        for k in range(tr.values.shape[1]):
-            shift = d[k] * tr.rate_hz
-            if shift == round(shift):  # whole samples: an exact shift
-                s = round(shift)
-                out[:s, k] = tr.values[0, k]
-                out[s:, k] = tr.values[: tr.n - s, k]
+    def start(self, first: FloatArray, rate_hz: float) -> Any:
+        """State: the last ``m + 1`` input jets (the first one held before the start)."""
+        shift = self.per_dof * rate_hz
+        whole = np.floor(shift + 1e-9)
+        frac = np.where(shift - whole < 1e-9, 0.0, shift - whole)
+        depth = int(whole.max()) + 1
+        history = np.repeat(held(first)[:, None], depth, axis=1)
+        return (whole.astype(int), frac, 1.0 / rate_hz, history)
+
+    def stream(self, jets: FloatArray, state: Any) -> tuple[FloatArray, Any]:
+        """Delay consecutive samples."""
+        whole, frac, h, history = state
+        depth = history.shape[1]
+        ext = np.concatenate([history, jets], axis=1)
+        n = jets.shape[1]
+        out = np.empty_like(jets)
+        idx = depth + np.arange(n)
+        for (m, f), cols in _groups(whole, frac).items():
+            late = ext[:, idx - m][:, :, cols]
+            if f == 0.0:
+                out[:, :, cols] = late
             else:
-                out[:, k] = tr.at(t - d[k])[:, k]
-        return tr.replace(out)
+                early = ext[:, idx - m - 1][:, :, cols]
+                out[:, :, cols] = hermite_eval(early, late, 1.0 - f, h)
+        return out, (whole, frac, h, ext[:, -depth:].copy())
+
+
+def _groups(whole: NDArray[np.intp], frac: FloatArray) -> dict[tuple[int, float], list[int]]:
+    """DOFs sharing one delay, keyed by (whole samples, fraction)."""
+    out: dict[tuple[int, float], list[int]] = {}
+    for k, (m, f) in enumerate(zip(whole, frac, strict=True)):
+        out.setdefault((int(m), float(f)), []).append(k)
+    return out

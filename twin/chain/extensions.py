@@ -34,10 +34,10 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy import signal
 
-from twin.chain.spline_filter import filter_spline
+from twin.chain.block import Backlash, Block, Gain, Lead, backlash  # noqa: F401 (re-exported)
+from twin.chain.lti import LtiBlock
 from twin.errors import SignalError
 from twin.frames import DOF_NAMES
-from twin.trajectory import Trajectory
 
 FloatArray = NDArray[np.float64]
 ComplexArray = NDArray[np.complex128]
@@ -207,24 +207,25 @@ class Extension:
 
     # --- blocks --------------------------------------------------------------------------------
 
-    def __call__(self, tr: Trajectory) -> Trajectory:
-        """Apply a command-side extension to a trajectory (the DOFs it acts on)."""
-        mask = self.dof_mask
+    def block(self) -> Block:
+        """Return the command-side stream block of this extension (:mod:`twin.chain.block`).
+
+        ``sensor_filter`` acts inside the IMU (:class:`SensorFilterStream`) and ``noise`` on
+        the noise generators; neither has a command-side block.
+        """
+        mask = tuple(bool(m) for m in self.dof_mask)
         p = self.value
-        v = tr.values.copy()
         if self.effect == "gain":
-            v[:, mask] *= p("gain")
-        elif self.effect == "resonance":
+            return Gain(p("gain"), mask)
+        if self.effect == "resonance":
             w = 2 * np.pi * p("frequency_hz")
-            v[:, mask] = filter_spline(tr, [1.0], [1 / w**2, 2 * p("damping") / w, 1.0])[:, mask]
-        elif self.effect == "lead":
-            v[:, mask] += p("time_constant_s") * tr.at(tr.t, 1)[:, mask]
-        elif self.effect == "backlash":
-            for k in np.flatnonzero(mask):
-                v[:, k] = backlash(v[:, k], p("play"))
-        else:
-            raise SignalError(f"{self.effect} is not applied to the commands")
-        return tr.replace(v)
+            sys = ((1.0,), (1 / w**2, 2 * p("damping") / w, 1.0))
+            return LtiBlock(tuple(sys if m else None for m in mask), f"resonance {self.describe()}")
+        if self.effect == "lead":
+            return Lead(tuple(p("time_constant_s") if m else 0.0 for m in mask))
+        if self.effect == "backlash":
+            return Backlash(p("play"), mask)
+        raise SignalError(f"{self.effect} is not applied to the commands")
 
 
 _RANGES = {
@@ -236,31 +237,6 @@ _RANGES = {
     "backlash": "play >= 0",
     "noise": "scale >= 0",
 }
-
-
-def backlash(x: ArrayLike, play: float) -> FloatArray:
-    """Dead-band (play) operator: the output moves only when the input pushes it.
-
-    The output stays put while the input travels inside a band of width ``play`` around it
-    and follows the input at the band's edge otherwise; it starts centred on the input.
-
-    Examples
-    --------
-    >>> backlash([0.0, 1.0, 2.0, 1.5, 0.0], 1.0).tolist()
-    [0.0, 0.5, 1.5, 1.5, 0.5]
-
-    """
-    xx = np.asarray(x, dtype=float)
-    h = 0.5 * float(play)
-    out = np.empty_like(xx)
-    y = xx[0] if xx.size else 0.0
-    for i, xi in enumerate(xx):
-        if xi - y > h:
-            y = xi - h
-        elif y - xi > h:
-            y = xi + h
-        out[i] = y
-    return out
 
 
 class SensorFilterStream:

@@ -193,22 +193,21 @@ class ActuatorLimits:
         if not any_row.any() and not state.active:
             state.length, state.velocity = lengths[-1].copy(), velocities[-1].copy()
             return lengths, velocities
-        return self._limit(t, lengths, velocities, any_row, state)
+        return self._limit(1.0 / report.rate_hz, lengths, velocities, any_row, state)
 
     def _limit(
         self,
-        t: FloatArray,
+        dt: float,
         x: FloatArray,
         xd: FloatArray,
         broken: NDArray[np.bool_],
         state: LimiterState,
     ) -> tuple[FloatArray, FloatArray]:
         """Sequential limiter, run only from a violation until the reference is rejoined."""
-        dt = float(t[1] - t[0]) if len(t) > 1 else 1e-3
         a, vmax = self.max_acceleration, self.max_velocity
         y, yd = x.copy(), xd.copy()
         pos, vel = state.length.copy(), state.velocity.copy()
-        k, n = 0, len(t)
+        k, n = 0, len(x)
         active = state.active  # the chunk may start off the reference
         while k < n:
             if not active:

@@ -39,6 +39,8 @@ FloatArray = NDArray[np.float64]
 
 #: Order of the high-pass that removes the noise below ``highpass_hz``.
 HIGHPASS_ORDER = 4
+#: Samples generated at a time by :meth:`NoiseStream.at` (the same samples however they are cut).
+GENERATE_BLOCK = 4096
 #: Noise generated and discarded before the first sample, so the stream starts stationary [s].
 LEAD_IN_S = 1.0
 
@@ -210,8 +212,9 @@ class NoiseStream:
         fs = self.noise.rate_hz
         need = int(np.ceil(float(t[-1]) * fs - 1e-9)) + 1
         have = self._buffer_start + self._buffer.shape[0]
-        if need > have:
-            self._buffer = np.vstack([self._buffer, self._filter(need - have)])
+        if need > have:  # whole blocks ahead: a stream stepped 10 ms at a time stays cheap
+            more = max(need - have, GENERATE_BLOCK)
+            self._buffer = np.vstack([self._buffer, self._filter(more)])
         ts = (self._buffer_start + np.arange(self._buffer.shape[0])) / fs
         out = np.zeros((t.size, 3))
         for k in range(self._buffer.shape[1]):

@@ -9,33 +9,28 @@ saturation (limits are counted, never applied).
 
 from __future__ import annotations
 
-from collections.abc import Iterator
-
 import numpy as np
 from numpy.typing import NDArray
 
-from twin.background import prefetch
 from twin.chain.limits import ActuatorLimits, LimitReport
-from twin.chain.noise import NoiseStream
-from twin.chain.physics import CHUNK_S, ReferenceChunk, reference_chunks
 from twin.chain.response import PlatformResponse, rigid_motion
+from twin.chain.stepping import Platform, PlatformState, Reference
 from twin.platform.facts import load_facts
 from twin.platform.geometry import load_geometry
 from twin.platform.kinematics import leg_rates
-from twin.trajectory import Trajectory
 
 FloatArray = NDArray[np.float64]
 
 
-class ReducedPlatform:
+class ReducedPlatform(Platform):
     """A rigid cabin that follows its input exactly: with the blocks in front, Eq 5.11.
 
-    Produces the same :class:`PlatformResponse` as :class:`FullPlatform`. Being analytic it
-    is evaluated where it is looked at: by default at the IMU rate of ``platform.toml``
-    (819.2 Hz), so each IMU sample is an exact evaluation; give ``rate_hz`` (e.g. the full
-    model's 1 kHz) to compare the two sample by sample. Leg lengths come from the inverse
-    kinematics, and actuator limits are counted at that rate (never limited: the reduced
-    model has no actuators to saturate).
+    Produces the same :class:`PlatformResponse` as :class:`~twin.chain.physics.FullPlatform`.
+    Being analytic it is evaluated where it is looked at: by default at the IMU rate of
+    ``platform.toml`` (819.2 Hz), so each IMU sample is an exact evaluation; give ``rate_hz``
+    (e.g. the full model's 1 kHz, or a closed loop's own rate) to sample it elsewhere. Leg
+    lengths come from the inverse kinematics, and actuator limits are counted at that rate
+    (never limited: the reduced model has no actuators to saturate).
 
     Parameters
     ----------
@@ -59,29 +54,26 @@ class ReducedPlatform:
         self.rate_hz = float(rate_hz or facts.imu_rate_hz)
         self._radius = float(np.linalg.norm(self.geometry.cabin_gimbals, axis=1).max())
 
-    def run(
-        self,
-        commands: Trajectory,
-        noise: NoiseStream | None = None,
-        report: LimitReport | None = None,
-        chunk_s: float = CHUNK_S,
-    ) -> Iterator[PlatformResponse]:
-        """Evaluate the response chunk by chunk (same arguments as :meth:`FullPlatform.run`)."""
-        report = report if report is not None else LimitReport(self.limits.mode, self.rate_hz)
-
-        def responses() -> Iterator[PlatformResponse]:
-            for ref in reference_chunks(
-                commands, noise, self.geometry, self.rate_hz, chunk_s, leg_derivatives=False
-            ):
-                motion = rigid_motion(ref.pose, ref.rate, ref.acc, ref.rotation)
-                self._check_limits(ref, motion, report)
-                yield PlatformResponse(ref.t, ref.pose, ref.pose.copy(), *motion, ref.lengths)
-
-        # a second pipeline stage: references | cabin motion and limits | the caller (IMU)
-        return prefetch(responses())
+    def _advance(self, ref: Reference, state: PlatformState) -> PlatformResponse:
+        """The cabin is where the reference says; count the limits it would break."""
+        runs, m = ref.pose.shape[:2]
+        flat = [a.reshape(runs * m, 6) for a in (ref.pose, ref.rate, ref.acc)]
+        pose, rate, acc = flat
+        lengths, _, _ = leg_rates(self.geometry, pose)
+        motion = rigid_motion(pose, rate, acc)
+        self._check_limits(np.tile(ref.t, runs), pose, rate, acc, lengths, motion, state.report)
+        shaped = [x.reshape(runs, m, -1) for x in (*motion, lengths)]
+        return PlatformResponse(ref.t, ref.command, ref.pose.copy(), *shaped)
 
     def _check_limits(
-        self, ref: ReferenceChunk, motion: tuple[FloatArray, ...], report: LimitReport
+        self,
+        t: FloatArray,
+        pose: FloatArray,
+        rate: FloatArray,
+        acc: FloatArray,
+        lengths: FloatArray,
+        motion: tuple[FloatArray, ...],
+        report: LimitReport,
     ) -> None:
         """Count limit violations, computing leg rates only where a bound says they may occur.
 
@@ -91,24 +83,24 @@ class ReducedPlatform:
         them; the rest (and any out of stroke) get the exact leg velocities and accelerations.
         The counts equal those of checking every sample exactly.
         """
+        if t.size == 0:
+            return
         velocity, acceleration, omega, omega_dot = motion
         w = _norm(omega)
         v_bound = _norm(velocity) + w * self._radius
         a_bound = (
             _norm(acceleration)
             + (_norm(omega_dot) + w**2) * self._radius
-            + v_bound**2 / ref.lengths.min(axis=1)
+            + v_bound**2 / lengths.min(axis=1)
         )
         lim = self.limits
         suspect = (v_bound > lim.max_velocity * 0.999) | (a_bound > lim.max_acceleration * 0.999)
-        suspect |= ((ref.lengths < lim.leg_min) | (ref.lengths > lim.leg_max)).any(axis=1)
+        suspect |= ((lengths < lim.leg_min) | (lengths > lim.leg_max)).any(axis=1)
         rows = np.flatnonzero(suspect)
         if rows.size == 0:
             return
-        _, vel, acc = leg_rates(
-            self.geometry, ref.pose[rows], ref.rate[rows], ref.acc[rows], ref.rotation[rows]
-        )
-        lim.check(ref.t[rows], ref.lengths[rows], vel, acc, report)
+        _, vel, lacc = leg_rates(self.geometry, pose[rows], rate[rows], acc[rows])
+        lim.check(t[rows], lengths[rows], vel, lacc, report)
 
 
 def _norm(v: FloatArray) -> FloatArray:

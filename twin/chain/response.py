@@ -20,6 +20,9 @@ GRAVITY_BASE = np.array([0.0, 0.0, 9.81])
 class PlatformResponse:
     """Cabin motion of a platform run (full or reduced), uniformly sampled.
 
+    A platform stepped for several runs at once returns arrays with a leading runs axis
+    (``(runs, n, ...)``; ``t`` stays ``(n,)``); :meth:`run` takes one of them.
+
     Attributes
     ----------
     t : ndarray, shape (n,)
@@ -57,6 +60,14 @@ class PlatformResponse:
     def rate_hz(self) -> float:
         """Sample rate [Hz]."""
         return 1.0 / float(self.t[1] - self.t[0])
+
+    def run(self, i: int) -> PlatformResponse:
+        """One run of a response stepped for several runs (arrays ``(runs, m, ...)``)."""
+        out = {}
+        for f in fields(self):
+            v = getattr(self, f.name)
+            out[f.name] = v if (v is None or f.name == "t") else v[i]
+        return type(self)(**out)
 
     @classmethod
     def concatenate(cls, parts: Iterable[PlatformResponse]) -> PlatformResponse:

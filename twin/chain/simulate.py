@@ -20,16 +20,18 @@ import numpy as np
 from twin.chain.config import MotionSystem, motion_system
 from twin.chain.extensions import SensorFilterStream
 from twin.chain.imu import ImuRecord, ImuSpec, VirtualImu
+from twin.chain.jets import JetSignal
 from twin.chain.limits import LimitReport
 from twin.chain.noise import MotionNoise, NoiseStream
 from twin.chain.physics import FullPlatform
 from twin.chain.reduced import ReducedPlatform
 from twin.chain.response import PlatformResponse
+from twin.chain.stepping import CHUNK_S, Platform
+from twin.chain.stream import ChainStream, noise_streams
 from twin.errors import SignalError
 from twin.trajectory import Trajectory
 
 MODELS = ("full", "reduced")
-Platform = FullPlatform | ReducedPlatform
 
 
 def make_platform(platform: str, model: str = "full", limit_mode: str = "limit") -> Platform:
@@ -64,8 +66,6 @@ class Simulation:
         The run's seed (noise and IMU draw from it).
     commands : Trajectory
         The pose commands as given.
-    platform_input : Trajectory
-        The commands after the filter/delay/resonance blocks (noise is added at the platform).
     response : PlatformResponse
         Cabin motion at the platform rate.
     imu : ImuRecord
@@ -83,7 +83,6 @@ class Simulation:
     model: str
     seed: int
     commands: Trajectory
-    platform_input: Trajectory
     response: PlatformResponse
     imu: ImuRecord
     imu_spec: ImuSpec
@@ -97,12 +96,15 @@ class Run:
 
     Attributes
     ----------
-    config, model, seed, commands, platform_input, imu_spec, limits, notes
+    config, model, seed, commands, imu_spec, limits, notes
         As in :class:`Simulation`.
     platform : FullPlatform or ReducedPlatform
         The platform.
     noise : MotionNoise or None
         The heave-noise generator (seeded from ``seed``; see :meth:`noise_stream`).
+    chunk_s : float
+        Command seconds fed to the chain per step (memory stays bounded for any duration;
+        results do not depend on it).
 
     """
 
@@ -110,18 +112,24 @@ class Run:
     model: str
     seed: int
     commands: Trajectory
-    platform_input: Trajectory
     imu_spec: ImuSpec
     limits: LimitReport
     notes: list[str]
     platform: Platform
     noise: MotionNoise | None
+    chunk_s: float = CHUNK_S
 
     def noise_stream(self) -> NoiseStream | None:
         """Return a fresh stream of this run's heave noise (same seed, same samples)."""
-        if self.noise is None:
-            return None
-        return self.noise.stream(np.random.SeedSequence([self.seed, 0]))
+        return noise_streams(self.config, [self.seed], self.imu_spec.rate_hz)[0]
+
+    @property
+    def platform_input(self) -> JetSignal:
+        """The commands after the configuration's blocks, whole (the platform adds the noise)."""
+        sig = JetSignal.from_trajectory(self.commands)
+        for block in self.config.blocks(self.platform.own_lag_s):
+            sig = block(sig)
+        return sig
 
     def chunks(self) -> Iterator[tuple[PlatformResponse, ImuRecord]]:
         """Yield (response, IMU) chunk pairs; memory stays bounded for any duration."""
@@ -130,7 +138,16 @@ class Run:
         filters = [
             SensorFilterStream(e, self.imu_spec.rate_hz) for e in self.config.of("sensor_filter")
         ]
-        for chunk in self.platform.run(self.platform_input, self.noise_stream(), self.limits):
+        cmd = self.commands
+        chain = ChainStream(self.config, self.platform, cmd.rate_hz, cmd.t0, self.seed,
+                            self.imu_spec.rate_hz, self.limits)  # fmt: skip
+        step = max(1, round(self.chunk_s * cmd.rate_hz))
+        for k in range(0, cmd.n, step):
+            _, rate, acc = cmd.derivatives(cmd.t[k : k + step], 2)
+            jets = np.stack([cmd.values[k : k + step], rate, acc], axis=-1)[None]
+            chunk = chain.step(jets).run(0)
+            if chunk.t.size == 0:
+                continue
             rec = imu.feed(chunk)
             if filters:
                 values = np.hstack([rec.accel, rec.gyro])
@@ -150,7 +167,7 @@ class Run:
     def simulation(self, responses: list[PlatformResponse], records: list[ImuRecord]) -> Simulation:
         """Join chunks produced by :meth:`chunks` into a :class:`Simulation`."""
         return Simulation(
-            self.config, self.model, self.seed, self.commands, self.platform_input,
+            self.config, self.model, self.seed, self.commands,
             PlatformResponse.concatenate(responses), VirtualImu.concatenate(records),
             self.imu_spec, self.limits, self.notes,
         )  # fmt: skip
@@ -196,9 +213,6 @@ def prepare(
             f"delay {ms.delays_s.min() * 1e3:.1f} ms is shorter than the full model's own lag "
             f"({plat.own_lag_s.max() * 1e3:.1f} ms) in some DOFs; no delay added there"
         )
-    shaped = commands
-    for block in ms.blocks(plat.own_lag_s):
-        shaped = block(shaped)
     spec = imu if imu is not None else default_imu(ms.platform)
     if ms.noise_scale != 1.0:
         k = ms.noise_scale
@@ -207,7 +221,7 @@ def prepare(
         )
     noise = ms.noise_block(spec.rate_hz)
     limits = LimitReport(plat.limits.mode, plat.rate_hz)
-    return Run(ms, plat.kind, int(seed), commands, shaped, spec, limits, notes, plat, noise)
+    return Run(ms, plat.kind, int(seed), commands, spec, limits, notes, plat, noise)
 
 
 def simulate(

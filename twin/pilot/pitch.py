@@ -3,8 +3,10 @@
 The task (§6.3.1, Fig 6.3): the Cessna Citation pitch dynamics of Eq 6.3 behind the stick gain
 K = -0.2865, the disturbance f_d acting on the control signal and the target f_t of Table 6.2,
 the compensatory display 25 ms late. The pilot (Eq 6.5-6.7) sees the error and feels the motion
-the motion system actually produces (:mod:`twin.pilot.motion`): the pitch attitude after the
-configuration's platform filter and delay on the reduced (Eq 5.11) or the full MuJoCo platform,
+the motion system actually produces: the configuration's whole chain (every block and
+extension of :meth:`~twin.chain.config.MotionSystem.blocks`, the actuator limits, the heave
+noise; :class:`twin.chain.stream.ChainStream`, the same stream as open-loop runs) stepped one
+loop sample at a time, on the reduced (Eq 5.11) or the full MuJoCo platform,
 plus the heave noise of Eq 5.10 at the pilot station, 3.2 m ahead of the c.g., where a heave
 offset z reads as a pitch attitude -z / l (the model's single motion response combines pitch
 and pitch-heave, §6.3.5):
@@ -29,13 +31,16 @@ from numpy.typing import ArrayLike, NDArray
 from scipy import signal
 
 from twin.chain.config import MotionSystem, motion_system
-from twin.chain.noise import MotionNoise
+from twin.chain.physics import FullPlatform
+from twin.chain.reduced import ReducedPlatform
+from twin.chain.response import PlatformResponse
+from twin.chain.stepping import Platform
+from twin.chain.stream import ChainStream
 from twin.errors import SignalError
 from twin.frames import DOF_NAMES
 from twin.pilot.forcing import MEASUREMENT_S, RATE_HZ, RUN_IN_S, ForcingFunction, pitch_task
 from twin.pilot.loop import _Filter
 from twin.pilot.model import REMNANT_FILTER, neuromuscular
-from twin.pilot.motion import FullMotion, ReducedMotion
 
 FloatArray = NDArray[np.float64]
 ComplexArray = NDArray[np.complex128]
@@ -44,7 +49,7 @@ ComplexArray = NDArray[np.complex128]
 AIRCRAFT = (-10.6189 * np.array([1.0, 0.9906]), np.array([1.0, 2.756, 7.612, 0.0]))
 #: Stick gain K_de,u (§6.3.1), pilot station ahead of the c.g. [m], display latency [s].
 STICK_GAIN, PILOT_STATION_M, DISPLAY_DELAY_S = -0.2865, 3.2, 0.025
-PITCH = DOF_NAMES.index("pitch")
+PITCH, HEAVE = DOF_NAMES.index("pitch"), DOF_NAMES.index("heave")
 
 
 @dataclass(frozen=True)
@@ -201,8 +206,8 @@ def simulate_pitch(
     rate_hz : float
         Simulation rate [Hz].
     model : str
-        ``"reduced"`` (Eq 5.11) or ``"full"`` (the MuJoCo platform in the loop); see
-        :mod:`twin.pilot.motion`.
+        ``"reduced"`` (Eq 5.11) or ``"full"`` (the MuJoCo platform in the loop), behind the
+        configuration's whole chain (:class:`twin.chain.stream.ChainStream`, as open loop).
 
     """
     cfg = motion_system(config) if isinstance(config, str) else config
@@ -230,38 +235,75 @@ def simulate_pitch(
     pm = _Filter(*signal.bilinear(pilot.k_m * w2 * np.array([1.0, 0.0]), nm_den, fs=rate_hz),
                  runs)  # fmt: skip
     nf = _Filter(*signal.bilinear(*REMNANT_FILTER, fs=rate_hz), runs)
-    noise = np.zeros((runs, t.size))
-    if cfg.noise:
-        gen = MotionNoise(highpass_hz=cfg.noise_highpass_hz)
-        for i in range(runs):  # heave position noise, one seeded stream per run
-            stream = np.random.default_rng(np.random.SeedSequence([seed, 3, i]))
-            z = gen.generate(t[-1] + 1.0, stream)
-            noise[i] = np.interp(t, z.t, z.position)
-    motion_class = {"reduced": ReducedMotion, "full": FullMotion}[model]
-    motion = motion_class(cfg, runs, rate_hz, PILOT_STATION_M)
+    chain = pitch_chain(cfg, model, rate_hz, runs, seed)
+    a_c, b_c, c_c, _ = signal.tf2ss(STICK_GAIN * AIRCRAFT[0], AIRCRAFT[1])
+    # attitude jets from the aircraft state; the input held over the last interval (ZOH)
+    jet_x = np.stack([c_c[0], c_c[0] @ a_c, c_c[0] @ a_c @ a_c])  # (3, nx)
+    jet_u = np.array([0.0, float(c_c[0] @ b_c[:, 0]), float(c_c[0] @ a_c @ b_c[:, 0])])
+    held_u = np.zeros(runs)
     d_v, d_m = round((pilot.tau_v + DISPLAY_DELAY_S) * rate_hz), round(pilot.tau_m * rate_hz)
-    hist = max(d_v, d_m) + 1
-    e_hist, felt_hist = np.zeros((hist, runs)), np.zeros((hist, runs))
+    # the pilot feels the motion d_m samples late, so the chain can be stepped d_m samples at
+    # a time (the same arithmetic as one at a time; far fewer calls)
+    block = max(1, d_m)
+    jets = np.zeros((runs, block, 6, 3))
+    hist = d_v + 1
+    e_hist, felt = np.zeros((hist, runs)), np.zeros((runs, t.size))
     zeros = np.zeros(runs)
-    out = {k: np.empty((runs, n_keep)) for k in ("e", "u", "theta", "theta_felt", "n")}
+    out = {k: np.empty((runs, n_keep)) for k in ("e", "u", "theta", "n")}
     for k in range(t.size):
-        theta = (cd @ state)[0]
+        theta_jet = (jet_x @ state).T + held_u[:, None] * jet_u  # (runs, 3)
+        theta = theta_jet[:, 0]
         e = f_t[k] - theta
-        felt = motion.step(theta, noise[:, k])
-        e_hist[k % hist], felt_hist[k % hist] = e, felt
+        jets[:, k % block, PITCH] = theta_jet
+        jets[:, k % block, HEAVE] = -PILOT_STATION_M * theta_jet
+        if k % block == block - 1 or k == t.size - 1:
+            first = k - k % block
+            motion = chain.step(jets[:, : k - first + 1])
+            felt[:, first : k + 1] = felt_attitude(motion, PILOT_STATION_M, t[first : k + 1])
+        e_hist[k % hist] = e
         ye = pe.step(e_hist[(k - d_v) % hist] if k >= d_v else zeros)
-        ym = pm.step(felt_hist[(k - d_m) % hist] if k >= d_m else zeros)
+        ym = pm.step(felt[:, k - d_m] if k >= d_m else zeros)
         n = remnant_scale * nf.step(rng.standard_normal(runs)) if remnant_scale else zeros
         u = ye - ym + n
-        state = ad @ state + bd @ (u + f_d[k])[None, :]
+        held_u = u + f_d[k]
+        state = ad @ state + bd @ held_u[None, :]
         if k >= start:
             j = k - start
-            for name, v in (("e", e), ("u", u), ("theta", theta), ("theta_felt", felt),
-                            ("n", n)):  # fmt: skip
+            for name, v in (("e", e), ("u", u), ("theta", theta), ("n", n)):
                 out[name][:, j] = v
+    out["theta_felt"] = felt[:, start:]
     window = slice(start, start + n_keep)
     return PitchRuns(t[window] - t[start], out["e"], out["u"], out["theta"], out["theta_felt"],
                      out["n"], f_t[window], f_d[window], cfg)  # fmt: skip
+
+
+def pitch_chain(
+    config: MotionSystem, model: str, rate_hz: float, runs: int, seed: int
+) -> ChainStream:
+    """The configuration's chain with the reduced or the full platform, for ``runs`` runs.
+
+    The reduced platform is sampled at the loop rate; the full one steps its physics through
+    each loop interval. Run ``i``'s heave noise draws from ``SeedSequence([seed, 3, i])``.
+    """
+    if model == "full":
+        platform: Platform = FullPlatform(config.platform)
+    else:
+        platform = ReducedPlatform(config.platform, rate_hz=rate_hz)
+    seeds = [int(np.random.SeedSequence([seed, 3, i]).generate_state(1)[0]) for i in range(runs)]
+    return ChainStream(config, platform, rate_hz, seed=seeds)
+
+
+def felt_attitude(response: PlatformResponse, station_m: float, times: FloatArray) -> FloatArray:
+    """The pitch attitude a pilot feels at the loop's sample ``times``, shape (runs, len(times)).
+
+    The cabin's pitch, plus the heave at the pilot station that is not the commanded
+    pitch-heave read as attitude, -(z - z_cmd) / l (the heave noise of Eq 5.10, and on the
+    full platform its own heave error): the model's single motion channel combines pitch and
+    pitch-heave (§6.3.5).
+    """
+    rows = np.clip(np.searchsorted(response.t, times - 1e-9), 0, response.t.size - 1)
+    pose, command = response.pose[:, rows], response.command[:, rows]
+    return pose[..., PITCH] - (pose[..., HEAVE] - command[..., HEAVE]) / station_m
 
 
 def variance_decomposition(

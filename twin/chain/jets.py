@@ -1,0 +1,212 @@
+"""The currency between the chain's blocks: sampled jets (value, rate, acceleration).
+
+Every block of the chain is a causal, stateful map from one sampled signal to another at the
+command rate. What flows between blocks is a *jet* per sample: the value of each DOF and its
+first two time derivatives, array shape ``(runs, n, 6, 3)``. Between two samples the signal is
+the quintic Hermite polynomial through the two jets (value, slope and curvature match at both
+ends), so it is C^2, causal at the sample level (the interval (t[k-1], t[k]] needs nothing
+after sample k) and exact to O(h^6) for smooth signals. Linear blocks are discretised exactly
+for that input (:mod:`twin.chain.lti`); a delay evaluates the polynomial between the samples
+it falls between (:mod:`twin.chain.delay`); a platform evaluates it at its own rate.
+
+The commands themselves enter as jets of their cubic spline (:meth:`JetSignal.from_trajectory`)
+in open loop, or of the simulated aircraft in a closed loop (:mod:`twin.pilot.pitch`).
+
+Examples
+--------
+>>> import numpy as np
+>>> from twin.trajectory import Trajectory
+>>> t = np.arange(101) / 100.0
+>>> sig = JetSignal.from_trajectory(Trajectory(100.0, np.outer(t**2, np.ones(6))))
+>>> sig.jets.shape, round(float(sig.jets[0, 50, 0, 2]), 6)   # d2/dt2 of t^2
+((1, 101, 6, 3), 2.0)
+
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from twin.errors import SignalError
+from twin.frames import DOF_NAMES
+from twin.trajectory import Trajectory
+
+FloatArray = NDArray[np.float64]
+
+#: Derivatives carried per sample: value, first and second derivative.
+ORDER = 3
+
+
+def _hermite_inverse() -> FloatArray:
+    """V^-1 mapping (p(0), p'(0), p''(0), p(1), p'(1), p''(1)) to monomial coefficients in s."""
+    powers = np.arange(6)
+    rows = [
+        (powers == 0).astype(float),
+        (powers == 1).astype(float),
+        2.0 * (powers == 2),
+        np.ones(6),
+        powers.astype(float),
+        powers * (powers - 1.0),
+    ]
+    return np.linalg.inv(np.array(rows))
+
+
+#: Quintic Hermite: monomial coefficients (in s = tau / h) from the scaled end jets.
+HERMITE = _hermite_inverse()
+
+
+def scaled(jets: FloatArray, h: float) -> FloatArray:
+    """Return jets with the k-th derivative times h^k (the Hermite data in s = tau / h)."""
+    return jets * np.array([1.0, h, h * h])
+
+
+def hermite_coefficients(j0: FloatArray, j1: FloatArray, h: float) -> FloatArray:
+    """Monomial coefficients a_0..a_5 (in s = tau / h) of the quintic through two jets.
+
+    Parameters
+    ----------
+    j0, j1 : ndarray, shape (..., 3)
+        Jets at the start and the end of an interval of length ``h``.
+
+    Returns
+    -------
+    ndarray, shape (..., 6)
+
+    """
+    data = np.concatenate([scaled(j0, h), scaled(j1, h)], axis=-1)
+    return data @ HERMITE.T
+
+
+def _basis(s: FloatArray, order: int) -> FloatArray:
+    """Derivatives (in s) of the monomials s^0..s^5 at ``s``: shape s.shape + (order + 1, 6)."""
+    powers = np.arange(6)
+    out = np.zeros((*s.shape, order + 1, 6))
+    for d in range(order + 1):
+        coef = np.ones(6)
+        for i in range(d):
+            coef = coef * (powers - i)
+        p = np.maximum(powers - d, 0)
+        out[..., d, :] = coef * s[..., None] ** p
+    return out
+
+
+def hermite_eval(
+    j0: FloatArray, j1: FloatArray, s: ArrayLike, h: float, order: int = 2
+) -> FloatArray:
+    """Evaluate the quintic through two jets, and its derivatives, at s = tau / h in [0, 1].
+
+    Parameters
+    ----------
+    j0, j1 : ndarray, shape (..., 3)
+        Jets at the interval's ends.
+    s : float or ndarray
+        Position in the interval: a scalar, or one value per element of ``j0.shape[:-1]``'s
+        trailing axes (broadcast like ``s[..., None]`` against the jets).
+    h : float
+        Interval length [s].
+    order : int
+        Highest derivative returned (2 or 3).
+
+    Returns
+    -------
+    ndarray, shape (..., order + 1)
+
+    """
+    data = np.concatenate([scaled(j0, h), scaled(j1, h)], axis=-1)
+    ss = np.asarray(s, dtype=float)
+    weights = HERMITE.T @ np.swapaxes(_basis(ss, order), -1, -2)  # (..., 6, order + 1)
+    weights = weights / h ** np.arange(order + 1)
+    if ss.ndim == 0:
+        return data @ weights
+    return np.einsum(
+        "...j,...jd->...d", data, np.broadcast_to(weights, (*data.shape[:-1], 6, order + 1))
+    )
+
+
+def held(first: FloatArray) -> FloatArray:
+    """The jet of a signal held at ``first``'s value (derivatives zero), same shape."""
+    out = np.zeros_like(first)
+    out[..., 0] = first[..., 0]
+    return out
+
+
+@dataclass(frozen=True, eq=False)
+class JetSignal:
+    """A uniformly sampled signal with its first two derivatives, for one or several runs.
+
+    Attributes
+    ----------
+    rate_hz : float
+        Sample rate [Hz].
+    jets : ndarray, shape (runs, n, k, 3)
+        Value, first and second derivative of each of the ``k`` channels.
+    t0 : float
+        Time of the first sample [s].
+    names : tuple of str
+        Channel names (the six DOFs by default).
+
+    """
+
+    rate_hz: float
+    jets: FloatArray
+    t0: float = 0.0
+    names: tuple[str, ...] = DOF_NAMES
+
+    def __post_init__(self) -> None:
+        """Check rate and shape."""
+        if not np.isfinite(self.rate_hz) or self.rate_hz <= 0:
+            raise SignalError(f"sample rate must be a positive number of Hz; got {self.rate_hz}")
+        j = np.asarray(self.jets, dtype=float)
+        if j.ndim != 4 or j.shape[2] != len(self.names) or j.shape[3] != ORDER:
+            raise SignalError(
+                f"jets must have shape (runs, n, {len(self.names)}, {ORDER}); got {j.shape}"
+            )
+        object.__setattr__(self, "jets", j)
+
+    @classmethod
+    def from_trajectory(cls, tr: Trajectory) -> JetSignal:
+        """Jets of a trajectory's cubic spline at its samples (one run)."""
+        _, rate, acc = tr.derivatives(tr.t, 2)
+        return cls(tr.rate_hz, np.stack([tr.values, rate, acc], axis=-1)[None], tr.t0, tr.names)
+
+    @property
+    def n(self) -> int:
+        """Samples per run."""
+        return self.jets.shape[1]
+
+    @property
+    def runs(self) -> int:
+        """Number of runs."""
+        return self.jets.shape[0]
+
+    @property
+    def t(self) -> FloatArray:
+        """Sample times [s]."""
+        return self.t0 + np.arange(self.n) / self.rate_hz
+
+    @property
+    def duration(self) -> float:
+        """Time from the first to the last sample [s]."""
+        return (self.n - 1) / self.rate_hz
+
+    def replace(self, jets: FloatArray) -> JetSignal:
+        """The same time grid with other jets."""
+        return JetSignal(self.rate_hz, jets, self.t0, self.names)
+
+    def trajectory(self, run: int = 0) -> Trajectory:
+        """The values of one run as a :class:`~twin.trajectory.Trajectory`."""
+        return Trajectory(self.rate_hz, self.jets[run, :, :, 0], self.t0, self.names)
+
+    def at(self, t: ArrayLike, run: int = 0) -> FloatArray:
+        """Value, rate and acceleration at times ``t`` (held outside), shape (len(t), k, 3)."""
+        tt = np.atleast_1d(np.asarray(t, dtype=float))
+        x = np.clip((tt - self.t0) * self.rate_hz, 0.0, self.n - 1.0)
+        i = np.minimum(np.floor(x).astype(int), self.n - 2)
+        j = self.jets[run]
+        out = hermite_eval(j[i], j[i + 1], (x - i)[:, None], 1.0 / self.rate_hz)
+        outside = (tt < self.t0) | (tt > self.t0 + self.duration)
+        out[outside, :, 1:] = 0.0
+        return out
