@@ -130,14 +130,18 @@ def execute(
     with writer as w:
         if w is not None:
             w.write("commands.csv", t_cmd, commands.values)
+        written = 0  # command samples whose leg lengths are written
+        carry: tuple[np.ndarray, np.ndarray] | None = None  # the previous chunk's last row
         for response, imu in run.chunks():
             responses.append(response)
             records.append(imu)
             if w is not None:
-                end = response.t[-1] + 0.5 / run.platform.rate_hz
-                sel = (t_cmd >= response.t[0] - 1e-9) & (t_cmd < end)
-                legs = _legs_at(t_cmd[sel], response.t, response.legs)
-                w.write("actuators.csv", t_cmd[sel], legs)
+                t, legs = response.t, response.legs
+                if carry is not None:
+                    t, legs = np.concatenate([carry[0], t]), np.vstack([carry[1], legs])
+                upto = int(np.searchsorted(t_cmd, t[-1] + 1e-9))
+                w.write("actuators.csv", t_cmd[written:upto], _legs_at(t_cmd[written:upto], t, legs))
+                written, carry = upto, (t[-1:], legs[-1:])
                 w.write("imu.csv", imu.t, np.hstack([imu.accel, imu.gyro]))
             if recorder is not None:
                 recorder.log(response, imu, offset_s)
