@@ -26,7 +26,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy import signal
 
-from twin.agard.session import Session, signal_meta
+from twin.agard.session import Session
 from twin.errors import SignalError
 from twin.frames import DOF_NAMES
 from twin.measurement.describing_function import (
@@ -38,6 +38,7 @@ from twin.measurement.describing_function import (
     phase_deg,
 )
 from twin.measurement.measure import Bench, Measurement, driven_dof
+from twin.run_folder import signal_meta
 from twin.signals import describing_signal
 
 FloatArray = NDArray[np.float64]

@@ -81,12 +81,18 @@ def from_imu(
     return Measurement(t, acc, measured, commands, source, config, meta)
 
 
+def run_config(run: RecordedRun | str | Path) -> MotionSystem:
+    """Return the configuration a recorded run's ``meta.json`` names."""
+    rec = run if isinstance(run, RecordedRun) else read_run(run)
+    return MotionSystem.from_meta(
+        rec.meta["platform"], rec.meta["platform_config"], f"from {rec.path}/meta.json"
+    )
+
+
 def from_run(run: RecordedRun | str | Path) -> Measurement:
     """Return the :class:`Measurement` of a recorded ``twin-run/1`` folder (validated)."""
     rec = run if isinstance(run, RecordedRun) else read_run(run)
-    config = MotionSystem.from_meta(
-        rec.meta["platform"], rec.meta["platform_config"], f"from {rec.path}/meta.json"
-    )
+    config = run_config(rec)
     imu = ImuRecord(rec.imu_t, rec.imu[:, :3], rec.imu[:, 3:])
     return from_imu(rec.commands, imu, str(rec.path), config, dict(rec.meta))
 
