@@ -30,7 +30,7 @@ from twin.chain.config import MotionSystem, motion_system
 from twin.chain.reduced import ReducedPlatform
 from twin.chain.simulate import Platform, make_platform, simulate
 from twin.errors import SignalError
-from twin.frames import DOF_NAMES
+from twin.frames import DOF_NAMES, dof_index
 from twin.measurement.describing_function import (
     LagDelayFit,
     describing_function,
@@ -96,7 +96,7 @@ def _drive(
     config: MotionSystem, platform: Platform, dof: str, signals: Sequence[int]
 ) -> tuple[FloatArray, ComplexArray, list[tuple[FloatArray, FloatArray, FloatArray]]]:
     """Run the multi-sines in one DOF; return frequencies, DF, and (t, cmd, pose) windows."""
-    k = DOF_NAMES.index(dof)
+    k = dof_index(dof)
     freqs, dfs, windows = [], [], []
     for number in signals:
         sig = describing_signal(number, dof)
@@ -279,7 +279,7 @@ class Comparison:
         for j, (dof, r) in enumerate(self.dofs.items()):
             f = r.frequencies_hz
             fa = np.geomspace(f.min(), max(f.max(), 10.0), 200)
-            ha = self.config.frequency_response(fa)[:, DOF_NAMES.index(dof)]
+            ha = self.config.frequency_response(fa)[:, dof_index(dof)]
             axes[0, j].semilogx(fa, 20 * np.log10(np.abs(ha)), "k-", lw=0.8, label="Eq 5.11")
             axes[1, j].semilogx(fa, phase_deg(ha), "k-", lw=0.8)
             for h, style, label in ((r.full, "o", "full"), (r.reduced, "x", "reduced")):
@@ -331,6 +331,6 @@ def compare(
         cmd = np.concatenate([a[1] for a in w_full])
         rms = float(np.sqrt(np.mean(diff**2)) / np.sqrt(np.mean(cmd**2)))
         out[dof] = DofResponse(dof, f, h_full, h_red, rms)
-        analytic[dof] = ms_quiet.frequency_response(f)[:, DOF_NAMES.index(dof)]
+        analytic[dof] = ms_quiet.frequency_response(f)[:, dof_index(dof)]
     notes = [] if not ms.noise else ["the configuration's noise was off for these runs"]
     return Comparison(ms_quiet, out, analytic, notes)

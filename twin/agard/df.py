@@ -28,7 +28,7 @@ from scipy import signal
 
 from twin.agard.session import Session
 from twin.errors import SignalError
-from twin.frames import DOF_NAMES
+from twin.frames import DOF_NAMES, dof_index
 from twin.measurement.describing_function import (
     ResponseMixin,
     describing_function,
@@ -174,7 +174,7 @@ class DfResult(ResponseMixin):
 
         fig, (ax_g, ax_p) = plt.subplots(2, 1, figsize=(6, 5.5), sharex=True)
         f = self.frequencies_hz
-        k = DOF_NAMES.index(self.dof)
+        k = dof_index(self.dof)
         if config is not None:
             fa = np.geomspace(min(f.min(), 0.05), max(f.max(), 10.0), 300)
             ha = config.frequency_response(fa)[:, k]

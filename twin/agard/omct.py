@@ -33,7 +33,7 @@ from numpy.typing import NDArray
 
 from twin.agard.session import Session
 from twin.errors import SignalError, TwinError
-from twin.frames import DOF_NAMES
+from twin.frames import DOF_NAMES, dof_index
 from twin.measurement.describing_function import ResponseMixin, describing_function, phase_deg
 from twin.measurement.measure import Measurement, driven_dof
 
@@ -245,7 +245,7 @@ def default_amplitude(dof: str, w_rad_s: float, platform: str, fraction: float =
     """
     from twin.agard.snr import system_limit
 
-    cap = 1.0 if DOF_NAMES.index(dof) >= 3 else 0.2
+    cap = 1.0 if dof_index(dof) >= 3 else 0.2
     return min(cap, fraction * float(system_limit(platform, dof, w_rad_s / (2 * np.pi))))
 
 
@@ -282,7 +282,7 @@ def run_omct(
         ws.append(wi)
         hs.append(h)
     w_arr = np.asarray(ws)
-    analytic = cfg.frequency_response(w_arr / (2 * np.pi))[:, DOF_NAMES.index(dof)]
+    analytic = cfg.frequency_response(w_arr / (2 * np.pi))[:, dof_index(dof)]
     return OmctResult(
         dof,
         w_arr,

@@ -24,7 +24,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from twin.agard.noise_level import NoiseLevelPoint, analyse_noise
 from twin.agard.session import Session
-from twin.frames import DOF_NAMES, acceleration_unit
+from twin.frames import acceleration_unit, dof_index
 
 FloatArray = NDArray[np.float64]
 
@@ -46,7 +46,7 @@ def dof_limits(platform: str, dof: str) -> tuple[float, float, float]:
     from twin.platform.kinematics import jacobian, workspace
 
     geo, facts = load_geometry(platform), load_facts(platform)
-    k = DOF_NAMES.index(dof)
+    k = dof_index(dof)
     r = workspace(geo)[dof]
     column = np.abs(jacobian(geo, np.zeros(6))[:, k]).max()
     return (min(-r.min, r.max), facts.max_velocity / column, facts.max_acceleration / column)

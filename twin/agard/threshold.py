@@ -23,7 +23,7 @@ from twin.agard.session import Session
 from twin.chain.config import MotionSystem
 from twin.chain.spline_filter import filter_spline
 from twin.errors import SignalError
-from twin.frames import DOF_NAMES, acceleration_unit
+from twin.frames import DOF_NAMES, acceleration_unit, dof_index
 from twin.measurement.measure import Measurement, driven_dof
 from twin.signals import square_steps
 from twin.trajectory import Trajectory
@@ -96,7 +96,7 @@ def fit_eq_3_7(
 
 def analytic_t63(config: MotionSystem, dof: str) -> float:
     """Exact 63 % time of the configuration's Eq 5.11 acceleration step response from rest [s]."""
-    k = DOF_NAMES.index(dof)
+    k = dof_index(dof)
     delay, fb = float(config.delays_s[k]), config.breaks_hz[k]
     if fb is None:
         return delay
