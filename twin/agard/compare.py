@@ -37,6 +37,7 @@ from twin.measurement.describing_function import (
     fit_lag_delay,
     phase_deg,
 )
+from twin.plotting import finish, pyplot
 from twin.signals import describing_signal
 from twin.thesis import TABLE_5_5
 
@@ -145,6 +146,45 @@ class PlatformDynamics:
             })  # fmt: skip
         return rows
 
+    def to_dict(self) -> dict[str, object]:
+        """JSON-ready result: the platform and the rows of :meth:`table`."""
+        return {"platform": self.platform, "fits": self.table()}
+
+    def plot(self, path: str | None = None):
+        """Bode plot per DOF: the full model's describing function and its lag-plus-delay fit.
+
+        Parameters
+        ----------
+        path : str, optional
+            Save the figure here.
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+
+        """
+        plt = pyplot()
+        n = len(self.fits)
+        fig, axes = plt.subplots(2, n, figsize=(3.2 * n, 5.5), squeeze=False, sharex=True)
+        for j, (dof, fit) in enumerate(self.fits.items()):
+            r = self.responses[dof]
+            f = r.frequencies_hz
+            fa = np.geomspace(f.min(), f.max(), 200)
+            s = 2j * np.pi * fa
+            hf = np.exp(-s * fit.tau) / (fit.t_m * s + 1)
+            axes[0, j].semilogx(f, 20 * np.log10(np.abs(r.full)), "o", label="full model")
+            axes[1, j].semilogx(f, phase_deg(r.full), "o")
+            label = f"lag {fit.t_m * 1e3:.1f} ms + delay {fit.tau * 1e3:.1f} ms"
+            axes[0, j].semilogx(fa, 20 * np.log10(np.abs(hf)), "k-", lw=0.8, label=label)
+            axes[1, j].semilogx(fa, phase_deg(hf), "k-", lw=0.8)
+            axes[0, j].set_title(dof)
+            axes[0, j].legend(fontsize=7)
+            axes[1, j].set_xlabel("frequency [Hz]")
+        axes[0, 0].set_ylabel("gain [dB]")
+        axes[1, 0].set_ylabel("phase [deg]")
+        fig.suptitle(f"{self.platform}: full model alone (Table 5.5)")
+        return finish(fig, path)
+
     def format_table(self) -> str:
         """Plain-text Table 5.5 comparison."""
         out = [f"{self.platform}: full model alone, first-order lag + delay per DOF (Table 5.5)",
@@ -247,7 +287,7 @@ class Comparison:
         }
 
     def to_json(self) -> str:
-        """Return the result as JSON text."""
+        """Return :meth:`to_dict` as JSON text (alias)."""
         return json.dumps(self.to_dict(), indent=2)
 
     def format_table(self) -> str:
@@ -272,8 +312,7 @@ class Comparison:
 
     def plot(self, path: str | None = None):
         """Bode plot per DOF: full, reduced and analytic Eq 5.11; saved to ``path`` if given."""
-        import matplotlib.pyplot as plt  # Agg by itself when there is no display
-
+        plt = pyplot()
         n = len(self.dofs)
         fig, axes = plt.subplots(2, n, figsize=(3.2 * n, 5.5), squeeze=False, sharex=True)
         for j, (dof, r) in enumerate(self.dofs.items()):
@@ -291,10 +330,7 @@ class Comparison:
         axes[1, 0].set_ylabel("phase [deg]")
         axes[0, 0].legend(fontsize=8)
         fig.suptitle(f"{self.config.name}: full vs reduced describing functions")
-        fig.tight_layout()
-        if path:
-            fig.savefig(path, dpi=120)
-        return fig
+        return finish(fig, path)
 
 
 def compare(

@@ -38,6 +38,7 @@ from twin.measurement.describing_function import (
     phase_deg,
 )
 from twin.measurement.measure import Bench, Measurement, driven_dof
+from twin.plotting import finish, pyplot
 from twin.run_folder import signal_meta
 from twin.signals import describing_signal
 
@@ -170,8 +171,7 @@ class DfResult(ResponseMixin):
             Also show the largest cross describing function.
 
         """
-        import matplotlib.pyplot as plt
-
+        plt = pyplot()
         fig, (ax_g, ax_p) = plt.subplots(2, 1, figsize=(6, 5.5), sharex=True)
         f = self.frequencies_hz
         k = dof_index(self.dof)
@@ -212,10 +212,7 @@ class DfResult(ResponseMixin):
         ax_g.legend(fontsize=8)
         ax_p.legend(fontsize=8)
         ax_g.set_title(f"describing function, {self.dof}: {self.source}", fontsize=9)
-        fig.tight_layout()
-        if path:
-            fig.savefig(path, dpi=120)
-        return fig
+        return finish(fig, path)
 
 
 def periodic_design(m: Measurement, k: int) -> tuple[FloatArray, tuple[float, float]]:

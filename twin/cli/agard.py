@@ -223,9 +223,7 @@ def _save(out: Path, test: str, result, payload: dict, config, bounds) -> None:
     if test == "df":
         fig = result.plot(png, config=config)
     elif test == "omct":
-        from twin.agard.omct import plot_omct
-
-        fig = plot_omct([result], bounds, png)
+        fig = result.plot(png, bounds=bounds)
     else:
         fig = result.plot(png)
     plt.close(fig)

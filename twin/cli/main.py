@@ -62,7 +62,7 @@ def _cmd_dynamics(args: argparse.Namespace) -> int:
     dyn = platform_dynamics(
         args.platform, dofs=args.dofs or DOF_NAMES, progress=common.progress(args)
     )
-    print(json.dumps(dyn.table(), indent=2) if args.json else dyn.format_table())
+    print(json.dumps(dyn.to_dict(), indent=2) if args.json else dyn.format_table())
     return 0
 
 

@@ -8,6 +8,7 @@ import json
 import numpy as np
 
 from twin.cli import common
+from twin.plotting import pyplot
 
 DEG2 = (180 / np.pi) ** 2
 
@@ -178,48 +179,13 @@ def _cmd_experiment(args: argparse.Namespace) -> int:
     _check_runs(args.runs)
     r = run_experiment(runs=args.runs, seed=args.seed, progress=common.progress(args), fit=True)
     if args.plot:
-        _plot_experiment(r, args.plot)
+        plt = pyplot()
+        plt.close(r.plot(args.plot))
     if args.json:
-        print(json.dumps({"conditions": r.conditions, "effects": r.effects}, indent=2))
+        print(json.dumps(r.to_dict(), indent=2))
     else:
         print(r.format_table())
     return 0
-
-
-def _plot_experiment(r, path: str) -> None:
-    """Measures per condition as Fig 6.5-6.9: variances, open loops, estimated parameters."""
-    import matplotlib.pyplot as plt
-
-    conds = list(r.conditions)
-    panels = [
-        ("var_e", "var(e) [deg^2] (Fig 6.5a)"),
-        ("var_u", "var(u) [deg^2] (Fig 6.5b)"),
-        ("vaf_percent", "VAF [%] (Fig 6.6)"),
-        ("crossover_d", "crossover d [rad/s] (Fig 6.7)"),
-        ("phase_margin_d", "phase margin d [deg] (Fig 6.7)"),
-        ("crossover_t", "crossover t [rad/s] (Fig 6.7)"),
-    ]
-    params = ("k_v", "t_lead", "t_lag", "k_m", "tau_v", "tau_m", "omega_nm", "zeta_nm")
-    fig, axes = plt.subplots(2, 7, figsize=(20, 5.5))
-    for ax, (m, label) in zip(axes[0], panels, strict=False):
-        ax.bar([str(c) for c in conds], [r.conditions[c].get(m, float("nan")) for c in conds])
-        ax.set_title(label, fontsize=8)
-    for ax, name in zip([*axes[0][len(panels) :], *axes[1]], params, strict=False):
-        ax.bar(
-            [str(c) for c in conds],
-            [r.conditions[c].get("estimated", {}).get(name, float("nan")) for c in conds],
-        )
-        ax.set_title(f"{name} (Fig 6.8-6.9)", fontsize=8)
-    for ax in axes.flat:
-        ax.tick_params(labelsize=7)
-    fig.suptitle(
-        "Table 6.3 conditions (x axis), pilot model fixed; estimated parameters from "
-        "each condition's first run",
-        fontsize=9,
-    )
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
 
 
 def _cmd_identify(args: argparse.Namespace) -> int:
@@ -281,23 +247,10 @@ def _cmd_identify(args: argparse.Namespace) -> int:
 
 
 def _cmd_montecarlo(args: argparse.Namespace) -> int:
-    from twin.pilot.fit import parameter_errors
-    from twin.pilot.model import RollPilot
     from twin.pilot.montecarlo import monte_carlo
 
     r = monte_carlo(args.runs, args.seed, fit_runs=args.fit_runs, progress=common.progress(args))
-    out = {"runs": r.runs, "omega_rad_s": r.omega_rad_s.tolist(), "arx_orders": r.orders.__dict__}
-    for resp in ("pe", "px"):
-        out[resp] = {
-            "fc_std_gain": r.sample_std_mag("fc", resp).tolist(),
-            "arx_std_gain": r.sample_std_mag("arx", resp).tolist(),
-            "arx_analytic_std_gain": r.arx_std_mag[resp].tolist(),
-            "arx_sampled_std_gain": r.arx_sampled_std_mag[resp].tolist(),
-        }
-    if args.fit_runs:
-        out["parameter_errors"] = {
-            m: parameter_errors(r.pilots[m], RollPilot()) for m in ("fc", "arx")
-        }
+    out = r.to_dict()
     if args.json:
         print(json.dumps(out, indent=2))
     else:
