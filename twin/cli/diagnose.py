@@ -68,7 +68,7 @@ def _cmd_diagnose(args: argparse.Namespace) -> int:
     if args.save_config:
         d.extended_config.save(args.save_config)
     if args.json:
-        print(json.dumps(d.to_json_safe(), indent=2))
+        print(json.dumps(d.to_dict(), indent=2))
         return 0
     if not d.findings:
         print("no finding: the runs agree with the nominal model within their noise")
