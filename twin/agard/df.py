@@ -210,7 +210,8 @@ class DfResult(ResponseMixin):
         ax_p.set_ylabel("phase [deg]")
         ax_p.set_xlabel("frequency [Hz]")
         ax_g.legend(fontsize=8)
-        ax_p.legend(fontsize=8)
+        if config is not None:  # the fitted-delay curve
+            ax_p.legend(fontsize=8)
         ax_g.set_title(f"describing function, {self.dof}: {self.source}", fontsize=9)
         return finish(fig, path)
 

@@ -103,6 +103,8 @@ class ExperimentResult:
         for ax in axes.flat:
             ax.tick_params(labelsize=7)
             ax.set_xlabel("condition", fontsize=7)
+        axes[0][0].set_ylabel("measure (panel titles)", fontsize=8)
+        axes[1][0].set_ylabel("estimated parameter", fontsize=8)
         fig.suptitle(
             "Table 6.3 conditions (x axis), pilot model fixed; estimated parameters from "
             "each condition's first run",
