@@ -28,6 +28,7 @@ from twin.pilot.experiment import ExperimentResult
 from twin.pilot.mle import PilotFit
 from twin.pilot.montecarlo import MonteCarloResult
 from twin.pilot.pitch import PitchPilot
+from twin.platform.kinematics import ForwardResult
 
 F = np.array([0.1, 0.3, 1.0, 3.0])
 H = np.exp(-2j * np.pi * F * 0.05) / (1 + 2j * np.pi * F * 0.02)
@@ -82,6 +83,7 @@ RESULTS = {
         {"delay": {"var_e": 0.5}},
     ),
     "MonteCarloResult": _montecarlo,
+    "ForwardResult": lambda: ForwardResult(np.zeros((3, 6)), 2, np.array([2, 1, 1]), 1e-9),
     "PilotFit": lambda: PilotFit(PitchPilot(), {"k_v": 0.1, "tau_v": 0.01}, 85.0, 0.02),
 }
 
