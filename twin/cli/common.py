@@ -125,8 +125,10 @@ def overrides_parent(imu: bool = True) -> argparse.ArgumentParser:
     """
     p = _parent()
     g = p.add_argument_group("configuration overrides")
-    g.add_argument("--break-hz", type=float, help="platform-filter break frequency, Hz (0: none)")
-    g.add_argument("--delay-ms", type=float, help="total motion-system delay, ms")
+    g.add_argument(
+        "--break-hz", type=float, metavar="HZ", help="platform-filter break frequency, Hz (0: none)"
+    )
+    g.add_argument("--delay-ms", type=float, metavar="MS", help="total motion-system delay, ms")
     g.add_argument("--no-noise", action="store_true", help="switch the Eq 5.10 noise off")
     g.add_argument(
         "--resonance", action="store_true", help="add the SRS resonance terms of Eq 5.12/5.13"
