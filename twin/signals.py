@@ -27,7 +27,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from twin.errors import SignalError, SignalLimitError
-from twin.frames import DOF_NAMES, acceleration_unit
+from twin.frames import DOF_NAMES, acceleration_unit, dof_index
 from twin.thesis import TABLE_5_2
 from twin.trajectory import Trajectory
 
@@ -117,7 +117,7 @@ def table_5_2(signal: int, dof: str) -> MultiSine:
     if dof not in DOF_NAMES:
         raise SignalError(f"unknown DOF {dof!r}; expected one of {', '.join(DOF_NAMES)}")
     row = SIGNALS[signal]
-    rotational = DOF_NAMES.index(dof) >= 3
+    rotational = dof_index(dof) >= 3
     amps = np.radians(row["rotation_deg_s2"]) if rotational else np.array(row["translation_m_s2"])
     return MultiSine(np.array(row["frequency_hz"]), np.asarray(amps, dtype=float))
 
@@ -220,7 +220,7 @@ def periodic_signal(
     n = round(total * rate_hz) + 1
     t = np.arange(n) / rate_hz
     values = np.zeros((n, 6))
-    values[:, DOF_NAMES.index(dof)] = ms.position(t) * fade(t, f_min / 2, fade_out_at=total)
+    values[:, dof_index(dof)] = ms.position(t) * fade(t, f_min / 2, fade_out_at=total)
     return DescribingSignal(Trajectory(rate_hz, values), dof, f, (start, end), amps, label)
 
 
@@ -390,7 +390,7 @@ def square_steps(
         x[seg] = p + v * tau[seg] + 0.5 * a * tau[seg] ** 2
         p, v = p + v * step_s + 0.5 * a * step_s**2, v + a * step_s
     values = np.zeros((t.size, 6))
-    values[:, DOF_NAMES.index(dof)] = x
+    values[:, dof_index(dof)] = x
     return StepSignal(Trajectory(rate_hz, values), dof, float(amplitude), float(step_s), rest_s,
                       levels)  # fmt: skip
 

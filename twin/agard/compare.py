@@ -30,13 +30,14 @@ from twin.chain.config import MotionSystem, motion_system
 from twin.chain.reduced import ReducedPlatform
 from twin.chain.simulate import Platform, make_platform, simulate
 from twin.errors import SignalError
-from twin.frames import DOF_NAMES
+from twin.frames import DOF_NAMES, dof_index
 from twin.measurement.describing_function import (
     LagDelayFit,
     describing_function,
     fit_lag_delay,
     phase_deg,
 )
+from twin.plotting import finish, pyplot
 from twin.signals import describing_signal
 from twin.thesis import TABLE_5_5
 
@@ -96,7 +97,7 @@ def _drive(
     config: MotionSystem, platform: Platform, dof: str, signals: Sequence[int]
 ) -> tuple[FloatArray, ComplexArray, list[tuple[FloatArray, FloatArray, FloatArray]]]:
     """Run the multi-sines in one DOF; return frequencies, DF, and (t, cmd, pose) windows."""
-    k = DOF_NAMES.index(dof)
+    k = dof_index(dof)
     freqs, dfs, windows = [], [], []
     for number in signals:
         sig = describing_signal(number, dof)
@@ -144,6 +145,45 @@ class PlatformDynamics:
                 "t_m_error": fit.t_m / ref[0] - 1 if ref else None,
             })  # fmt: skip
         return rows
+
+    def to_dict(self) -> dict[str, object]:
+        """JSON-ready result: the platform and the rows of :meth:`table`."""
+        return {"platform": self.platform, "fits": self.table()}
+
+    def plot(self, path: str | None = None):
+        """Bode plot per DOF: the full model's describing function and its lag-plus-delay fit.
+
+        Parameters
+        ----------
+        path : str, optional
+            Save the figure here.
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+
+        """
+        plt = pyplot()
+        n = len(self.fits)
+        fig, axes = plt.subplots(2, n, figsize=(3.2 * n, 5.5), squeeze=False, sharex=True)
+        for j, (dof, fit) in enumerate(self.fits.items()):
+            r = self.responses[dof]
+            f = r.frequencies_hz
+            fa = np.geomspace(f.min(), f.max(), 200)
+            s = 2j * np.pi * fa
+            hf = np.exp(-s * fit.tau) / (fit.t_m * s + 1)
+            axes[0, j].semilogx(f, 20 * np.log10(np.abs(r.full)), "o", label="full model")
+            axes[1, j].semilogx(f, phase_deg(r.full), "o")
+            label = f"lag {fit.t_m * 1e3:.1f} ms + delay {fit.tau * 1e3:.1f} ms"
+            axes[0, j].semilogx(fa, 20 * np.log10(np.abs(hf)), "k-", lw=0.8, label=label)
+            axes[1, j].semilogx(fa, phase_deg(hf), "k-", lw=0.8)
+            axes[0, j].set_title(dof)
+            axes[0, j].legend(fontsize=7)
+            axes[1, j].set_xlabel("frequency [Hz]")
+        axes[0, 0].set_ylabel("gain [dB]")
+        axes[1, 0].set_ylabel("phase [deg]")
+        fig.suptitle(f"{self.platform}: full model alone (Table 5.5)")
+        return finish(fig, path)
 
     def format_table(self) -> str:
         """Plain-text Table 5.5 comparison."""
@@ -247,7 +287,7 @@ class Comparison:
         }
 
     def to_json(self) -> str:
-        """Return the result as JSON text."""
+        """Return :meth:`to_dict` as JSON text (alias)."""
         return json.dumps(self.to_dict(), indent=2)
 
     def format_table(self) -> str:
@@ -272,14 +312,13 @@ class Comparison:
 
     def plot(self, path: str | None = None):
         """Bode plot per DOF: full, reduced and analytic Eq 5.11; saved to ``path`` if given."""
-        import matplotlib.pyplot as plt  # Agg by itself when there is no display
-
+        plt = pyplot()
         n = len(self.dofs)
         fig, axes = plt.subplots(2, n, figsize=(3.2 * n, 5.5), squeeze=False, sharex=True)
         for j, (dof, r) in enumerate(self.dofs.items()):
             f = r.frequencies_hz
             fa = np.geomspace(f.min(), max(f.max(), 10.0), 200)
-            ha = self.config.frequency_response(fa)[:, DOF_NAMES.index(dof)]
+            ha = self.config.frequency_response(fa)[:, dof_index(dof)]
             axes[0, j].semilogx(fa, 20 * np.log10(np.abs(ha)), "k-", lw=0.8, label="Eq 5.11")
             axes[1, j].semilogx(fa, phase_deg(ha), "k-", lw=0.8)
             for h, style, label in ((r.full, "o", "full"), (r.reduced, "x", "reduced")):
@@ -291,10 +330,7 @@ class Comparison:
         axes[1, 0].set_ylabel("phase [deg]")
         axes[0, 0].legend(fontsize=8)
         fig.suptitle(f"{self.config.name}: full vs reduced describing functions")
-        fig.tight_layout()
-        if path:
-            fig.savefig(path, dpi=120)
-        return fig
+        return finish(fig, path)
 
 
 def compare(
@@ -331,6 +367,6 @@ def compare(
         cmd = np.concatenate([a[1] for a in w_full])
         rms = float(np.sqrt(np.mean(diff**2)) / np.sqrt(np.mean(cmd**2)))
         out[dof] = DofResponse(dof, f, h_full, h_red, rms)
-        analytic[dof] = ms_quiet.frequency_response(f)[:, DOF_NAMES.index(dof)]
+        analytic[dof] = ms_quiet.frequency_response(f)[:, dof_index(dof)]
     notes = [] if not ms.noise else ["the configuration's noise was off for these runs"]
     return Comparison(ms_quiet, out, analytic, notes)

@@ -26,9 +26,9 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy import signal
 
-from twin.agard.session import Session, signal_meta
+from twin.agard.session import Session
 from twin.errors import SignalError
-from twin.frames import DOF_NAMES
+from twin.frames import DOF_NAMES, dof_index
 from twin.measurement.describing_function import (
     ResponseMixin,
     describing_function,
@@ -38,6 +38,8 @@ from twin.measurement.describing_function import (
     phase_deg,
 )
 from twin.measurement.measure import Bench, Measurement, driven_dof
+from twin.plotting import finish, pyplot
+from twin.run_folder import signal_meta
 from twin.signals import describing_signal
 
 FloatArray = NDArray[np.float64]
@@ -169,11 +171,10 @@ class DfResult(ResponseMixin):
             Also show the largest cross describing function.
 
         """
-        import matplotlib.pyplot as plt
-
+        plt = pyplot()
         fig, (ax_g, ax_p) = plt.subplots(2, 1, figsize=(6, 5.5), sharex=True)
         f = self.frequencies_hz
-        k = DOF_NAMES.index(self.dof)
+        k = dof_index(self.dof)
         if config is not None:
             fa = np.geomspace(min(f.min(), 0.05), max(f.max(), 10.0), 300)
             ha = config.frequency_response(fa)[:, k]
@@ -209,12 +210,10 @@ class DfResult(ResponseMixin):
         ax_p.set_ylabel("phase [deg]")
         ax_p.set_xlabel("frequency [Hz]")
         ax_g.legend(fontsize=8)
-        ax_p.legend(fontsize=8)
+        if config is not None:  # the fitted-delay curve
+            ax_p.legend(fontsize=8)
         ax_g.set_title(f"describing function, {self.dof}: {self.source}", fontsize=9)
-        fig.tight_layout()
-        if path:
-            fig.savefig(path, dpi=120)
-        return fig
+        return finish(fig, path)
 
 
 def periodic_design(m: Measurement, k: int) -> tuple[FloatArray, tuple[float, float]]:

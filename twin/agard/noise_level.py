@@ -35,6 +35,7 @@ from twin.agard.session import Session
 from twin.errors import SignalError
 from twin.frames import DOF_NAMES, acceleration_unit
 from twin.measurement.measure import Measurement, driven_dof
+from twin.plotting import finish, pyplot
 
 FloatArray = NDArray[np.float64]
 
@@ -235,8 +236,7 @@ class NoiseLevelResult:
 
     def plot(self, path: str | None = None):
         """Bar chart of the noise ratios per amplitude (as Fig 3.5)."""
-        import matplotlib.pyplot as plt
-
+        plt = pyplot()
         fig, ax = plt.subplots(figsize=(7, 3.8))
         names = (
             "low_frequency_nonlinearity",
@@ -266,10 +266,7 @@ class NoiseLevelResult:
             )
         ax.set_ylabel("noise ratio [-]")
         ax.legend(fontsize=7, ncol=3)
-        fig.tight_layout()
-        if path:
-            fig.savefig(path, dpi=120)
-        return fig
+        return finish(fig, path)
 
 
 def run_noise(

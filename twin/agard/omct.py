@@ -33,9 +33,10 @@ from numpy.typing import NDArray
 
 from twin.agard.session import Session
 from twin.errors import SignalError, TwinError
-from twin.frames import DOF_NAMES
+from twin.frames import DOF_NAMES, dof_index
 from twin.measurement.describing_function import ResponseMixin, describing_function, phase_deg
 from twin.measurement.measure import Measurement, driven_dof
+from twin.plotting import finish, pyplot
 
 FloatArray = NDArray[np.float64]
 ComplexArray = NDArray[np.complex128]
@@ -187,6 +188,23 @@ class OmctResult(ResponseMixin):
             out["bounds"] = {"title": bounds.title, "path": bounds.path}
         return out
 
+    def plot(self, path: str | None = None, bounds: OmctBounds | None = None):
+        """Gain and phase at the OMCT frequencies, with boundaries if given (Fig 5.12).
+
+        Parameters
+        ----------
+        path : str, optional
+            Save the figure here.
+        bounds : OmctBounds, optional
+            Boundaries to shade.
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+
+        """
+        return plot_omct([self], bounds, path)
+
     def format_table(self, bounds: OmctBounds | None = None) -> str:
         """Plain-text table."""
         inside = self.check(bounds) if bounds is not None else [None] * self.w_rad_s.size
@@ -212,8 +230,7 @@ def plot_omct(
     results: Sequence[OmctResult], bounds: OmctBounds | None = None, path: str | None = None
 ):
     """Gain and phase of several OMCT results on one figure, with boundaries (Fig 5.12)."""
-    import matplotlib.pyplot as plt
-
+    plt = pyplot()
     fig, (ax_g, ax_p) = plt.subplots(2, 1, figsize=(6.5, 6), sharex=True)
     if bounds is not None and results:
         w = np.geomspace(OMCT_RAD_S[0], OMCT_RAD_S[-1], 200)
@@ -231,10 +248,7 @@ def plot_omct(
         title += f"\nbounds: {bounds.title}"
     ax_g.set_title(title, fontsize=8)
     ax_g.legend(fontsize=7)
-    fig.tight_layout()
-    if path:
-        fig.savefig(path, dpi=120)
-    return fig
+    return finish(fig, path)
 
 
 def default_amplitude(dof: str, w_rad_s: float, platform: str, fraction: float = 0.1) -> float:
@@ -245,7 +259,7 @@ def default_amplitude(dof: str, w_rad_s: float, platform: str, fraction: float =
     """
     from twin.agard.snr import system_limit
 
-    cap = 1.0 if DOF_NAMES.index(dof) >= 3 else 0.2
+    cap = 1.0 if dof_index(dof) >= 3 else 0.2
     return min(cap, fraction * float(system_limit(platform, dof, w_rad_s / (2 * np.pi))))
 
 
@@ -282,7 +296,7 @@ def run_omct(
         ws.append(wi)
         hs.append(h)
     w_arr = np.asarray(ws)
-    analytic = cfg.frequency_response(w_arr / (2 * np.pi))[:, DOF_NAMES.index(dof)]
+    analytic = cfg.frequency_response(w_arr / (2 * np.pi))[:, dof_index(dof)]
     return OmctResult(
         dof,
         w_arr,

@@ -18,13 +18,13 @@ import matplotlib.pyplot as plt
 
 from twin.agard import df, noise_level, omct, snr, threshold
 from twin.agard.session import Session
-from twin.frames import DOF_NAMES
+from twin.frames import dof_index
 from twin.measurement.measure import Bench
 
 
 def threshold_defaults(dof: str) -> tuple[float, float]:
     """Step amplitude and length of §3.3.4: 0.1 m/s^2 or 0.075 rad/s^2, 1 s."""
-    return (0.075 if DOF_NAMES.index(dof) >= 3 else 0.1), 1.0
+    return (0.075 if dof_index(dof) >= 3 else 0.1), 1.0
 
 
 def write_report(

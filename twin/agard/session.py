@@ -9,35 +9,13 @@ measurement session.
 
 from __future__ import annotations
 
-import sys
 from collections.abc import Callable
 from pathlib import Path
 
-from twin.cli.simulate import execute
 from twin.errors import SignalLimitError
 from twin.measurement.measure import Bench, Measurement
+from twin.run_folder import execute, run_meta
 from twin.signals import DescribingSignal, StepSignal, single_sine
-
-
-def signal_meta(sig: DescribingSignal | StepSignal) -> dict[str, object]:
-    """Return the ``signal`` entry of a run's ``meta.json``: how to analyse the run."""
-    if isinstance(sig, StepSignal):
-        return {
-            "kind": "steps",
-            "dof": sig.dof,
-            "amplitude": sig.amplitude,
-            "step_s": sig.step_s,
-            "start_s": sig.start_s,
-            "levels": list(sig.levels),
-        }
-    return {
-        "kind": "periodic",
-        "dof": sig.dof,
-        "label": sig.label,
-        "frequencies_hz": [float(f) for f in sig.frequencies_hz],
-        "amplitudes": None if sig.amplitudes is None else [float(a) for a in sig.amplitudes],
-        "window_s": [float(sig.window[0]), float(sig.window[1])],
-    }
 
 
 class Session:
@@ -82,16 +60,7 @@ class Session:
         if self.progress:
             self.progress(f"run {k + 1}: {name} on {self.bench.name}")
         run = self.bench.prepare(sig.commands, k, name)
-        meta = {
-            "platform": self.bench.config.platform,
-            "platform_config": self.bench.config.to_meta(),
-            "command_rate_hz": sig.commands.rate_hz,
-            "imu": {"position_m": list(run.imu_spec.position_m), "rate_hz": run.imu_spec.rate_hz},
-            "notes": f"AGARD-AR-144 test run {name}, simulated by twin",
-            "model": self.bench.model,
-            "seed": run.seed,
-            "signal": signal_meta(sig),
-        }
+        meta = run_meta(run, f"AGARD-AR-144 test run {name}, simulated by twin", signal=sig)
         folder = None if self.out is None else self.out / "runs" / f"{k:02d}-{name}"
         try:
             sim = execute(
@@ -135,8 +104,3 @@ class Session:
             self.close()
         else:
             self.abort()
-
-
-def stderr_progress(message: str) -> None:
-    """Print progress on stderr."""
-    print(f"  {message}", file=sys.stderr)

@@ -24,7 +24,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from twin.agard.noise_level import NoiseLevelPoint, analyse_noise
 from twin.agard.session import Session
-from twin.frames import DOF_NAMES, acceleration_unit
+from twin.frames import acceleration_unit, dof_index
+from twin.plotting import finish, pyplot
 
 FloatArray = NDArray[np.float64]
 
@@ -46,7 +47,7 @@ def dof_limits(platform: str, dof: str) -> tuple[float, float, float]:
     from twin.platform.kinematics import jacobian, workspace
 
     geo, facts = load_geometry(platform), load_facts(platform)
-    k = DOF_NAMES.index(dof)
+    k = dof_index(dof)
     r = workspace(geo)[dof]
     column = np.abs(jacobian(geo, np.zeros(6))[:, k]).max()
     return (min(-r.min, r.max), facts.max_velocity / column, facts.max_acceleration / column)
@@ -116,8 +117,7 @@ class SnrResult:
 
     def plot(self, path: str | None = None, levels: Sequence[float] = (0.05, 0.1, 0.2, 0.5, 1)):
         """Contours of the noise ratio against the system limits (as Fig 3.6)."""
-        import matplotlib.pyplot as plt
-
+        plt = pyplot()
         fig, ax = plt.subplots(figsize=(6, 4.2))
         f = np.array([p.frequency_hz for p in self.points])
         a = np.array([p.amplitude for p in self.points])
@@ -140,10 +140,7 @@ class SnrResult:
         ax.set_ylabel(f"log10 amplitude [{unit}]")
         ax.set_title(f"signal-to-noise, {self.dof}: {self.source}", fontsize=9)
         ax.legend(fontsize=7, loc="lower right")
-        fig.tight_layout()
-        if path:
-            fig.savefig(path, dpi=120)
-        return fig
+        return finish(fig, path)
 
 
 def run_snr(

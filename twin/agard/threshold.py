@@ -23,8 +23,9 @@ from twin.agard.session import Session
 from twin.chain.config import MotionSystem
 from twin.chain.spline_filter import filter_spline
 from twin.errors import SignalError
-from twin.frames import DOF_NAMES, acceleration_unit
+from twin.frames import DOF_NAMES, acceleration_unit, dof_index
 from twin.measurement.measure import Measurement, driven_dof
+from twin.plotting import finish, pyplot
 from twin.signals import square_steps
 from twin.trajectory import Trajectory
 
@@ -96,7 +97,7 @@ def fit_eq_3_7(
 
 def analytic_t63(config: MotionSystem, dof: str) -> float:
     """Exact 63 % time of the configuration's Eq 5.11 acceleration step response from rest [s]."""
-    k = DOF_NAMES.index(dof)
+    k = dof_index(dof)
     delay, fb = float(config.delays_s[k]), config.breaks_hz[k]
     if fb is None:
         return delay
@@ -179,8 +180,7 @@ class ThresholdResult:
 
     def plot(self, path: str | None = None):
         """Commanded, measured and fitted responses (as Fig 3.8 / Fig 4.2)."""
-        import matplotlib.pyplot as plt
-
+        plt = pyplot()
         fig, ax = plt.subplots(figsize=(7, 3.5))
         ax.plot(self.t, self.commanded, "k-", lw=0.8, label="commanded")
         ax.plot(self.t, self.measured, lw=0.7, alpha=0.8, label="measured")
@@ -196,10 +196,7 @@ class ThresholdResult:
         ax.set_ylabel(f"{self.dof} acceleration [{unit}]")
         ax.set_title(f"dynamic threshold: {self.source}", fontsize=9)
         ax.legend(fontsize=7)
-        fig.tight_layout()
-        if path:
-            fig.savefig(path, dpi=120)
-        return fig
+        return finish(fig, path)
 
 
 def analyse_threshold(

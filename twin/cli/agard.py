@@ -10,11 +10,10 @@ from __future__ import annotations
 import argparse
 import json
 import shutil
-import sys
-from collections.abc import Callable
 from pathlib import Path
 
-from twin.frames import DOF_NAMES
+from twin.cli import common
+from twin.frames import DOF_NAMES, dof_index
 
 TESTS = ("df", "noise", "snr", "threshold", "omct")
 HELP = {
@@ -26,6 +25,19 @@ HELP = {
 }
 
 
+def _common() -> list[argparse.ArgumentParser]:
+    """Return the parent parsers every test (and the report) shares."""
+    return [
+        common.model_parent(),
+        common.overrides_parent(),
+        common.seed_parent("seed of the first run; run k uses seed + k"),
+        common.json_parent(),
+        common.out_parent("folder for the runs (twin-run/1), result.json and figures"),
+        common.rrd_parent("save every run to this Rerun recording"),
+        common.quiet_parent(),
+    ]
+
+
 def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
     """Add ``twin agard`` and its subcommands to the ``twin`` parser."""
     from twin.chain.config import config_help
@@ -35,7 +47,7 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
     )
     tests = agard.add_subparsers(dest="test", required=True, parser_class=parser_class)
     for name in TESTS:
-        p = tests.add_parser(name, help=HELP[name], description=HELP[name])
+        p = tests.add_parser(name, parents=_common(), help=HELP[name], description=HELP[name])
         p.add_argument(
             "target",
             metavar="PLATFORM_OR_CONFIG",
@@ -46,7 +58,6 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
             choices=DOF_NAMES,
             help="driven DOF (needed for a configuration; a run says its own)",
         )
-        _common(p)
         if name == "threshold":
             p.add_argument(
                 "--amplitude",
@@ -82,6 +93,7 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
         p.set_defaults(func=_cmd_test)
     rep = tests.add_parser(
         "report",
+        parents=_common(),
         help="run the whole suite and write a report folder",
         description="Run df, noise, threshold, omct and snr for each DOF and "
         "write report.json, summary.md and figures into a folder.",
@@ -94,42 +106,21 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
         default=["pitch", "heave"],
         help="DOFs (default pitch heave)",
     )
-    _common(rep)
     rep.set_defaults(func=_cmd_report)
-    demo = tests.add_parser("demo", help="the make-demo sweep: Table 5.2 DFs of MPI and SRS twins")
-    demo.add_argument("--out", default="out/demo", help="folder for figures and .rrd")
-    demo.add_argument("--quiet", action="store_true", help="no progress on stderr")
+    demo = tests.add_parser(
+        "demo",
+        parents=[common.out_parent("folder for figures and .rrd (default out/demo)"),
+                 common.quiet_parent()],
+        help="the make-demo sweep: Table 5.2 DFs of MPI and SRS twins",
+    )  # fmt: skip
     demo.set_defaults(func=_cmd_demo)
 
 
-def _common(p: argparse.ArgumentParser) -> None:
-    p.add_argument(
-        "--model", choices=("full", "reduced"), default="full", help="platform model (default full)"
-    )
-    p.add_argument("--break-hz", type=float, help="platform-filter break frequency (0: none)")
-    p.add_argument("--delay-ms", type=float, help="total motion-system delay, ms")
-    p.add_argument("--no-noise", action="store_true", help="switch the Eq 5.10 noise off")
-    p.add_argument("--ideal-imu", action="store_true", help="IMU without noise and bias")
-    p.add_argument("--seed", type=int, default=0, help="seed of the first run (default 0)")
-    p.add_argument("--json", action="store_true", help="print the result as JSON")
-    p.add_argument("--out", help="folder for the runs (twin-run/1), result.json and figures")
-    p.add_argument("--rrd", help="save every run to this Rerun recording")
-    p.add_argument("--quiet", action="store_true", help="no progress on stderr")
-
-
-def _progress(args: argparse.Namespace) -> Callable[[str], None] | None:
-    from twin.agard.session import stderr_progress
-
-    return None if args.quiet else stderr_progress
-
-
 def _bench(args: argparse.Namespace, target: str):
-    from twin.chain.simulate import default_imu
-    from twin.measurement.measure import Bench, configure
+    from twin.measurement.measure import Bench
 
-    config = configure(target, args.break_hz, args.delay_ms, False if args.no_noise else None)
-    imu = default_imu(config.platform).ideal() if args.ideal_imu else None
-    return Bench(config, args.model, args.seed, imu)
+    config = common.configured(target, args)
+    return Bench(config, args.model, args.seed, common.imu_of(config, args))
 
 
 def _simulate(args: argparse.Namespace, out: Path | None):
@@ -141,7 +132,7 @@ def _simulate(args: argparse.Namespace, out: Path | None):
     if args.dof is None:
         raise SignalError(f"give --dof for a configuration ({', '.join(DOF_NAMES)})")
     bench = _bench(args, args.target)
-    with Session(bench, out, args.rrd, _progress(args)) as s:
+    with Session(bench, out, args.rrd, common.progress(args)) as s:
         if args.test == "df":
             return df.run_df(s, args.dof), bench.config
         if args.test == "noise":
@@ -176,7 +167,7 @@ def _analyse(args: argparse.Namespace):
         return threshold.analyse_threshold(m, args.dof, fix), m.config
     w, h = omct.analyse_omct_point(m, args.dof)
     dof = DOF_NAMES[np.argmax(np.ptp(m.commands.values, axis=0))] if args.dof is None else args.dof
-    analytic = m.config.frequency_response([w / (2 * np.pi)])[:, DOF_NAMES.index(dof)]
+    analytic = m.config.frequency_response([w / (2 * np.pi)])[:, dof_index(dof)]
     return omct.OmctResult(
         dof, np.array([w]), np.array([h]), analytic, m.source, m.source
     ), m.config
@@ -232,9 +223,7 @@ def _save(out: Path, test: str, result, payload: dict, config, bounds) -> None:
     if test == "df":
         fig = result.plot(png, config=config)
     elif test == "omct":
-        from twin.agard.omct import plot_omct
-
-        fig = plot_omct([result], bounds, png)
+        fig = result.plot(png, bounds=bounds)
     else:
         fig = result.plot(png)
     plt.close(fig)
@@ -253,7 +242,7 @@ def _cmd_report(args: argparse.Namespace) -> int:
         )
     bench = _bench(args, args.target)
     out = Path(args.out or f"out/agard-{bench.config.name}-{bench.model}")
-    report = write_report(bench, args.dof, out, args.rrd, _progress(args))
+    report = write_report(bench, args.dof, out, args.rrd, common.progress(args))
     print(json.dumps(report, indent=2) if args.json else (out / "summary.md").read_text())
     return 0
 
@@ -261,10 +250,6 @@ def _cmd_report(args: argparse.Namespace) -> int:
 def _cmd_demo(args: argparse.Namespace) -> int:
     from twin.agard.demo import run_demo
 
-    text = run_demo(Path(args.out), None if args.quiet else _stderr)
+    text = run_demo(Path(args.out or "out/demo"), common.progress(args))
     print(text)
     return 0
-
-
-def _stderr(message: str) -> None:
-    print(f"  {message}", file=sys.stderr)

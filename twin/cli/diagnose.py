@@ -4,14 +4,27 @@ from __future__ import annotations
 
 import argparse
 import json
-import sys
 from pathlib import Path
+
+from twin.cli import common
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
     """Add ``twin diagnose`` to the ``twin`` parser."""
     p = sub.add_parser(
         "diagnose",
+        parents=[
+            common.model_parent(
+                "reduced",
+                "the nominal twin is simulated once per run and candidate; give --model full "
+                "for runs recorded on a platform whose own dynamics matter",
+            ),
+            common.overrides_parent(imu=False),
+            common.seed_parent("seed of the simulated noise"),
+            common.out_parent("report folder (default out/diagnose-<first run's name>)"),
+            common.json_parent("the findings"),
+            common.quiet_parent(),
+        ],
         help="compare recorded runs with the nominal twin, name the cause, extend the model",
         description="Simulate the nominal twin with the runs' own commands, compare the measured "
         "IMU signals (describing-function ratios, harmonics, residual noise), fit candidate "
@@ -20,43 +33,42 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("runs", nargs="+", metavar="RUN_DIR", help="twin-run/1 folders (same platform)")
     p.add_argument("--config", help="nominal configuration (name or twin-config/1 file); "
-                   "default: the runs' meta.json")  # fmt: skip
-    p.add_argument("--model", choices=("reduced", "full"), default="reduced",
-                   help="nominal platform model (default reduced)")  # fmt: skip
+                   "default: the runs' meta.json; the overrides below apply to it")  # fmt: skip
     p.add_argument("--validate", nargs="+", default=[], metavar="RUN_DIR",
                    help="runs only for measuring the gain (default: held-out halves)")  # fmt: skip
     p.add_argument("--save-config", metavar="FILE", help="write the extended configuration (JSON)")
-    p.add_argument("--out", help="report folder (default out/diagnose-<first run's name>)")
     p.add_argument("--max-hz", type=float, default=15.0, help="top of the band (default 15 Hz)")
     p.add_argument("--dof", nargs="+", help="DOFs to analyse (default: the driven ones)")
-    p.add_argument("--seed", type=int, default=0, help="seed of the simulated noise (default 0)")
     p.add_argument("--no-figures", action="store_true", help="skip figures and the .rrd")
-    p.add_argument("--json", action="store_true", help="print the findings as JSON")
     p.set_defaults(func=_cmd_diagnose)
 
 
-def _progress(message: str) -> None:
-    print(f"  {message}", file=sys.stderr)
+def _nominal(args: argparse.Namespace):
+    """Return the nominal configuration with the overrides (None: the runs' own, unchanged)."""
+    given = (args.break_hz, args.delay_ms, args.no_noise or None, args.resonance or None)
+    if args.config is None and all(v is None for v in given):
+        return None
+    if args.config is not None:
+        return common.configured(args.config, args)
+    from twin.measurement.measure import run_config
+
+    return common.configured(run_config(args.runs[0]), args)
 
 
 def _cmd_diagnose(args: argparse.Namespace) -> int:
     from twin.diagnose.diagnosis import diagnose
     from twin.diagnose.report import write_report
-    from twin.errors import SignalError
 
-    if args.seed < 0:
-        raise SignalError(f"--seed must be >= 0; got {args.seed}")
-    quiet = args.json
     d = diagnose(
-        args.runs, args.config, args.model, args.validate, args.max_hz, args.seed, args.dof,
-        progress=None if quiet else _progress,
+        args.runs, _nominal(args), args.model, args.validate, args.max_hz, args.seed, args.dof,
+        progress=common.progress(args),
     )  # fmt: skip
     out = Path(args.out) if args.out else Path("out") / f"diagnose-{Path(args.runs[0]).name}"
     write_report(d, out, figures=not args.no_figures, rrd=not args.no_figures)
     if args.save_config:
         d.extended_config.save(args.save_config)
     if args.json:
-        print(json.dumps(d.to_json_safe(), indent=2))
+        print(json.dumps(d.to_dict(), indent=2))
         return 0
     if not d.findings:
         print("no finding: the runs agree with the nominal model within their noise")

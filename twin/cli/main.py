@@ -13,17 +13,19 @@ from collections.abc import Sequence
 from typing import NoReturn
 
 from twin import __version__
-from twin.errors import TwinError
+from twin.cli import common
+from twin.cli.simulate import add_parser as add_simulate
+from twin.errors import TwinError, UsageError
 from twin.frames import DOF_NAMES
 
 EXIT_USAGE = 2
 
 
 class _Parser(argparse.ArgumentParser):
-    """An argument parser whose errors are one line and exit code 2."""
+    """An argument parser whose errors are :class:`UsageError` (one line, exit code 2)."""
 
     def error(self, message: str) -> NoReturn:
-        self.exit(EXIT_USAGE, f"twin: error: {message} (see `{self.prog} --help`)\n")
+        raise UsageError(f"{message} (see `{self.prog} --help`)")
 
 
 def _cmd_workspace(args: argparse.Namespace) -> int:
@@ -41,24 +43,11 @@ def _cmd_workspace(args: argparse.Namespace) -> int:
     return 0
 
 
-def _cmd_simulate(args: argparse.Namespace) -> int:
-    from twin.cli.simulate import run_to_folder
-
-    connect = None if args.connect is None else args.connect
-    run_to_folder(args.config, args.signal, args.model, args.seed, args.out, args.rrd, connect,
-                  "strict" if args.strict else "limit", args.resonance, args.overwrite,
-                  args.quiet)  # fmt: skip
-    return 0
-
-
-def _progress(message: str) -> None:
-    print(f"  {message}", file=sys.stderr)
-
-
 def _cmd_compare(args: argparse.Namespace) -> int:
     from twin.agard.compare import compare
 
-    cmp = compare(args.config, dofs=args.dofs or DOF_NAMES, progress=_progress)
+    cfg = common.configured(args.config, args)
+    cmp = compare(cfg, dofs=args.dofs or DOF_NAMES, progress=common.progress(args))
     if args.plot:
         cmp.plot(args.plot)
     print(cmp.to_json() if args.json else cmp.format_table())
@@ -70,83 +59,41 @@ def _cmd_dynamics(args: argparse.Namespace) -> int:
     from twin.platform.facts import check_platform
 
     check_platform(args.platform)
-    dyn = platform_dynamics(args.platform, dofs=args.dofs or DOF_NAMES, progress=_progress)
-    print(json.dumps(dyn.table(), indent=2) if args.json else dyn.format_table())
+    dyn = platform_dynamics(
+        args.platform, dofs=args.dofs or DOF_NAMES, progress=common.progress(args)
+    )
+    print(json.dumps(dyn.to_dict(), indent=2) if args.json else dyn.format_table())
     return 0
 
 
-def _add_simulate(sub: argparse._SubParsersAction) -> None:
-    from twin.chain.config import config_help
-    from twin.signals import BUILTIN_HELP
-
-    p = sub.add_parser(
-        "simulate",
-        help="run a configuration on a signal; write a twin-run/1 folder",
-        description="Drive a motion-system configuration (filter, delay, noise in front of the "
-        "full MuJoCo or the reduced platform) with pose commands and write the run in the "
-        "twin-run/1 format (meta.json, commands.csv, imu.csv, actuators.csv).",
-    )
-    p.add_argument("config", metavar="CONFIG", help=config_help())
-    p.add_argument(
-        "--signal",
-        required=True,
-        metavar="FILE_OR_NAME",
-        help=f"a commands.csv (any rate) or a built-in: {BUILTIN_HELP}",
-    )
-    p.add_argument(
-        "--model",
-        choices=("full", "reduced"),
-        default="full",
-        help="full rigid-body MuJoCo platform (default) or reduced Eq 5.11",
-    )
-    p.add_argument("--seed", type=int, default=0, help="seed for noise and IMU (default 0)")
-    p.add_argument(
-        "--out", metavar="DIR", help="run folder (default out/CONFIG-MODEL-SIGNAL-seedN)"
-    )
-    p.add_argument("--overwrite", action="store_true", help="replace an existing run folder")
-    view = p.add_mutually_exclusive_group()
-    view.add_argument("--rrd", metavar="FILE", help="also save a Rerun recording")
-    view.add_argument(
-        "--connect",
-        nargs="?",
-        const="",
-        metavar="URL",
-        help="stream live to a running Rerun viewer (default URL if omitted)",
-    )
-    p.add_argument(
-        "--strict",
-        action="store_true",
-        help="reject commands beyond an actuator limit instead of limiting them",
-    )
-    p.add_argument(
-        "--resonance", action="store_true", help="add the SRS resonance terms of Eq 5.12/5.13"
-    )
-    p.add_argument("--quiet", action="store_true", help="no progress or summary")
-    p.set_defaults(func=_cmd_simulate)
-
-
 def _add_analysis(sub: argparse._SubParsersAction) -> None:
+    from twin.chain.config import config_help
+
     p = sub.add_parser(
         "compare",
+        parents=[
+            common.json_parent("the comparison"),
+            common.quiet_parent(),
+            common.overrides_parent(imu=False),
+        ],
         help="full vs reduced model: describing functions per DOF (§5.5)",
         description="Drive the full and the reduced model of a configuration with the same "
         "multi-sines (Table 5.2, plus 4.5-10 Hz) in each DOF and print gain and phase "
         "differences, the equivalent delay and the time-domain RMS difference.",
     )
-    p.add_argument("config", metavar="CONFIG", help="e.g. mpi, srs, condition-8")
+    p.add_argument("config", metavar="CONFIG", help=config_help())
     p.add_argument("--dofs", nargs="+", choices=DOF_NAMES, help="DOFs (default all six)")
-    p.add_argument("--json", action="store_true", help="print JSON instead of a table")
     p.add_argument("--plot", metavar="PNG", help="save a Bode plot")
     p.set_defaults(func=_cmd_compare)
     d = sub.add_parser(
         "dynamics",
+        parents=[common.json_parent("the fits"), common.quiet_parent()],
         help="the full model's own lag per DOF beside Table 5.5",
         description="Fit a first-order lag plus delay to the full model's describing functions "
         "(no filter, delay or noise; thesis §5.5.1) and compare with Table 5.5.",
     )
     d.add_argument("platform", metavar="PLATFORM", help="mpi or srs")
     d.add_argument("--dofs", nargs="+", choices=DOF_NAMES, help="DOFs (default all six)")
-    d.add_argument("--json", action="store_true", help="print JSON instead of a table")
     d.set_defaults(func=_cmd_dynamics)
 
 
@@ -157,14 +104,14 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
     ws = sub.add_parser(
         "workspace",
+        parents=[common.json_parent("the workspace (m and deg)")],
         help="workspace per DOF (App. B.3) beside Table 5.1",
         description="Workspace per degree of freedom about neutral: each DOF alone, the others "
         "at neutral, limited by the actuator stroke (thesis App. B.3).",
     )
     ws.add_argument("platform", metavar="PLATFORM", help="mpi or srs")
-    ws.add_argument("--json", action="store_true", help="print JSON (m and deg) instead")
     ws.set_defaults(func=_cmd_workspace)
-    _add_simulate(sub)
+    add_simulate(sub)
     _add_analysis(sub)
     from twin.cli.agard import add_parser as add_agard
 
@@ -180,8 +127,8 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the ``twin`` command; return its exit code."""
-    args = build_parser().parse_args(argv)
     try:
+        args = build_parser().parse_args(argv)
         return int(args.func(args))
     except TwinError as e:
         print(f"twin: error: {e}", file=sys.stderr)

@@ -4,11 +4,18 @@ from __future__ import annotations
 
 import argparse
 import json
-import sys
 
 import numpy as np
 
+from twin.cli import common
+from twin.plotting import pyplot
+
 DEG2 = (180 / np.pi) ** 2
+
+
+def _batch() -> list[argparse.ArgumentParser]:
+    """Return the parent parsers of the batch commands (experiment, montecarlo)."""
+    return [common.seed_parent("seed of the runs"), common.json_parent(), common.quiet_parent()]
 
 
 def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
@@ -17,14 +24,21 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
 
     pilot = sub.add_parser("pilot", help="pilot-in-the-loop tasks and identification")
     cmds = pilot.add_subparsers(dest="pilot_command", required=True, parser_class=parser_class)
-    run = cmds.add_parser("run", help="fly the pitch task (§6.3) through a motion configuration")
-    run.add_argument("config", metavar="CONFIG", help=config_help())
-    run.add_argument(
-        "--model",
-        choices=("reduced", "full"),
-        default="reduced",
-        help="platform in the loop: reduced (Eq 5.11, default) or full (MuJoCo)",
+    run = cmds.add_parser(
+        "run",
+        parents=[
+            common.model_parent(
+                "reduced", "the pilot closes the loop at every sample; MuJoCo in the loop is slow"
+            ),
+            common.overrides_parent(imu=False),
+            common.seed_parent("seed of the remnant and the noise"),
+            common.out_parent("write the first run as a twin-pilot/1 CSV here", "CSV"),
+            common.rrd_parent("save e, u, theta, forcing functions and felt motion (.rrd)"),
+            common.json_parent(),
+        ],
+        help="fly the pitch task (§6.3) through a motion configuration",
     )
+    run.add_argument("config", metavar="CONFIG", help=config_help())
     run.add_argument("--runs", type=int, default=1, help="runs with fresh remnant (default 1)")
     run.add_argument(
         "--remnant",
@@ -32,33 +46,47 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
         default=0.15,
         help="remnant power over control power (default 0.15; 0: none)",
     )
-    run.add_argument("--seed", type=int, default=0)
-    run.add_argument("--out", help="write the first run as a twin-pilot/1 CSV here")
-    run.add_argument("--rrd", help="save e, u, theta, forcing functions and felt motion (.rrd)")
-    run.add_argument("--json", action="store_true")
     run.set_defaults(func=_cmd_run)
-    exp = cmds.add_parser("experiment", help="the eight Table 6.3 conditions, pilot fixed")
+    exp = cmds.add_parser(
+        "experiment",
+        parents=[
+            common.seed_parent("seed of the runs"),
+            common.json_parent(),
+            common.quiet_parent(),
+        ],
+        help="the eight Table 6.3 conditions, pilot fixed (their filter, delay and noise are the "
+        "experiment's factors: no overrides)",
+    )
     exp.add_argument("--runs", type=int, default=5, help="runs per condition (default 5)")
-    exp.add_argument("--seed", type=int, default=0)
     exp.add_argument("--plot", help="save a figure of the measures per condition (PNG)")
-    exp.add_argument("--json", action="store_true")
     exp.set_defaults(func=_cmd_experiment)
-    ide = cmds.add_parser("identify", help="FC, ARX and MLE on a twin-pilot/1 CSV")
+    ide = cmds.add_parser(
+        "identify", parents=[common.json_parent()], help="FC, ARX and MLE on a twin-pilot/1 CSV"
+    )
     ide.add_argument("csv", metavar="RUN_CSV", help="t,ft,fd,e,u,theta[,theta_felt] (rad)")
     ide.add_argument(
         "--config",
         default="condition-1",
         help="motion configuration the run was flown with (default condition-1)",
     )
-    ide.add_argument("--json", action="store_true")
     ide.set_defaults(func=_cmd_identify)
-    mc = cmds.add_parser("montecarlo", help="Chapter 2 Monte-Carlo: FC versus ARX (§2.5)")
+    mc = cmds.add_parser(
+        "montecarlo",
+        parents=[
+            common.seed_parent("seed of the runs"),
+            common.json_parent(),
+            common.quiet_parent(),
+        ],
+        help="Chapter 2 Monte-Carlo: FC versus ARX (§2.5)",
+    )
     mc.add_argument("--runs", type=int, default=1000, help="closed-loop runs (default 1000)")
     mc.add_argument("--fit-runs", type=int, default=0, help="pilot-model fits per batch")
-    mc.add_argument("--seed", type=int, default=0)
-    mc.add_argument("--json", action="store_true")
     mc.set_defaults(func=_cmd_montecarlo)
-    lead = cmds.add_parser("lead", help="vestibular lead through a configuration (§7.4)")
+    lead = cmds.add_parser(
+        "lead",
+        parents=[common.overrides_parent(imu=False), common.json_parent()],
+        help="vestibular lead through a configuration (§7.4)",
+    )
     lead.add_argument("config", metavar="CONFIG", help=config_help())
     lead.add_argument(
         "--margin-deg",
@@ -66,12 +94,7 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
         default=45.0,
         help="allowed lag behind an integrator over 0.06-2.8 Hz (default 45)",
     )
-    lead.add_argument("--json", action="store_true")
     lead.set_defaults(func=_cmd_lead)
-
-
-def _progress(message: str) -> None:
-    print(f"  {message}", file=sys.stderr)
 
 
 def _check_runs(runs: int) -> None:
@@ -82,7 +105,6 @@ def _check_runs(runs: int) -> None:
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
-    from twin.chain.config import motion_system
     from twin.errors import SignalError
     from twin.pilot.experiment import pitch_remnant_scale
     from twin.pilot.forcing import pitch_task
@@ -92,7 +114,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
     _check_runs(args.runs)
     if not 0 <= args.remnant < 1:
         raise SignalError(f"--remnant must be in [0, 1); got {args.remnant}")
-    cfg = motion_system(args.config)
+    cfg = common.configured(args.config, args)
     pilot = PitchPilot()
     scale = pitch_remnant_scale(pilot, args.remnant, args.seed) if args.remnant else 0.0
     r = simulate_pitch(pilot, cfg, args.runs, args.seed, scale, model=args.model)
@@ -155,50 +177,15 @@ def _cmd_experiment(args: argparse.Namespace) -> int:
     from twin.pilot.experiment import run_experiment
 
     _check_runs(args.runs)
-    r = run_experiment(runs=args.runs, seed=args.seed, progress=_progress, fit=True)
+    r = run_experiment(runs=args.runs, seed=args.seed, progress=common.progress(args), fit=True)
     if args.plot:
-        _plot_experiment(r, args.plot)
+        plt = pyplot()
+        plt.close(r.plot(args.plot))
     if args.json:
-        print(json.dumps({"conditions": r.conditions, "effects": r.effects}, indent=2))
+        print(json.dumps(r.to_dict(), indent=2))
     else:
         print(r.format_table())
     return 0
-
-
-def _plot_experiment(r, path: str) -> None:
-    """Measures per condition as Fig 6.5-6.9: variances, open loops, estimated parameters."""
-    import matplotlib.pyplot as plt
-
-    conds = list(r.conditions)
-    panels = [
-        ("var_e", "var(e) [deg^2] (Fig 6.5a)"),
-        ("var_u", "var(u) [deg^2] (Fig 6.5b)"),
-        ("vaf_percent", "VAF [%] (Fig 6.6)"),
-        ("crossover_d", "crossover d [rad/s] (Fig 6.7)"),
-        ("phase_margin_d", "phase margin d [deg] (Fig 6.7)"),
-        ("crossover_t", "crossover t [rad/s] (Fig 6.7)"),
-    ]
-    params = ("k_v", "t_lead", "t_lag", "k_m", "tau_v", "tau_m", "omega_nm", "zeta_nm")
-    fig, axes = plt.subplots(2, 7, figsize=(20, 5.5))
-    for ax, (m, label) in zip(axes[0], panels, strict=False):
-        ax.bar([str(c) for c in conds], [r.conditions[c].get(m, float("nan")) for c in conds])
-        ax.set_title(label, fontsize=8)
-    for ax, name in zip([*axes[0][len(panels) :], *axes[1]], params, strict=False):
-        ax.bar(
-            [str(c) for c in conds],
-            [r.conditions[c].get("estimated", {}).get(name, float("nan")) for c in conds],
-        )
-        ax.set_title(f"{name} (Fig 6.8-6.9)", fontsize=8)
-    for ax in axes.flat:
-        ax.tick_params(labelsize=7)
-    fig.suptitle(
-        "Table 6.3 conditions (x axis), pilot model fixed; estimated parameters from "
-        "each condition's first run",
-        fontsize=9,
-    )
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
 
 
 def _cmd_identify(args: argparse.Namespace) -> int:
@@ -260,23 +247,10 @@ def _cmd_identify(args: argparse.Namespace) -> int:
 
 
 def _cmd_montecarlo(args: argparse.Namespace) -> int:
-    from twin.pilot.fit import parameter_errors
-    from twin.pilot.model import RollPilot
     from twin.pilot.montecarlo import monte_carlo
 
-    r = monte_carlo(args.runs, args.seed, fit_runs=args.fit_runs, progress=_progress)
-    out = {"runs": r.runs, "omega_rad_s": r.omega_rad_s.tolist(), "arx_orders": r.orders.__dict__}
-    for resp in ("pe", "px"):
-        out[resp] = {
-            "fc_std_gain": r.sample_std_mag("fc", resp).tolist(),
-            "arx_std_gain": r.sample_std_mag("arx", resp).tolist(),
-            "arx_analytic_std_gain": r.arx_std_mag[resp].tolist(),
-            "arx_sampled_std_gain": r.arx_sampled_std_mag[resp].tolist(),
-        }
-    if args.fit_runs:
-        out["parameter_errors"] = {
-            m: parameter_errors(r.pilots[m], RollPilot()) for m in ("fc", "arx")
-        }
+    r = monte_carlo(args.runs, args.seed, fit_runs=args.fit_runs, progress=common.progress(args))
+    out = r.to_dict()
     if args.json:
         print(json.dumps(out, indent=2))
     else:
@@ -302,10 +276,9 @@ def _cmd_montecarlo(args: argparse.Namespace) -> int:
 
 
 def _cmd_lead(args: argparse.Namespace) -> int:
-    from twin.chain.config import motion_system
     from twin.pilot.lead import SENSORS, analyse_lead
 
-    cfg = motion_system(args.config)
+    cfg = common.configured(args.config, args)
     res = [analyse_lead(cfg, s, args.margin_deg) for s in SENSORS]
     if args.json:
         print(json.dumps([r.__dict__ for r in res], indent=2))

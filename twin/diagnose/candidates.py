@@ -30,7 +30,7 @@ from twin.chain.extensions import DOF_CHANNEL, EFFECTS, LINEAR, Extension
 from twin.diagnose.data import Case, Channel, simulate_measurement
 from twin.diagnose.residuals import TAPER_CORRELATION, Segment, line_bins
 from twin.errors import SignalError
-from twin.frames import DOF_NAMES
+from twin.frames import dof_index
 
 FloatArray = NDArray[np.float64]
 ComplexArray = NDArray[np.complex128]
@@ -77,7 +77,7 @@ class Model:
     def response(self, f: FloatArray) -> ComplexArray:
         """Product of the linear extensions' responses at ``f`` [Hz]."""
         h = np.ones(np.size(f), dtype=complex)
-        nominal_break = self.case.config.breaks_hz[DOF_NAMES.index(self.dof)]
+        nominal_break = self.case.config.breaks_hz[dof_index(self.dof)]
         for e in self.extensions:
             if e.effect in LINEAR:
                 h = h * e.response(f, nominal_break)
@@ -141,7 +141,7 @@ class Space:
 
 def search_space(effect: str, case: Case, dof: str, channels: Sequence[Channel]) -> Space:
     """Return the physical range searched for each effect (stated in the report)."""
-    k = DOF_NAMES.index(dof)
+    k = dof_index(dof)
     if effect == "delay":
         lo = -float(case.config.delay_s)
         return Space(("extra_delay_s",), (np.arange(lo, 0.3001, 0.002),), ((lo, 0.3),))

@@ -23,7 +23,7 @@ from twin.chain.config import MotionSystem, motion_system
 from twin.chain.imu import ImuSpec
 from twin.chain.simulate import MODELS, default_imu, prepare
 from twin.errors import RunFormatError, SignalError
-from twin.frames import DOF_NAMES
+from twin.frames import DOF_NAMES, dof_index
 from twin.measurement.measure import Measurement, from_imu, from_run
 from twin.runs import read_run
 from twin.trajectory import Trajectory
@@ -74,7 +74,7 @@ class Channel:
     @property
     def index(self) -> int:
         """DOF index."""
-        return DOF_NAMES.index(self.dof)
+        return dof_index(self.dof)
 
     @property
     def rate_hz(self) -> float:
@@ -155,13 +155,13 @@ def driven_dofs(m: Measurement, dofs: Sequence[str] | None = None) -> list[int]:
         bad = [d for d in dofs if d not in DOF_NAMES]
         if bad:
             raise SignalError(f"unknown DOF {bad[0]!r}; expected one of {', '.join(DOF_NAMES)}")
-        return [DOF_NAMES.index(d) for d in dofs]
+        return [dof_index(d) for d in dofs]
     rms = np.sqrt(np.mean(m.commanded**2, axis=0))
     if not rms.any():
         raise SignalError(f"{m.source}: the commands do not move; nothing to diagnose")
     sig = m.meta.get("signal", {})
     if sig.get("dof") in DOF_NAMES:
-        return [DOF_NAMES.index(sig["dof"])]
+        return [dof_index(sig["dof"])]
     # translations and rotations in their own units: compare within each group
     out = []
     for group in (slice(0, 3), slice(3, 6)):

@@ -11,6 +11,7 @@ Examples
 
 from __future__ import annotations
 
+import json
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -32,7 +33,8 @@ from twin.diagnose.residuals import (
     segment,
 )
 from twin.diagnose.select import BIC_MARGIN, Finding, held_out_gain, scores, select
-from twin.errors import SignalError
+from twin.errors import SignalError, UsageError
+from twin.plotting import finish, pyplot
 
 
 @dataclass(eq=False)
@@ -72,6 +74,49 @@ class DofReport:
     extended_scores: dict[str, float]
     findings: list[Finding]
     model: Model
+
+    def plot(self, path: str | None = None, max_hz: float = MAX_HZ):
+        """Plot the describing-function ratio measured / nominal, and the extended model's.
+
+        Parameters
+        ----------
+        path : str, optional
+            Save the figure here.
+        max_hz : float
+            Top of the model curve [Hz].
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+
+        """
+        plt = pyplot()
+        fig, (a1, a2) = plt.subplots(2, 1, figsize=(7, 6), sharex=True)
+        lo, hi = self.lines.ci_db()
+        db = self.lines.db
+        a1.errorbar(self.lines.f, db, yerr=[db - lo, hi - db], fmt="o",
+                    label="measured / nominal (95 % CI)")  # fmt: skip
+        a1.plot(
+            self.extended_lines.f,
+            self.extended_lines.db,
+            "s",
+            mfc="none",
+            label="measured / extended",
+        )
+        f = np.geomspace(self.lines.f.min() / 2, max_hz, 300)
+        h = self.model.response(f)
+        a1.semilogx(f, 20 * np.log10(np.abs(h)), "k-", lw=1, label="extended / nominal (model)")
+        a1.axhline(0, color="0.6", lw=0.5)
+        a1.set_ylabel("magnitude [dB]")
+        a1.legend(fontsize=8)
+        a2.errorbar(self.lines.f, self.lines.deg, yerr=self.lines.ci_deg(), fmt="o")
+        a2.plot(self.extended_lines.f, self.extended_lines.deg, "s", mfc="none")
+        a2.semilogx(f, np.degrees(np.angle(h)), "k-", lw=1)
+        a2.axhline(0, color="0.6", lw=0.5)
+        a2.set_ylabel("phase [deg]")
+        a2.set_xlabel("frequency [Hz]")
+        a1.set_title(f"{self.dof}: describing function, measured against the models")
+        return finish(fig, path, dpi=110)
 
     def to_json(self) -> dict[str, object]:
         """Return the DOF's part of ``nominal``."""
@@ -134,8 +179,8 @@ class Diagnosis:
             description=f"{cfg.name} extended by twin diagnose of {', '.join(self.runs)}",
         )
 
-    def to_json(self) -> dict[str, object]:
-        """Return the ``--json`` document: ``findings`` and ``nominal``."""
+    def _document(self) -> dict[str, object]:
+        """Return the ``--json`` document: ``findings`` and ``nominal`` (numpy values)."""
         return {
             "findings": [f.to_json() for f in self.findings],
             "nominal": {
@@ -152,9 +197,39 @@ class Diagnosis:
             "extended_config": self.extended_config.to_meta(),
         }
 
+    def to_dict(self) -> dict[str, object]:
+        """Return the ``--json`` document (``findings``, ``nominal``, ``extended_config``).
+
+        Numbers are plain Python ones and non-finite values null, ready for ``json.dumps``.
+        """
+        return _plain(self._document())  # type: ignore[return-value]
+
+    def to_json(self) -> str:
+        """Return :meth:`to_dict` as JSON text (alias)."""
+        return json.dumps(self.to_dict(), indent=2)
+
     def to_json_safe(self) -> dict[str, object]:
-        """:meth:`to_json` with plain Python numbers and non-finite values as null."""
-        return _plain(self.to_json())  # type: ignore[return-value]
+        """Alias of :meth:`to_dict` (kept for existing callers)."""
+        return self.to_dict()
+
+    def plot(self, path: str | None = None, dof: str | None = None):
+        """Plot one DOF's describing-function ratios (see :meth:`DofReport.plot`).
+
+        Parameters
+        ----------
+        path : str, optional
+            Save the figure here.
+        dof : str, optional
+            Which analysed DOF (default the first).
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+
+        """
+        if dof is not None and dof not in self.dofs:
+            raise UsageError(f"{dof!r} was not analysed; analysed: {', '.join(self.dofs)}")
+        return self.dofs[dof or next(iter(self.dofs))].plot(path, self.max_hz)
 
 
 def _plain(v: object) -> object:

@@ -21,12 +21,10 @@ from pathlib import Path
 
 import numpy as np
 
-from twin.agard.session import signal_meta
 from twin.chain.config import MotionSystem, motion_system
 from twin.chain.extensions import DOF_CHANNEL, EFFECTS, Extension
 from twin.chain.imu import ImuSpec
 from twin.chain.simulate import prepare
-from twin.cli.simulate import execute
 from twin.diagnose.candidates import Model
 from twin.diagnose.data import Case, Channel, clean_config, measurement_channels, nominal_imu
 from twin.diagnose.detect import expected_delta_bic, fisher_std
@@ -34,6 +32,7 @@ from twin.diagnose.residuals import segment
 from twin.diagnose.select import BIC_MARGIN
 from twin.errors import SignalError
 from twin.measurement.measure import from_imu
+from twin.run_folder import execute, run_meta, signal_meta
 from twin.signals import describing_signal
 
 #: Expected evidence of a drawn effect, in multiples of the naming threshold.
@@ -201,15 +200,9 @@ def record_runs(
     for number in signals:
         sig = describing_signal(number, dof, settle_s=None)
         run = prepare(truth, sig.commands, model, 7919 * seed + number)
-        meta = {
-            "platform": nominal.platform,
-            "platform_config": nominal.to_meta(),
-            "command_rate_hz": sig.commands.rate_hz,
-            "imu": {"position_m": list(run.imu_spec.position_m), "rate_hz": run.imu_spec.rate_hz},
-            "notes": f"hidden-effect run, seed {seed}",
-        }
-        if with_signal_meta:
-            meta["signal"] = signal_meta(sig)
+        meta = run_meta(
+            run, f"hidden-effect run, seed {seed}", nominal, sig if with_signal_meta else None
+        )
         folder = out / f"seed{seed}-{dof}-multisine{number}"
         execute(run, meta, folder, overwrite=True)
         folders.append(folder)

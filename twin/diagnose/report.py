@@ -14,6 +14,7 @@ import numpy as np
 
 from twin.diagnose.diagnosis import Diagnosis, DofReport
 from twin.diagnose.residuals import segment
+from twin.plotting import pyplot
 
 HALVES = "the other half of the measurement window (two-fold)"
 
@@ -115,35 +116,10 @@ def _dof_section(dof: str, r: DofReport) -> list[str]:
 
 
 def _figures(d: Diagnosis, folder: Path) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
     for dof, r in d.dofs.items():
-        fig, (a1, a2) = plt.subplots(2, 1, figsize=(7, 6), sharex=True)
-        lo, hi = r.lines.ci_db()
-        a1.errorbar(r.lines.f, r.lines.db, yerr=[r.lines.db - lo, hi - r.lines.db], fmt="o",
-                    label="measured / nominal (95 % CI)")  # fmt: skip
-        a1.plot(
-            r.extended_lines.f, r.extended_lines.db, "s", mfc="none", label="measured / extended"
-        )
-        f = np.geomspace(r.lines.f.min() / 2, d.max_hz, 300)
-        h = r.model.response(f)
-        a1.semilogx(f, 20 * np.log10(np.abs(h)), "k-", lw=1, label="extended / nominal (model)")
-        a1.axhline(0, color="0.6", lw=0.5)
-        a1.set_ylabel("magnitude [dB]")
-        a1.legend(fontsize=8)
-        a2.errorbar(r.lines.f, r.lines.deg, yerr=r.lines.ci_deg(), fmt="o")
-        a2.plot(r.extended_lines.f, r.extended_lines.deg, "s", mfc="none")
-        a2.semilogx(f, np.degrees(np.angle(h)), "k-", lw=1)
-        a2.axhline(0, color="0.6", lw=0.5)
-        a2.set_ylabel("phase [deg]")
-        a2.set_xlabel("frequency [Hz]")
-        a1.set_title(f"{dof}: describing function, measured against the models")
-        fig.tight_layout()
-        fig.savefig(folder / f"df_{dof}.png", dpi=110)
-        plt.close(fig)
+        plt.close(r.plot(str(folder / f"df_{dof}.png"), d.max_hz))
 
         fig, ax = plt.subplots(figsize=(7, 4))
         ch = d.case.of(dof)[0]
@@ -193,7 +169,7 @@ def write_report(d: Diagnosis, out: str | Path, figures: bool = True, rrd: bool 
     tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.", dir=out.parent))
     try:
         (tmp / "summary.md").write_text(summary(d))
-        (tmp / "diagnosis.json").write_text(json.dumps(d.to_json_safe(), indent=2) + "\n")
+        (tmp / "diagnosis.json").write_text(json.dumps(d.to_dict(), indent=2) + "\n")
         if figures:
             _figures(d, tmp)
         if rrd:

@@ -29,7 +29,7 @@ from twin.chain.config import MotionSystem, motion_system
 from twin.chain.imu import ImuRecord, ImuSpec, postprocess
 from twin.chain.simulate import MODELS, Run, Simulation, prepare
 from twin.errors import SignalError, UnknownPlatformError
-from twin.frames import DOF_NAMES
+from twin.frames import DOF_NAMES, dof_index
 from twin.runs import RecordedRun, read_run
 from twin.signals import check_signal
 from twin.trajectory import Trajectory
@@ -81,12 +81,18 @@ def from_imu(
     return Measurement(t, acc, measured, commands, source, config, meta)
 
 
+def run_config(run: RecordedRun | str | Path) -> MotionSystem:
+    """Return the configuration a recorded run's ``meta.json`` names."""
+    rec = run if isinstance(run, RecordedRun) else read_run(run)
+    return MotionSystem.from_meta(
+        rec.meta["platform"], rec.meta["platform_config"], f"from {rec.path}/meta.json"
+    )
+
+
 def from_run(run: RecordedRun | str | Path) -> Measurement:
     """Return the :class:`Measurement` of a recorded ``twin-run/1`` folder (validated)."""
     rec = run if isinstance(run, RecordedRun) else read_run(run)
-    config = MotionSystem.from_meta(
-        rec.meta["platform"], rec.meta["platform_config"], f"from {rec.path}/meta.json"
-    )
+    config = run_config(rec)
     imu = ImuRecord(rec.imu_t, rec.imu[:, :3], rec.imu[:, 3:])
     return from_imu(rec.commands, imu, str(rec.path), config, dict(rec.meta))
 
@@ -181,12 +187,10 @@ def check_target(target: str) -> None:
 def driven_dof(m: Measurement, dof: str | None = None) -> int:
     """Index of the driven DOF: ``dof`` if given, else the one the commands move most."""
     if dof is not None:
-        if dof not in DOF_NAMES:
-            raise SignalError(f"unknown DOF {dof!r}; expected one of {', '.join(DOF_NAMES)}")
-        return DOF_NAMES.index(dof)
+        return dof_index(dof)
     signal = m.meta.get("signal", {})
     if signal.get("dof") in DOF_NAMES:
-        return DOF_NAMES.index(signal["dof"])
+        return dof_index(signal["dof"])
     excursion = np.ptp(m.commands.values, axis=0)
     if not excursion.any():
         raise SignalError(f"{m.source}: the commands do not move; no driven DOF")

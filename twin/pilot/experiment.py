@@ -21,6 +21,7 @@ from twin.errors import SignalError
 from twin.pilot.forcing import pitch_task
 from twin.pilot.mle import fit_pitch_pilot
 from twin.pilot.pitch import PitchPilot, open_loops, simulate_pitch, variance_decomposition
+from twin.plotting import finish, pyplot
 from twin.thesis import TABLE_6_3
 
 FACTORS = ("filter", "delay", "noise")
@@ -58,6 +59,58 @@ class ExperimentResult:
 
     conditions: dict[int, dict[str, object]]
     effects: dict[str, dict[str, float]]
+
+    def to_dict(self) -> dict[str, object]:
+        """JSON-ready result: ``conditions`` and ``effects``."""
+        return {"conditions": self.conditions, "effects": self.effects}
+
+    def plot(self, path: str | None = None):
+        """Measures per condition as Fig 6.5-6.9: variances, open loops, estimated parameters.
+
+        Parameters
+        ----------
+        path : str, optional
+            Save the figure here.
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+
+        """
+        plt = pyplot()
+        conds = list(self.conditions)
+        panels = [
+            ("var_e", "var(e) [deg^2] (Fig 6.5a)"),
+            ("var_u", "var(u) [deg^2] (Fig 6.5b)"),
+            ("vaf_percent", "VAF [%] (Fig 6.6)"),
+            ("crossover_d", "crossover d [rad/s] (Fig 6.7)"),
+            ("phase_margin_d", "phase margin d [deg] (Fig 6.7)"),
+            ("crossover_t", "crossover t [rad/s] (Fig 6.7)"),
+        ]
+        params = ("k_v", "t_lead", "t_lag", "k_m", "tau_v", "tau_m", "omega_nm", "zeta_nm")
+        fig, axes = plt.subplots(2, 7, figsize=(20, 5.5))
+        for ax, (m, label) in zip(axes[0], panels, strict=False):
+            ax.bar(
+                [str(c) for c in conds], [self.conditions[c].get(m, float("nan")) for c in conds]
+            )
+            ax.set_title(label, fontsize=8)
+        for ax, name in zip([*axes[0][len(panels) :], *axes[1]], params, strict=False):
+            ax.bar(
+                [str(c) for c in conds],
+                [self.conditions[c].get("estimated", {}).get(name, float("nan")) for c in conds],
+            )
+            ax.set_title(f"{name} (Fig 6.8-6.9)", fontsize=8)
+        for ax in axes.flat:
+            ax.tick_params(labelsize=7)
+            ax.set_xlabel("condition", fontsize=7)
+        axes[0][0].set_ylabel("measure (panel titles)", fontsize=8)
+        axes[1][0].set_ylabel("estimated parameter", fontsize=8)
+        fig.suptitle(
+            "Table 6.3 conditions (x axis), pilot model fixed; estimated parameters from "
+            "each condition's first run",
+            fontsize=9,
+        )
+        return finish(fig, path, dpi=110)
 
     def format_table(self) -> str:
         """Plain-text table of the conditions and the effects."""

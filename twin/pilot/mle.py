@@ -24,6 +24,7 @@ from scipy.optimize import least_squares
 from twin.chain.config import MotionSystem
 from twin.errors import SignalError
 from twin.pilot.pitch import DISPLAY_DELAY_S, PitchPilot, aircraft, motion_response
+from twin.plotting import finish, pyplot
 
 FloatArray = NDArray[np.float64]
 PARAMETERS = ("k_v", "t_lead", "t_lag", "tau_v", "k_m", "tau_m", "omega_nm", "zeta_nm")
@@ -82,6 +83,31 @@ class PilotFit:
         p = dataclasses.asdict(self.pilot)
         return {"parameters": p, "crlb_sd": self.crlb, "vaf_percent": self.vaf_percent,
                 "residual_sd": self.residual_sd}  # fmt: skip
+
+    def plot(self, path: str | None = None):
+        """Estimated parameters with their Cramer-Rao bounds (1 sd), relative to the estimate.
+
+        Parameters
+        ----------
+        path : str, optional
+            Save the figure here.
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+
+        """
+        plt = pyplot()
+        names = list(self.crlb)
+        values = np.array([getattr(self.pilot, n) for n in names], dtype=float)
+        rel = np.array([self.crlb[n] for n in names]) / np.where(values == 0, np.nan, abs(values))
+        fig, ax = plt.subplots(figsize=(7, 3.5))
+        ax.bar(names, rel * 100)
+        ax.set_xlabel("parameter (Eq 6.5-6.7)")
+        ax.set_ylabel("CRLB sd / |estimate| [%]")
+        ax.set_title(f"pilot-model fit: VAF {self.vaf_percent:.1f} %", fontsize=9)
+        ax.tick_params(axis="x", labelsize=8)
+        return finish(fig, path)
 
 
 def fit_pitch_pilot(

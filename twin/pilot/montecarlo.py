@@ -20,10 +20,11 @@ from numpy.typing import NDArray
 from twin.errors import SignalError
 from twin.pilot.arx import ARX_RATE_HZ, ArxOrders, decimate, fit_arx, select_orders
 from twin.pilot.fc import fc_estimate
-from twin.pilot.fit import fit_pilot
+from twin.pilot.fit import fit_pilot, parameter_errors
 from twin.pilot.forcing import roll_task
 from twin.pilot.loop import remnant_scale_for, simulate_loop
 from twin.pilot.model import RollPilot
+from twin.plotting import finish, pyplot
 
 FloatArray = NDArray[np.float64]
 ComplexArray = NDArray[np.complex128]
@@ -76,6 +77,56 @@ class MonteCarloResult:
     def sample_std_mag(self, method: str, response: str) -> FloatArray:
         """Sample standard deviation of |H| over the runs."""
         return np.abs(getattr(self, method)[response]).std(axis=0, ddof=1)
+
+    def to_dict(self) -> dict[str, object]:
+        """JSON-ready result: standard deviations of |H| per method at the input frequencies.
+
+        ``parameter_errors`` (mean absolute error per parameter, Table 2.3) is included when
+        pilot models were fitted.
+        """
+        out: dict[str, object] = {
+            "runs": self.runs,
+            "omega_rad_s": self.omega_rad_s.tolist(),
+            "arx_orders": self.orders.__dict__,
+        }
+        for resp in ("pe", "px"):
+            out[resp] = {
+                "fc_std_gain": self.sample_std_mag("fc", resp).tolist(),
+                "arx_std_gain": self.sample_std_mag("arx", resp).tolist(),
+                "arx_analytic_std_gain": self.arx_std_mag[resp].tolist(),
+                "arx_sampled_std_gain": self.arx_sampled_std_mag[resp].tolist(),
+            }
+        if any(self.pilots.values()):
+            out["parameter_errors"] = {
+                m: parameter_errors(self.pilots[m], RollPilot()) for m in ("fc", "arx")
+            }
+        return out
+
+    def plot(self, path: str | None = None):
+        """Plot the standard deviation of |H| over the runs: FC against ARX (§2.5).
+
+        Parameters
+        ----------
+        path : str, optional
+            Save the figure here.
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+
+        """
+        plt = pyplot()
+        fig, axes = plt.subplots(1, 2, figsize=(9, 4), sharey=True)
+        w = self.omega_rad_s
+        for ax, resp in zip(axes, ("pe", "px"), strict=True):
+            ax.loglog(w, self.sample_std_mag("fc", resp), "o", label="FC (Monte-Carlo)")
+            ax.loglog(w, self.sample_std_mag("arx", resp), "s", label="ARX (Monte-Carlo)")
+            ax.loglog(w, self.arx_std_mag[resp], "k-", lw=0.8, label="ARX analytic (Eq 2.16)")
+            ax.set_title(f"H_{resp}: {self.runs} runs")
+            ax.set_xlabel("frequency [rad/s]")
+        axes[0].set_ylabel("standard deviation of |H| [-]")
+        axes[0].legend(fontsize=8)
+        return finish(fig, path)
 
     def sample_std_phase(self, method: str, response: str) -> FloatArray:
         """Sample standard deviation of the phase [deg] over the runs."""

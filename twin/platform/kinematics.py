@@ -180,6 +180,45 @@ class ForwardResult:
     iterations_per_sample: NDArray[np.int64] = field(repr=False)
     residual: float
 
+    def to_dict(self) -> dict[str, object]:
+        """JSON-ready result (poses as nested lists, m and rad)."""
+        return {
+            "pose": np.asarray(self.pose).tolist(),
+            "iterations": int(self.iterations),
+            "iterations_per_sample": np.asarray(self.iterations_per_sample).tolist(),
+            "residual_m": float(self.residual),
+        }
+
+    def plot(self, path: str | None = None):
+        """Plot the solved poses per DOF against the sample number (translations and angles).
+
+        Parameters
+        ----------
+        path : str, optional
+            Save the figure here.
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+
+        """
+        from twin.plotting import finish, pyplot
+
+        plt = pyplot()
+        pose = np.asarray(self.pose).reshape(-1, 6)
+        fig, (ax_t, ax_r) = plt.subplots(2, 1, figsize=(6, 5), sharex=True)
+        for k, name in enumerate(DOF_NAMES):
+            ax = ax_t if k < 3 else ax_r
+            ax.plot(pose[:, k] if k < 3 else np.degrees(pose[:, k]), ".-", label=name)
+        ax_t.set_ylabel("translation [m]")
+        ax_r.set_ylabel("rotation [deg]")
+        ax_r.set_xlabel("sample")
+        ax_t.legend(fontsize=8)
+        ax_r.legend(fontsize=8)
+        ax_t.set_title(f"forward kinematics: {self.iterations} iterations, "
+                       f"residual {self.residual:.1e} m", fontsize=9)  # fmt: skip
+        return finish(fig, path)
+
 
 def forward(
     geo: Geometry,

@@ -1,0 +1,216 @@
+"""What every ``twin`` command shares: parent parsers, overrides, progress.
+
+Parent parsers (``parents=[...]`` of a subcommand) give the same options the same spelling,
+type and help everywhere:
+
+``--json``                    print the result as JSON
+``--seed N``                  seed of the noise and the IMU (integer >= 0; default 0)
+``--out DIR``                 where results go (the command says what it writes)
+``--rrd FILE``                save a Rerun recording
+``--quiet``                   no progress on stderr
+``--model {full,reduced}``    platform model; **full by default everywhere**; a command
+                              that defaults to ``reduced`` says why in its help
+``--delay-ms``, ``--break-hz``, ``--no-noise``, ``--resonance``
+                              configuration overrides (:meth:`MotionSystem.override`)
+``--ideal-imu``               IMU without noise and bias (commands that use an IMU)
+
+Progress goes through one helper, :func:`progress`: a callable ``progress(message)`` that
+library functions take as their ``progress=`` argument; it prints on stderr only when
+stderr is a terminal and ``--quiet`` is not given.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Callable
+from typing import TYPE_CHECKING, TextIO
+
+if TYPE_CHECKING:
+    from twin.chain.config import MotionSystem
+
+#: The default platform model of every command (unless its help says why not).
+DEFAULT_MODEL = "full"
+#: The platform models (as :data:`twin.chain.simulate.MODELS`; not imported: startup stays light).
+MODELS = ("full", "reduced")
+
+
+def _parent() -> argparse.ArgumentParser:
+    return argparse.ArgumentParser(add_help=False)
+
+
+def seed_type(text: str) -> int:
+    """Parse a ``--seed``: an integer >= 0 (argparse ``type``)."""
+    try:
+        seed = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"seed must be an integer >= 0; got {text!r}") from None
+    if seed < 0:
+        raise argparse.ArgumentTypeError(f"seed must be an integer >= 0; got {seed}")
+    return seed
+
+
+def json_parent(what: str = "the result") -> argparse.ArgumentParser:
+    """Return a parent parser with ``--json``."""
+    p = _parent()
+    p.add_argument("--json", action="store_true", help=f"print {what} as JSON")
+    return p
+
+
+def seed_parent(what: str = "seed of the noise and the IMU") -> argparse.ArgumentParser:
+    """Return a parent parser with ``--seed`` (an integer >= 0, default 0)."""
+    p = _parent()
+    p.add_argument("--seed", type=seed_type, default=0, metavar="N", help=f"{what} (default 0)")
+    return p
+
+
+def out_parent(what: str, metavar: str = "DIR") -> argparse.ArgumentParser:
+    """Return a parent parser with ``--out``; ``what`` says what is written there."""
+    p = _parent()
+    p.add_argument("--out", metavar=metavar, help=what)
+    return p
+
+
+def rrd_parent(what: str = "save a Rerun recording") -> argparse.ArgumentParser:
+    """Return a parent parser with ``--rrd FILE``."""
+    p = _parent()
+    p.add_argument("--rrd", metavar="FILE", help=what)
+    return p
+
+
+def quiet_parent() -> argparse.ArgumentParser:
+    """Return a parent parser with ``--quiet``."""
+    p = _parent()
+    p.add_argument("--quiet", action="store_true", help="no progress on stderr")
+    return p
+
+
+def model_parent(default: str = DEFAULT_MODEL, why: str | None = None) -> argparse.ArgumentParser:
+    """Return a parent parser with ``--model``.
+
+    Parameters
+    ----------
+    default : str
+        ``full`` everywhere; a command that defaults to ``reduced`` must say ``why``.
+    why : str, optional
+        Why this command departs from the ``full`` default (shown in the help).
+
+    Raises
+    ------
+    ValueError
+        For a non-default default without a reason (a programming error).
+
+    """
+    if default != DEFAULT_MODEL and not why:
+        raise ValueError(f"--model defaults to {DEFAULT_MODEL}; say why {default} here")
+    note = f"default {default}" + (f": {why}" if why else "")
+    p = _parent()
+    p.add_argument(
+        "--model",
+        choices=MODELS,
+        default=default,
+        help=f"platform model: full rigid-body MuJoCo or reduced Eq 5.11 ({note})",
+    )
+    return p
+
+
+def overrides_parent(imu: bool = True) -> argparse.ArgumentParser:
+    """Return a parent parser with the configuration overrides (and ``--ideal-imu``).
+
+    Parameters
+    ----------
+    imu : bool
+        Also offer ``--ideal-imu`` (commands that measure with an IMU).
+
+    """
+    p = _parent()
+    g = p.add_argument_group("configuration overrides")
+    g.add_argument(
+        "--break-hz", type=float, metavar="HZ", help="platform-filter break frequency, Hz (0: none)"
+    )
+    g.add_argument("--delay-ms", type=float, metavar="MS", help="total motion-system delay, ms")
+    g.add_argument("--no-noise", action="store_true", help="switch the Eq 5.10 noise off")
+    g.add_argument(
+        "--resonance", action="store_true", help="add the SRS resonance terms of Eq 5.12/5.13"
+    )
+    if imu:
+        g.add_argument("--ideal-imu", action="store_true", help="IMU without noise and bias")
+    return p
+
+
+def configured(config: str | MotionSystem, args: argparse.Namespace) -> MotionSystem:
+    """Return a configuration (name, file or object) with the overrides in ``args``.
+
+    Parameters
+    ----------
+    config : str or MotionSystem
+        A configuration name, a ``twin-config/1`` file, or a configuration.
+    args : argparse.Namespace
+        Parsed options of a command with :func:`overrides_parent`.
+
+    Returns
+    -------
+    MotionSystem
+        ``config.override(...)`` with the options that were given.
+
+    """
+    from twin.chain.config import motion_system
+
+    ms = motion_system(config) if isinstance(config, str) else config
+    return ms.override(
+        args.break_hz,
+        args.delay_ms,
+        False if args.no_noise else None,
+        True if args.resonance else None,
+    )
+
+
+def imu_of(config: MotionSystem, args: argparse.Namespace):
+    """Return the IMU of ``--ideal-imu`` (None: the platform's default IMU)."""
+    if not getattr(args, "ideal_imu", False):
+        return None
+    from twin.chain.simulate import default_imu
+
+    return default_imu(config.platform).ideal()
+
+
+class Progress:
+    """Progress messages on stderr: ``progress(message)``.
+
+    Parameters
+    ----------
+    quiet : bool
+        Print nothing.
+    stream : file, optional
+        Where to print (default ``sys.stderr``); nothing is printed unless it is a terminal.
+
+    """
+
+    def __init__(self, quiet: bool = False, stream: TextIO | None = None) -> None:
+        self.stream = stream
+        self.quiet = quiet
+
+    @property
+    def enabled(self) -> bool:
+        """Whether messages are printed (not quiet, and stderr is a terminal)."""
+        stream = self.stream or sys.stderr
+        return not self.quiet and bool(getattr(stream, "isatty", lambda: False)())
+
+    def __call__(self, message: str) -> None:
+        """Print one progress message."""
+        if self.enabled:
+            print(f"  {message}", file=self.stream or sys.stderr, flush=True)
+
+
+def progress(args: argparse.Namespace | bool = False) -> Callable[[str], None]:
+    """Return the progress callback of a command (silent with ``--quiet``).
+
+    Parameters
+    ----------
+    args : argparse.Namespace or bool
+        Parsed options (``quiet`` read when present), or ``quiet`` itself.
+
+    """
+    if isinstance(args, bool):
+        return Progress(args)
+    return Progress(bool(getattr(args, "quiet", False)))

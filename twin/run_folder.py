@@ -1,0 +1,177 @@
+"""Stream a prepared run into a ``twin-run/1`` folder (and a Rerun recording).
+
+The format itself (reading, checking, :class:`~twin.runs.RunWriter`) is in :mod:`twin.runs`;
+this module is the one place where a simulated run's ``meta.json`` is built
+(:func:`run_meta`, with the signal design of :func:`signal_meta`) and where a run's chunks are
+written as they are simulated (:func:`execute`). Every command and library function that
+writes a simulated run goes through here; none of it depends on the command line.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from contextlib import nullcontext
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from twin.runs import RunWriter
+from twin.signals import DescribingSignal, StepSignal
+
+if TYPE_CHECKING:
+    from twin.chain.config import MotionSystem
+    from twin.chain.simulate import Run, Simulation
+    from twin.record import Recorder
+
+#: Progress messages of :func:`execute` per run (at most).
+PROGRESS_STEPS = 10
+
+
+def signal_meta(sig: DescribingSignal | StepSignal) -> dict[str, object]:
+    """Return the ``signal`` entry of a run's ``meta.json``: how to analyse the run.
+
+    Parameters
+    ----------
+    sig : DescribingSignal or StepSignal
+        The designed test signal the run was driven with.
+
+    Returns
+    -------
+    dict
+        ``kind`` ("periodic" or "steps"), ``dof`` and the design's parameters.
+
+    """
+    if isinstance(sig, StepSignal):
+        return {
+            "kind": "steps",
+            "dof": sig.dof,
+            "amplitude": sig.amplitude,
+            "step_s": sig.step_s,
+            "start_s": sig.start_s,
+            "levels": list(sig.levels),
+        }
+    return {
+        "kind": "periodic",
+        "dof": sig.dof,
+        "label": sig.label,
+        "frequencies_hz": [float(f) for f in sig.frequencies_hz],
+        "amplitudes": None if sig.amplitudes is None else [float(a) for a in sig.amplitudes],
+        "window_s": [float(sig.window[0]), float(sig.window[1])],
+    }
+
+
+def run_meta(
+    run: Run,
+    notes: str,
+    config: MotionSystem | None = None,
+    signal: DescribingSignal | StepSignal | None = None,
+) -> dict[str, object]:
+    """Return the ``meta.json`` of a simulated run (the one place it is built).
+
+    Parameters
+    ----------
+    run : Run
+        The prepared run (platform, model, seed, IMU and command rate come from it).
+    notes : str
+        Free text: what the run is.
+    config : MotionSystem, optional
+        The configuration ``meta.json`` names (default: the run's own; a hidden-effect run
+        names the nominal configuration instead of the one it was simulated with).
+    signal : DescribingSignal or StepSignal, optional
+        The signal design, written as the ``signal`` entry (see :func:`signal_meta`).
+
+    Returns
+    -------
+    dict
+        ``platform``, ``platform_config``, ``command_rate_hz``, ``imu``, ``notes``, ``model``,
+        ``seed`` and, with ``signal``, ``signal``.
+
+    """
+    cfg = run.config if config is None else config
+    meta: dict[str, object] = {
+        "platform": cfg.platform,
+        "platform_config": cfg.to_meta(),
+        "command_rate_hz": run.commands.rate_hz,
+        "imu": {"position_m": list(run.imu_spec.position_m), "rate_hz": run.imu_spec.rate_hz},
+        "notes": notes,
+        "model": run.model,
+        "seed": run.seed,
+    }
+    if signal is not None:
+        meta["signal"] = signal_meta(signal)
+    return meta
+
+
+def _legs_at(t_cmd: np.ndarray, t: np.ndarray, legs: np.ndarray) -> np.ndarray:
+    return np.column_stack([np.interp(t_cmd, t, legs[:, j]) for j in range(6)])
+
+
+def execute(
+    run: Run,
+    meta: dict | None = None,
+    folder: Path | None = None,
+    overwrite: bool = False,
+    recorder: Recorder | None = None,
+    progress: Callable[[str], None] | None = None,
+    offset_s: float = 0.0,
+) -> Simulation:
+    """Run all chunks, streaming them into a run folder and a recorder if given.
+
+    Parameters
+    ----------
+    run : Run
+        A prepared run.
+    meta : dict, optional
+        ``meta.json`` contents (see :func:`run_meta`; needed with ``folder``).
+    folder : Path, optional
+        Destination ``twin-run/1`` folder (written atomically by :class:`~twin.runs.RunWriter`).
+    overwrite : bool
+        Replace an existing folder.
+    recorder : Recorder, optional
+        Rerun sink.
+    progress : callable, optional
+        Called with a message about every tenth of the run.
+    offset_s : float
+        Added to the recorded times (runs of a test follow each other in one recording).
+
+    Returns
+    -------
+    Simulation
+        The whole run.
+
+    """
+    commands = run.commands
+    t_cmd = commands.t
+    responses, records = [], []
+    step = commands.duration / PROGRESS_STEPS
+    reported = 0.0
+    writer = RunWriter(folder, meta or {}, overwrite=overwrite) if folder else nullcontext()
+    with writer as w:
+        if w is not None:
+            w.write("commands.csv", t_cmd, commands.values)
+        written = 0  # command samples whose leg lengths are written
+        carry: tuple[np.ndarray, np.ndarray] | None = None  # the previous chunk's last row
+        for response, imu in run.chunks():
+            responses.append(response)
+            records.append(imu)
+            if w is not None:
+                # leg lengths at every command time, also between two chunks' samples
+                t, legs = response.t, response.legs
+                if carry is not None:
+                    t, legs = np.concatenate([carry[0], t]), np.vstack([carry[1], legs])
+                upto = int(np.searchsorted(t_cmd, t[-1] + 1e-9))
+                sel = slice(written, upto)
+                w.write("actuators.csv", t_cmd[sel], _legs_at(t_cmd[sel], t, legs))
+                written, carry = upto, (t[-1:], legs[-1:])
+                w.write("imu.csv", imu.t, np.hstack([imu.accel, imu.gyro]))
+            if recorder is not None:
+                recorder.log(response, imu, offset_s)
+            done = response.t[-1] - commands.t0
+            if progress is not None and done >= reported + step:
+                reported = done
+                progress(f"simulated {done:.1f} / {commands.duration:.1f} s")
+        if w is not None:
+            w.meta["limits"] = run.limits.to_dict()
+            w.meta["run_notes"] = run.notes
+    return run.simulation(responses, records)
