@@ -134,5 +134,5 @@ def test_chain_stream_rejects_bad_commands():
     bad[0, 1, 2, 0] = np.nan
     with pytest.raises(SignalError, match="finite"):
         chain.step(bad)
-    with pytest.raises(SignalError, match="drives the mpi platform, not .srs."):
+    with pytest.raises(SignalError, match=r"drives the mpi platform, not .srs."):
         ChainStream("mpi", ReducedPlatform("srs"), 100.0)

@@ -46,7 +46,7 @@ class Block:
     def __call__(self, sig: Trajectory) -> Trajectory: ...
 
     def __call__(self, sig: JetSignal | Trajectory) -> JetSignal | Trajectory:
-        """The whole-trajectory form: the stream run over every sample of ``sig``.
+        """Run the stream over every sample of ``sig`` (the whole-trajectory form).
 
         A :class:`~twin.trajectory.Trajectory` goes in as the jets of its cubic spline and
         comes out as the output's values.

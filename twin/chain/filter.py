@@ -9,7 +9,7 @@ from twin.errors import SignalError
 
 
 def eq_5_1(break_hz: float) -> System:
-    """The Eq 5.1 filter with break frequency ``break_hz`` as (num, den) in s."""
+    """Return the Eq 5.1 filter with break frequency ``break_hz`` as (num, den) in s."""
     if not np.isfinite(break_hz) or break_hz <= 0:
         raise SignalError(f"filter break frequency must be > 0 Hz; got {break_hz}")
     wb = 2 * np.pi * break_hz

@@ -70,6 +70,8 @@ def hermite_coefficients(j0: FloatArray, j1: FloatArray, h: float) -> FloatArray
     ----------
     j0, j1 : ndarray, shape (..., 3)
         Jets at the start and the end of an interval of length ``h``.
+    h : float
+        Interval length [s].
 
     Returns
     -------
@@ -81,7 +83,7 @@ def hermite_coefficients(j0: FloatArray, j1: FloatArray, h: float) -> FloatArray
 
 
 def _basis(s: FloatArray, order: int) -> FloatArray:
-    """Derivatives (in s) of the monomials s^0..s^5 at ``s``: shape s.shape + (order + 1, 6)."""
+    """Return the derivatives in s of s^0..s^5 at ``s``: shape s.shape + (order + 1, 6)."""
     powers = np.arange(6)
     out = np.zeros((*s.shape, order + 1, 6))
     for d in range(order + 1):
@@ -127,7 +129,7 @@ def hermite_eval(
 
 
 def held(first: FloatArray) -> FloatArray:
-    """The jet of a signal held at ``first``'s value (derivatives zero), same shape."""
+    """Return the jet of a signal held at ``first``'s value (derivatives zero), same shape."""
     out = np.zeros_like(first)
     out[..., 0] = first[..., 0]
     return out
@@ -193,11 +195,11 @@ class JetSignal:
         return (self.n - 1) / self.rate_hz
 
     def replace(self, jets: FloatArray) -> JetSignal:
-        """The same time grid with other jets."""
+        """Return the same time grid with other jets."""
         return JetSignal(self.rate_hz, jets, self.t0, self.names)
 
     def trajectory(self, run: int = 0) -> Trajectory:
-        """The values of one run as a :class:`~twin.trajectory.Trajectory`."""
+        """Return the values of one run as a :class:`~twin.trajectory.Trajectory`."""
         return Trajectory(self.rate_hz, self.jets[run, :, :, 0], self.t0, self.names)
 
     def at(self, t: ArrayLike, run: int = 0) -> FloatArray:

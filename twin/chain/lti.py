@@ -210,7 +210,7 @@ class LtiBlock(Block):
         return h
 
     def transfer_function(self, dof: int) -> Any:
-        """The DOF's system as a python-control transfer function (1 if it passes)."""
+        """Return the DOF's system as a python-control transfer function (1 if it passes)."""
         import control
 
         sys = self.systems[dof]

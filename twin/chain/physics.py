@@ -1,8 +1,8 @@
 """The full rigid-body platform: the MJCF model stepped by MuJoCo (Fig 5.4).
 
 The chain's output (jets at the command rate) is evaluated at the physics rate (1 kHz, the
-model's timestep, as the thesis simulated its model, §5.5.1) between its samples, turned into leg length and
-leg velocity references by the exact inverse kinematics (App. A), checked against the
+model's timestep, as the thesis simulated its model, §5.5.1) between its samples, turned into
+leg length and leg velocity references by the exact inverse kinematics (App. A), checked against the
 actuator limits (counted; limited or rejected), and fed to the PD of Eq 5.9 on each leg
 (position and velocity actuators in the MJCF) with the K_s static-force feedback (cabin
 gravity compensation in the MJCF). Physics runs step by step of the platform interface

@@ -55,7 +55,7 @@ class ReducedPlatform(Platform):
         self._radius = float(np.linalg.norm(self.geometry.cabin_gimbals, axis=1).max())
 
     def _advance(self, ref: Reference, state: PlatformState) -> PlatformResponse:
-        """The cabin is where the reference says; count the limits it would break."""
+        """Put the cabin where the reference says; count the limits it would break."""
         runs, m = ref.pose.shape[:2]
         flat = [a.reshape(runs * m, 6) for a in (ref.pose, ref.rate, ref.acc)]
         pose, rate, acc = flat

@@ -194,7 +194,7 @@ class Platform:
     # --- shared by both platforms -------------------------------------------------------------
 
     def _reference(self, jets: FloatArray, state: PlatformState) -> Reference:
-        """The reference at the platform's sample times covered by ``jets``."""
+        """Return the reference at the platform's sample times covered by ``jets``."""
         n = jets.shape[1]
         ratio = self.rate_hz / state.command_rate_hz
         last_cmd = state.consumed + n - 1
@@ -220,7 +220,7 @@ class Platform:
         return Reference(t, command, pose, rate, acc)
 
     def _reset_inner(self, runs: int) -> Any:
-        """The subclass's own state at rest."""
+        """Return the subclass's own state at rest."""
         return None
 
     def _advance(self, ref: Reference, state: PlatformState) -> PlatformResponse:

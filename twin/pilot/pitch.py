@@ -223,7 +223,7 @@ def simulate_pitch(
     f_t, f_d = ft(t), fd(t)
     rng = np.random.default_rng(np.random.SeedSequence([seed, 2]))
     # aircraft (Eq 6.3 with K) by zero-order hold, pilot channels by the bilinear transform
-    ad, bd, cd, _, _ = signal.cont2discrete(
+    ad, bd, _, _, _ = signal.cont2discrete(
         signal.tf2ss(STICK_GAIN * AIRCRAFT[0], AIRCRAFT[1]), dt, method="zoh"
     )
     state = np.zeros((ad.shape[0], runs))
@@ -280,7 +280,7 @@ def simulate_pitch(
 def pitch_chain(
     config: MotionSystem, model: str, rate_hz: float, runs: int, seed: int
 ) -> ChainStream:
-    """The configuration's chain with the reduced or the full platform, for ``runs`` runs.
+    """Return the configuration's chain with the reduced or the full platform, for ``runs`` runs.
 
     The reduced platform is sampled at the loop rate; the full one steps its physics through
     each loop interval. Run ``i``'s heave noise draws from ``SeedSequence([seed, 3, i])``.
@@ -294,7 +294,7 @@ def pitch_chain(
 
 
 def felt_attitude(response: PlatformResponse, station_m: float, times: FloatArray) -> FloatArray:
-    """The pitch attitude a pilot feels at the loop's sample ``times``, shape (runs, len(times)).
+    """Return the pitch attitude felt at the loop's sample ``times``, shape (runs, len(times)).
 
     The cabin's pitch, plus the heave at the pilot station that is not the commanded
     pitch-heave read as attitude, -(z - z_cmd) / l (the heave noise of Eq 5.10, and on the
