@@ -21,7 +21,7 @@ from scipy.optimize import brentq, least_squares
 
 from twin.agard.session import Session
 from twin.chain.config import MotionSystem
-from twin.chain.spline_filter import filter_spline
+from twin.chain.filter import PlatformFilter
 from twin.errors import SignalError
 from twin.frames import DOF_NAMES, acceleration_unit, dof_index
 from twin.measurement.measure import Measurement, driven_dof
@@ -217,12 +217,11 @@ def analyse_threshold(
     y = m.measured[span, k] - baseline
     fit = fit_eq_3_7(t, uu, y, fixed_delay_s)
     # the analytic model's response to the same commanded acceleration
-    acc = Trajectory(1.0 / (t[1] - t[0]), uu[:, None], float(t[0]), ("a",))
+    acc = Trajectory(1.0 / (t[1] - t[0]), np.repeat(uu[:, None], 6, axis=1), float(t[0]))
     model = m.config
-    y_a = acc.values[:, 0]
-    if model.filter_break_hz is not None:
-        wb = 2 * np.pi * model.filter_break_hz
-        y_a = filter_spline(acc, [1.0], [1 / wb**2, 2 / wb, 1.0])[:, 0]
+    y_a = acc.values[:, k]
+    if model.breaks_hz[k] is not None:
+        y_a = PlatformFilter(model.breaks_hz)(acc).values[:, k]
     y_a = np.interp(t - model.delay_s, t, y_a, left=0.0)
     analytic = fit_eq_3_7(t, uu, y_a, fixed_delay_s)
     sig = m.meta.get("signal", {})
