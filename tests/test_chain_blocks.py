@@ -116,17 +116,3 @@ def test_noise_stream_does_not_depend_on_chunking():
     for name in ("acceleration", "velocity", "position"):
         joined = np.concatenate([getattr(p, name) for p in parts])
         assert np.array_equal(joined, getattr(whole, name))
-
-
-def test_prefetch_hands_producer_errors_to_the_consumer():
-    from twin.background import prefetch
-
-    def failing():
-        yield 1
-        raise SignalError("broken at item 2")
-
-    got = []
-    with pytest.raises(SignalError, match="item 2"):
-        for x in prefetch(failing()):
-            got.append(x)
-    assert got == [1]

@@ -103,7 +103,7 @@ class Trajectory:
 
     def block_spline(self, block: int) -> CubicSpline:
         """Return the cubic spline of block ``block`` of samples, with margins (see :meth:`at`)."""
-        with _SPLINE_LOCK:  # trajectories are read from a prefetch thread too
+        with _SPLINE_LOCK:  # a trajectory may be read from several threads
             cache = self._splines
             if block not in cache:
                 lo = max(0, block * SPLINE_BLOCK - SPLINE_MARGIN)
