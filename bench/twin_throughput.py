@@ -116,9 +116,9 @@ def main():
           f"{cases['rrd']:.0f} MB")  # fmt: skip
     print(f"  sink cost over no sink ({label}): run folder {cases['folder'] / cases['none']:.2f}, "
           f".rrd {cases['rrd'] / cases['none']:.2f} (goal: ~1, the sinks stream to disk); growth "
-          f"1 min -> {label} {cases['folder'] - short:+.0f} MB = the 100 Hz commands and their "
-          f"filtered and delayed copies ({3 * 48 * 100 * (long_s - 60) / 1e6:.0f} MB), held "
-          "whole; physics, noise and IMU are streamed")  # fmt: skip
+          f"1 min -> {label} {cases['folder'] - short:+.0f} MB (the 100 Hz commands, held whole: "
+          f"{48 * 100 * (long_s - 60) / 1e6:.0f} MB; blocks, physics, noise and IMU are "
+          "streamed)")  # fmt: skip
 
 
 if __name__ == "__main__":
