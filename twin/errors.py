@@ -36,8 +36,12 @@ class ActuatorLimitError(TwinError, ValueError):
     """Commands that need an actuator beyond its stroke, velocity or acceleration (strict mode)."""
 
 
-class RunFormatError(TwinError, ValueError):
-    """A recorded-run folder that does not follow the ``twin-run/1`` format."""
+class DataError(SignalError):
+    """Recorded data (a run folder, a CSV, a pilot record) that cannot be used as given."""
+
+
+class RunFormatError(DataError):
+    """A recorded file or folder that does not follow its format (``twin-run/1``, ...)."""
 
 
 class SignalLimitError(SignalError):
@@ -50,7 +54,3 @@ class UsageError(TwinError, ValueError):
 
 class ConfigError(SignalError):
     """A motion-system configuration (name, file or override) that is malformed."""
-
-
-class DataError(SignalError):
-    """Recorded data (a run folder, a CSV, a pilot record) that cannot be used as given."""

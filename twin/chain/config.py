@@ -259,25 +259,25 @@ class MotionSystem:
 
         Raises
         ------
-        SignalError
+        ConfigError
             For a missing or malformed key (the message names it).
 
         """
         if not isinstance(cfg, dict):
-            raise SignalError(f"platform_config must be an object; got {cfg!r}")
+            raise ConfigError(f"platform_config must be an object; got {cfg!r}")
         for key in ("filter_break_hz", "delay_s", "noise"):
             if key not in cfg:
-                raise SignalError(f"platform_config lacks {key!r}")
+                raise ConfigError(f"platform_config lacks {key!r}")
         fb = cfg["filter_break_hz"]
         if fb is not None and (isinstance(fb, bool) or not isinstance(fb, int | float)):
-            raise SignalError(
+            raise ConfigError(
                 f"platform_config filter_break_hz must be a number or null; got {fb!r}"
             )
         if isinstance(cfg["delay_s"], bool) or not isinstance(cfg["delay_s"], int | float):
-            raise SignalError(f"platform_config delay_s must be a number; got {cfg['delay_s']!r}")
+            raise ConfigError(f"platform_config delay_s must be a number; got {cfg['delay_s']!r}")
         exts = cfg.get("extensions", [])
         if not isinstance(exts, list):
-            raise SignalError(f"platform_config extensions must be a list; got {exts!r}")
+            raise ConfigError(f"platform_config extensions must be a list; got {exts!r}")
         return cls(
             name=str(cfg.get("name", "recorded")),
             platform=platform,
@@ -319,11 +319,11 @@ def load_config(path: str | Path) -> MotionSystem:
     try:
         data = json.loads(path.read_text())
     except (OSError, UnicodeDecodeError) as exc:
-        raise SignalError(f"{path}: cannot read the configuration file ({exc})") from exc
+        raise ConfigError(f"{path}: cannot read the configuration file ({exc})") from exc
     except json.JSONDecodeError as exc:
-        raise SignalError(f"{path}: not valid JSON ({exc.msg}, line {exc.lineno})") from exc
+        raise ConfigError(f"{path}: not valid JSON ({exc.msg}, line {exc.lineno})") from exc
     if not isinstance(data, dict) or data.get("format") != CONFIG_FORMAT:
-        raise SignalError(
+        raise ConfigError(
             f"{path}: not a {CONFIG_FORMAT} file (its 'format' must be {CONFIG_FORMAT!r})"
         )
     if data.get("platform") not in PLATFORMS:

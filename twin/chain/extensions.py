@@ -36,7 +36,7 @@ from scipy import signal
 
 from twin.chain.block import Backlash, Block, Gain, Lead, backlash  # noqa: F401 (re-exported)
 from twin.chain.lti import LtiBlock
-from twin.errors import SignalError
+from twin.errors import ConfigError, SignalError
 from twin.frames import DOF_NAMES
 
 FloatArray = NDArray[np.float64]
@@ -87,18 +87,18 @@ class Extension:
     def __post_init__(self) -> None:
         """Check the effect, its parameters and the DOFs."""
         if self.effect not in EFFECTS:
-            raise SignalError(
+            raise ConfigError(
                 f"unknown effect {self.effect!r}; expected one of {', '.join(EFFECTS)}"
             )
         names = EFFECTS[self.effect]
         if set(self.parameters) != set(names):
-            raise SignalError(
+            raise ConfigError(
                 f"effect {self.effect!r} takes parameters {', '.join(names)}; "
                 f"got {', '.join(sorted(self.parameters)) or 'none'}"
             )
         for dof in self.dofs:
             if dof not in DOF_NAMES:
-                raise SignalError(f"unknown DOF {dof!r}; expected one of {', '.join(DOF_NAMES)}")
+                raise ConfigError(f"unknown DOF {dof!r}; expected one of {', '.join(DOF_NAMES)}")
         for name in names:
             if name != "channels":
                 self._number(name)
@@ -113,7 +113,7 @@ class Extension:
             "noise": p("scale", -1) >= 0,
         }
         if not checks.get(self.effect, True):
-            raise SignalError(f"{self.describe()}: out of range ({_RANGES[self.effect]})")
+            raise ConfigError(f"{self.describe()}: out of range ({_RANGES[self.effect]})")
         if self.effect == "sensor_filter":
             ch = self.parameters["channels"]
             if (
@@ -122,7 +122,7 @@ class Extension:
                 or not ch
                 or any(c not in IMU_CHANNELS for c in ch)
             ):
-                raise SignalError(
+                raise ConfigError(
                     f"sensor_filter channels must be a non-empty list of {', '.join(IMU_CHANNELS)};"
                     f" got {ch!r}"
                 )
@@ -130,9 +130,9 @@ class Extension:
     def _number(self, name: str) -> float:
         v = self.parameters[name]
         if isinstance(v, bool) or not isinstance(v, int | float | np.floating | np.integer):
-            raise SignalError(f"{self.effect} parameter {name} must be a number; got {v!r}")
+            raise ConfigError(f"{self.effect} parameter {name} must be a number; got {v!r}")
         if not np.isfinite(v):
-            raise SignalError(f"{self.effect} parameter {name} must be finite; got {v}")
+            raise ConfigError(f"{self.effect} parameter {name} must be finite; got {v}")
         return float(v)
 
     def value(self, name: str, default: float = 0.0) -> float:
@@ -162,15 +162,15 @@ class Extension:
 
     @classmethod
     def from_json(cls, data: object) -> Extension:
-        """Parse the JSON form (raises :class:`SignalError` on anything malformed)."""
+        """Parse the JSON form (raises :class:`~twin.errors.ConfigError` on anything malformed)."""
         if not isinstance(data, Mapping) or "effect" not in data or "parameters" not in data:
-            raise SignalError(f"an extension needs 'effect' and 'parameters'; got {data!r}")
+            raise ConfigError(f"an extension needs 'effect' and 'parameters'; got {data!r}")
         pars = data["parameters"]
         if not isinstance(pars, Mapping):
-            raise SignalError(f"extension parameters must be an object; got {pars!r}")
+            raise ConfigError(f"extension parameters must be an object; got {pars!r}")
         dofs = data.get("dofs", [])
         if not isinstance(dofs, list | tuple):
-            raise SignalError(f"extension dofs must be a list; got {dofs!r}")
+            raise ConfigError(f"extension dofs must be a list; got {dofs!r}")
         pars = {k: (tuple(v) if isinstance(v, list) else v) for k, v in pars.items()}
         return cls(str(data["effect"]), pars, tuple(dofs))
 
