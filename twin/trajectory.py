@@ -34,8 +34,35 @@ SPLINE_BLOCK, SPLINE_MARGIN = 4096, 48
 _SPLINE_LOCK = threading.Lock()
 
 
+class UniformGrid:
+    """Sample times of a uniformly sampled signal (``n``, ``rate_hz`` and ``t0`` given)."""
+
+    rate_hz: float
+    t0: float
+
+    @property
+    def n(self) -> int:  # pragma: no cover - every subclass defines it
+        """Number of samples."""
+        raise NotImplementedError
+
+    @property
+    def dt(self) -> float:
+        """Sample period [s]."""
+        return 1.0 / self.rate_hz
+
+    @property
+    def t(self) -> FloatArray:
+        """Sample times [s]."""
+        return self.t0 + np.arange(self.n) / self.rate_hz
+
+    @property
+    def duration(self) -> float:
+        """Time from the first to the last sample [s]."""
+        return (self.n - 1) / self.rate_hz
+
+
 @dataclass(frozen=True, eq=False)
-class Trajectory:
+class Trajectory(UniformGrid):
     """A uniformly sampled signal.
 
     Attributes
@@ -81,21 +108,6 @@ class Trajectory:
     def n(self) -> int:
         """Number of samples."""
         return self.values.shape[0]
-
-    @property
-    def dt(self) -> float:
-        """Sample period [s]."""
-        return 1.0 / self.rate_hz
-
-    @property
-    def t(self) -> FloatArray:
-        """Sample times [s]."""
-        return self.t0 + np.arange(self.n) / self.rate_hz
-
-    @property
-    def duration(self) -> float:
-        """Time from the first to the last sample [s]."""
-        return (self.n - 1) / self.rate_hz
 
     def replace(self, values: ArrayLike) -> Trajectory:
         """Return a trajectory on the same time grid with other values."""

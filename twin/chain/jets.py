@@ -15,7 +15,7 @@ in open loop, or of the simulated aircraft in a closed loop (:mod:`twin.pilot.pi
 Examples
 --------
 >>> import numpy as np
->>> from twin.trajectory import Trajectory
+>>> from twin.trajectory import Trajectory, UniformGrid
 >>> t = np.arange(101) / 100.0
 >>> sig = JetSignal.from_trajectory(Trajectory(100.0, np.outer(t**2, np.ones(6))))
 >>> sig.jets.shape, round(float(sig.jets[0, 50, 0, 2]), 6)   # d2/dt2 of t^2
@@ -32,7 +32,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from twin.errors import SignalError
 from twin.frames import DOF_NAMES
-from twin.trajectory import Trajectory
+from twin.trajectory import Trajectory, UniformGrid
 
 FloatArray = NDArray[np.float64]
 
@@ -136,7 +136,7 @@ def held(first: FloatArray) -> FloatArray:
 
 
 @dataclass(frozen=True, eq=False)
-class JetSignal:
+class JetSignal(UniformGrid):
     """A uniformly sampled signal with its first two derivatives, for one or several runs.
 
     Attributes
@@ -183,16 +183,6 @@ class JetSignal:
     def runs(self) -> int:
         """Number of runs."""
         return self.jets.shape[0]
-
-    @property
-    def t(self) -> FloatArray:
-        """Sample times [s]."""
-        return self.t0 + np.arange(self.n) / self.rate_hz
-
-    @property
-    def duration(self) -> float:
-        """Time from the first to the last sample [s]."""
-        return (self.n - 1) / self.rate_hz
 
     def replace(self, jets: FloatArray) -> JetSignal:
         """Return the same time grid with other jets."""
