@@ -95,7 +95,7 @@ def test_clean_runs_yield_no_finding(tmp_path):
 
 @pytest.mark.slow
 def test_clean_runs_false_finding_rate(tmp_path):
-    """40 clean cases: a finding in at most 5 % (the issue's >= 95 % clean)."""
+    """40 clean cases: a finding in at most 5 % (at least 95 % of clean cases give no finding)."""
     found = {s: _clean_finds(s, tmp_path / str(s)) for s in range(100, 140)}
     bad = {s: f for s, f in found.items() if f}
     assert len(bad) <= 2, bad

@@ -25,7 +25,7 @@ LINEAR_CASES = [
 ]
 
 
-def test_vocabulary_is_the_issue_s():
+def test_vocabulary_is_the_fixed_set_of_effects():
     assert dict(EFFECTS) == {
         "delay": ("extra_delay_s",), "gain": ("gain",), "platform_filter": ("break_hz",),
         "resonance": ("frequency_hz", "damping"), "lead": ("time_constant_s",),
