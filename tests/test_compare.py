@@ -8,6 +8,9 @@ from twin.frames import DOF_NAMES
 from twin.platform.facts import load_facts
 from twin.thesis import TABLE_5_5
 
+# the module fixtures are built once: keep the module on one xdist worker
+pytestmark = pytest.mark.xdist_group("compare")
+
 
 @pytest.fixture(scope="module")
 def mpi_dynamics():

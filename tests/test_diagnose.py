@@ -84,13 +84,23 @@ def _clean_finds(seed: int, tmp_path) -> list[str]:
     return [f.extension.describe() for f in d.findings]
 
 
-def test_clean_runs_yield_no_finding(tmp_path):
-    """Four clean cases (MPI/SRS, heave/pitch) in the default suite."""
-    assert {clean(s).config.name + clean(s).dof for s in (100, 101, 102, 103)} == {
+CLEAN_SEEDS = (100, 101, 102, 103)
+
+
+def test_the_clean_seeds_cover_mpi_srs_heave_pitch():
+    assert {clean(s).config.name + clean(s).dof for s in CLEAN_SEEDS} == {
         "srspitch", "mpipitch", "mpiheave", "srsheave"
     }  # fmt: skip
-    found = {s: _clean_finds(s, tmp_path / str(s)) for s in (100, 101, 102, 103)}
-    assert all(not f for f in found.values()), found
+
+
+@pytest.mark.parametrize(
+    "seed",  # two clean cases in the default suite (one per platform), all four in the slow one
+    [s if s in (100, 101) else pytest.param(s, marks=pytest.mark.slow) for s in CLEAN_SEEDS],
+)
+def test_clean_runs_yield_no_finding(seed, tmp_path):
+    """Clean cases (MPI/SRS, heave/pitch): no finding."""
+    found = _clean_finds(seed, tmp_path)
+    assert not found, found
 
 
 @pytest.mark.slow
@@ -104,24 +114,25 @@ def test_clean_runs_false_finding_rate(tmp_path):
 # --- the thesis' own cases -----------------------------------------------------------------
 
 
-def test_2008_mpi_software_against_the_35_ms_nominal_is_a_65_ms_delay(tmp_path):
+@pytest.mark.parametrize(
+    ("dof", "seed"),  # pitch in the default suite, heave (the same check) in the slow one
+    [("pitch", 11), pytest.param("heave", 12, marks=pytest.mark.slow)],
+)
+def test_2008_mpi_software_against_the_35_ms_nominal_is_a_65_ms_delay(dof, seed, tmp_path):
     """Ch 3 / §5.5.2: the MPI ran with 100 ms before its software update; nominal 35 ms.
 
     Pitch: within 5 ms. Heave behind the 1 Hz filter is noisier (the diagnosis reports a
     Cramér-Rao sd of about 5 ms there): within three of its own standard deviations.
     """
-    for dof, seed in (("pitch", 11), ("heave", 12)):
-        runs = record_runs(
-            motion_system("mpi-2008"), motion_system("mpi"), dof, tmp_path / dof, seed
-        )
-        d = diagnose(runs)
-        top = d.findings[0]
-        assert top.extension.effect == "delay"
-        sd = top.evidence["parameter_std"]["extra_delay_s"]
-        tol = 0.005 if dof == "pitch" else 3 * sd
-        assert top.extension.value("extra_delay_s") == pytest.approx(0.065, abs=tol), (dof, sd)
-        # the 2008 software had no noise model either: at most that, named after the delay
-        assert [f.extension.effect for f in d.findings[1:]] in ([], ["noise"])
+    runs = record_runs(motion_system("mpi-2008"), motion_system("mpi"), dof, tmp_path, seed)
+    d = diagnose(runs)
+    top = d.findings[0]
+    assert top.extension.effect == "delay"
+    sd = top.evidence["parameter_std"]["extra_delay_s"]
+    tol = 0.005 if dof == "pitch" else 3 * sd
+    assert top.extension.value("extra_delay_s") == pytest.approx(0.065, abs=tol), (dof, sd)
+    # the 2008 software had no noise model either: at most that, named after the delay
+    assert [f.extension.effect for f in d.findings[1:]] in ([], ["noise"])
 
 
 def test_srs_resonance_of_eq_5_12_against_an_ideal_srs(tmp_path):
@@ -181,6 +192,7 @@ def delay_runs(tmp_path_factory):
     return runs, val
 
 
+@pytest.mark.xdist_group("delay_runs")  # shares the module fixture on one worker
 def test_cli_json_report_config_and_validation(delay_runs, tmp_path, capsys):
     runs, val = delay_runs
     cfg = tmp_path / "mpi-measured.json"
@@ -216,6 +228,7 @@ def test_no_finding_exits_zero_and_says_so(tmp_path, capsys):
     assert "no finding" in capsys.readouterr().out
 
 
+@pytest.mark.xdist_group("delay_runs")  # shares the module fixture on one worker
 def test_malformed_runs_exit_2_with_one_line(tmp_path, delay_runs, capsys):
     assert main(["diagnose", str(tmp_path / "missing")]) == 2
     err = capsys.readouterr().err.strip()
@@ -233,6 +246,7 @@ def test_malformed_runs_exit_2_with_one_line(tmp_path, delay_runs, capsys):
     assert not (tmp_path / "out").exists()
 
 
+@pytest.mark.xdist_group("delay_runs")  # shares the module fixture on one worker
 def test_same_seed_same_diagnosis(delay_runs):
     a = diagnose(delay_runs[0][:1], seed=3).to_json_safe()
     b = diagnose(delay_runs[0][:1], seed=3).to_json_safe()

@@ -11,6 +11,9 @@ from twin.errors import RunFormatError
 from twin.record import read_entities
 from twin.runs import read_run
 
+# the module fixtures are built once: keep the module on one xdist worker
+pytestmark = pytest.mark.xdist_group("runs")
+
 
 @pytest.fixture(scope="module")
 def run_dir(tmp_path_factory):
