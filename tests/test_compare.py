@@ -8,16 +8,17 @@ from twin.frames import DOF_NAMES
 from twin.platform.facts import load_facts
 from twin.thesis import TABLE_5_5
 
-# the module fixtures are built once: keep the module on one xdist worker
+# the fixtures are built once per session (module scope would rebuild them when another
+# module's tests run in between) and the module stays on one xdist worker
 pytestmark = pytest.mark.xdist_group("compare")
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def mpi_dynamics():
     return platform_dynamics("mpi")
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def mpi_comparison():
     return compare("mpi", signals=(1, 2))
 

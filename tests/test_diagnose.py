@@ -182,7 +182,7 @@ def test_full_model_as_the_nominal(tmp_path):
 # --- CLI, Python API details -----------------------------------------------------------------
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")  # once per session: its tests are one xdist group
 def delay_runs(tmp_path_factory):
     tmp = tmp_path_factory.mktemp("delay")
     mpi = motion_system("mpi")

@@ -11,11 +11,12 @@ from twin.errors import RunFormatError
 from twin.record import read_entities
 from twin.runs import read_run
 
-# the module fixtures are built once: keep the module on one xdist worker
+# the fixture is built once per session (module scope would rebuild it when another module's
+# tests run in between) and the module stays on one xdist worker
 pytestmark = pytest.mark.xdist_group("runs")
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def run_dir(tmp_path_factory):
     base = tmp_path_factory.mktemp("runs")
     out, rrd = base / "run", base / "run.rrd"
