@@ -8,17 +8,13 @@ from twin.frames import DOF_NAMES
 from twin.platform.facts import load_facts
 from twin.thesis import TABLE_5_5
 
-# the fixtures are built once per session (module scope would rebuild them when another
-# module's tests run in between) and the module stays on one xdist worker
-pytestmark = pytest.mark.xdist_group("compare")
 
-
-@pytest.fixture(scope="session")
+@pytest.fixture(scope="module")
 def mpi_dynamics():
     return platform_dynamics("mpi")
 
 
-@pytest.fixture(scope="session")
+@pytest.fixture(scope="module")
 def mpi_comparison():
     return compare("mpi", signals=(1, 2))
 

@@ -11,12 +11,8 @@ from twin.errors import RunFormatError
 from twin.record import read_entities
 from twin.runs import read_run
 
-# the fixture is built once per session (module scope would rebuild it when another module's
-# tests run in between) and the module stays on one xdist worker
-pytestmark = pytest.mark.xdist_group("runs")
 
-
-@pytest.fixture(scope="session")
+@pytest.fixture(scope="module")
 def run_dir(tmp_path_factory):
     base = tmp_path_factory.mktemp("runs")
     out, rrd = base / "run", base / "run.rrd"
