@@ -20,7 +20,7 @@ $(NBSTAMP): $(STAMP)
 demo: $(STAMP)
 	$(BIN)/twin agard demo --out out/demo
 	# a "measured" SRS (its IMU filters the gyros) diagnosed against the nominal SRS
-	for n in 1 2; do $(BIN)/twin simulate models/simona_srs/srs-imu-filtered.json --quiet \
+	for n in 1 2; do $(BIN)/twin simulate notebooks/data/srs-imu-filtered.json --quiet \
 	  --signal multisine$$n-pitch --model reduced --seed $$n --overwrite \
 	  --out out/demo/recorded-pitch-$$n || exit 1; done
 	$(BIN)/twin diagnose out/demo/recorded-pitch-1 out/demo/recorded-pitch-2 --config srs \

@@ -1,4 +1,4 @@
-"""Wall time of the Table 5.2 describing-function sweep (issue 4 target), measured in one run.
+"""Wall time of the Table 5.2 describing-function sweep (target <= 5 s), measured in one run.
 
 Two multi-sine runs (signals 1 and 2, with the Eq 3.3 pre-measurement) in pitch and in heave,
 four runs and 200 s of simulated time, IMU post-processing and analysis included. Prints the

@@ -1,4 +1,4 @@
-"""Wall time of diagnosing one 60 s run against the reduced model (issue 6 target: <= 10 s).
+"""Wall time of diagnosing one 60 s run against the reduced model (target: <= 10 s).
 
 The run: Table 5.2 signal 1 in pitch on the MPI (60 s), recorded from the twin with a hidden
 30 ms extra delay and the nominal noise. Timed: ``diagnose`` (nominal twin and 8 noise

@@ -2,8 +2,8 @@
 
 Prints samples per second for inverse kinematics, Jacobian and forward kinematics on a 10 s,
 1 kHz trajectory, the ratio of vectorised IK to a per-sample Python loop, and the full model's
-raw `mj_step` real-time factor at its 1 kHz physics rate (the baseline issue 3's twin is
-measured against).
+raw `mj_step` real-time factor at its 1 kHz physics rate (the baseline the twin's
+throughput is measured against).
 """
 
 import time

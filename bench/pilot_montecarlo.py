@@ -1,4 +1,4 @@
-"""Chapter 2 Monte-Carlo throughput (issue 5 target), measured in one run.
+"""Chapter 2 Monte-Carlo throughput (target: 10,000 runs in <= 60 s), measured in one run.
 
 10,000 closed-loop runs of the roll task with fresh remnant, each identified with the FC
 method and a MISO ARX model (structure chosen once by FPE): wall time (goal <= 60 s on this

@@ -1,4 +1,4 @@
-"""Twin throughput and memory, measured in one run (issue 3 targets).
+"""Twin throughput and memory, measured in one run (the goals are listed below).
 
 Prints, per platform:
 - full twin throughput (chain + MuJoCo rollout + IMU, physics steps/s) / raw ``mj_step``

@@ -25,7 +25,7 @@ LINEAR_CASES = [
 ]
 
 
-def test_vocabulary_is_the_issue_s():
+def test_vocabulary_is_the_fixed_set_of_effects():
     assert dict(EFFECTS) == {
         "delay": ("extra_delay_s",), "gain": ("gain",), "platform_filter": ("break_hz",),
         "resonance": ("frequency_hz", "damping"), "lead": ("time_constant_s",),
@@ -127,3 +127,14 @@ def test_malformed_configuration_files_are_refused(tmp_path, content, error, mat
     path.write_text(content)
     with pytest.raises(error, match=match):
         motion_system(str(path))
+
+
+def test_the_demo_s_measured_configuration_loads():
+    """`make demo` simulates notebooks/data/srs-imu-filtered.json as a "measured" SRS."""
+    from pathlib import Path
+
+    path = Path(__file__).parents[1] / "notebooks" / "data" / "srs-imu-filtered.json"
+    ms = motion_system(str(path))
+    assert load_config(path).platform == "srs"
+    (filt,) = ms.of("sensor_filter")
+    assert filt.value("cutoff_hz") == pytest.approx(3.0)

@@ -11,7 +11,7 @@ from twin.platform.facts import PLATFORMS, load_model, model_dir, model_path
 from twin.platform.geometry import load_geometry
 
 PLATFORM_NAMES = list(PLATFORMS)
-LOOP_RESIDUAL_LIMIT = 1e-4  # m, issue 2
+LOOP_RESIDUAL_LIMIT = 1e-4  # m, largest allowed gap in a closed leg loop
 
 
 def equality_residual(data: mujoco.MjData) -> float:

@@ -17,7 +17,7 @@ from twin.platform.workspace import relative_errors
 
 def test_srs_workspace_reproduces_every_table_5_1_range_within_1_percent():
     # Table 5.1, SRS column: surge 2240 mm, sway 2062 mm, heave 1314 mm, roll +-25.9 deg,
-    # pitch +24.3/-23.7 deg, yaw +-41.6 deg; tolerance 1 % (issue 2)
+    # pitch +24.3/-23.7 deg, yaw +-41.6 deg; tolerance 1 %
     errors = relative_errors(workspace(load_geometry("srs")), "srs")
     assert max(abs(e) for e in errors.values()) < 0.01, errors
 

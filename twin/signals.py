@@ -13,7 +13,7 @@ run.
 Examples
 --------
 >>> sig = describing_signal(2, "pitch")
->>> sig.commands.rate_hz, sig.window, sig.frequencies_hz[-1]
+>>> sig.commands.rate_hz, sig.window, float(sig.frequencies_hz[-1])
 (100.0, (7.0, 27.0), 7.1)
 
 """

@@ -9,7 +9,7 @@ Examples
 --------
 >>> import numpy as np
 >>> tr = Trajectory(rate_hz=100.0, values=np.zeros((201, 6)))
->>> tr.duration, tr.t[-1]
+>>> tr.duration, float(tr.t[-1])
 (2.0, 2.0)
 
 """

@@ -1,1 +1,1 @@
-"""AGARD-AR-144 measurements (describing functions first; more come with issue 4)."""
+"""AGARD-AR-144 measurements: describing function, noise level, dynamic threshold, OMCT, SNR."""

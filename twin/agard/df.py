@@ -9,9 +9,10 @@ DOFs. A pure delay is fitted to the phase on top of the configuration's known dy
 
 Examples
 --------
+>>> from twin.agard.session import Session
 >>> from twin.measurement.measure import Bench, configure
->>> res = run_df(Bench(configure("mpi"), "reduced"), "heave", signals=(2,))  # doctest: +SKIP
->>> round(res.delay_s * 1e3)  # doctest: +SKIP
+>>> res = run_df(Session(Bench(configure("mpi"), "reduced")), "pitch", signals=(1,))
+>>> round(res.delay_s * 1e3)
 35
 
 """
