@@ -47,7 +47,17 @@ def _hidden(seed: int, effect: str, tmp_path):
     return h, diagnose(record(h, tmp_path), seed=seed)
 
 
-@pytest.mark.parametrize("effect", list(EFFECTS))
+#: Effects whose diagnosis simulates the twin inside the fit (backlash: non-linear) or many
+#: noise realisations (noise): 20-40 s each, so their one-seed case runs with the slow suite
+#: (the eight-seed test below covers them too); the extension blocks themselves are tested in
+#: test_diagnose_extensions.py and test_chain_stream.py.
+SLOW_EFFECTS = ("backlash", "noise")
+
+
+@pytest.mark.parametrize(
+    "effect",
+    [pytest.param(e, marks=pytest.mark.slow) if e in SLOW_EFFECTS else e for e in EFFECTS],
+)
 def test_a_hidden_effect_is_named_and_its_parameter_recovered(effect, tmp_path):
     """One seed per effect type: named first; delay within 5 ms, others within 20 %."""
     h, d = _hidden(1000 * list(EFFECTS).index(effect), effect, tmp_path)
