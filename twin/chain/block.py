@@ -193,11 +193,20 @@ class Backlash(Block):
         y = x[:, 0].copy() if state is None else state.copy()
         half = 0.5 * self.play
         moving = np.zeros(x.shape, dtype=bool)
-        for i in range(x.shape[1]):
-            up, down = x[:, i] - y > half, y - x[:, i] > half
-            y = np.where(up, x[:, i] - half, np.where(down, x[:, i] + half, y))
-            moving[:, i] = up | down
-            out[:, i, cols, 0] = y
+        ys = np.empty(x.shape)
+        for r in range(x.shape[0]):  # y = clamp(y, x - half, x + half), on Python floats
+            for c in range(x.shape[2]):
+                v, col = float(y[r, c]), ys[r, :, c]
+                for i, xi in enumerate(x[r, :, c].tolist()):
+                    if xi - v > half:
+                        v = xi - half
+                        moving[r, i, c] = True
+                    elif v - xi > half:
+                        v = xi + half
+                        moving[r, i, c] = True
+                    col[i] = v
+                y[r, c] = v
+        out[:, :, cols, 0] = ys
         rest = out[:, :, cols, 1:]
         rest[~moving] = 0.0
         out[:, :, cols, 1:] = rest

@@ -108,7 +108,7 @@ class MotionSystem:
 
     @property
     def noise_scale(self) -> float:
-        """Factor on every noise source (product of the ``noise`` extensions)."""
+        """Factor on the motion noise (product of the ``noise`` extensions; not the IMU's)."""
         return float(np.prod([e.value("scale") for e in self.of("noise")]))
 
     @property

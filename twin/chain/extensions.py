@@ -16,8 +16,9 @@ effect              parameters                      block
                                                     named channels (ax ay az p q r), noise included
 ``backlash``        ``play``                        dead band of width ``play`` [m or rad] on the
                                                     platform input (after filter and delay)
-``noise``           ``scale``                       every noise source (Eq 5.10 and the IMU's)
-                                                    times ``scale``
+``noise``           ``scale``                       the motion noise (Eq 5.10) times ``scale``
+                                                    (the IMU's own noise belongs to the IMU:
+                                                    :class:`~twin.chain.imu.ImuSpec`)
 ==================  ==============================  =============================================
 
 Command-side blocks act on the platform input in the order of the table (after the

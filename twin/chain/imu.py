@@ -92,8 +92,19 @@ class ImuSpec:
 
     def ideal(self) -> ImuSpec:
         """Return the same IMU without noise and bias."""
+        return self.with_noise(0.0)
+
+    def with_noise(self, scale: float) -> ImuSpec:
+        """Return the same IMU with its noise and bias standard deviations times ``scale``.
+
+        A better (``scale`` < 1) or a worse unit than the data sheet's.
+        """
+        k = float(scale)
+        if not np.isfinite(k) or k < 0:
+            raise SignalError(f"IMU noise scale must be a finite number >= 0; got {scale!r}")
         return ImuSpec(self.position_m, self.rate_hz, self.accel_range, self.gyro_range,
-                       0.0, 0.0, 0.0, 0.0)  # fmt: skip
+                       self.accel_noise_sd * k, self.gyro_noise_sd * k,
+                       self.accel_bias_sd * k, self.gyro_bias_sd * k)  # fmt: skip
 
 
 @dataclass(frozen=True, eq=False)

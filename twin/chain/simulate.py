@@ -11,7 +11,6 @@ Examples
 
 from __future__ import annotations
 
-import dataclasses
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 
@@ -214,11 +213,6 @@ def prepare(
             f"({plat.own_lag_s.max() * 1e3:.1f} ms) in some DOFs; no delay added there"
         )
     spec = imu if imu is not None else default_imu(ms.platform)
-    if ms.noise_scale != 1.0:
-        k = ms.noise_scale
-        spec = dataclasses.replace(
-            spec, accel_noise_sd=spec.accel_noise_sd * k, gyro_noise_sd=spec.gyro_noise_sd * k
-        )
     noise = ms.noise_block(spec.rate_hz)
     limits = LimitReport(plat.limits.mode, plat.rate_hz)
     return Run(ms, plat.kind, int(seed), commands, spec, limits, notes, plat, noise)

@@ -27,9 +27,11 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         ],
         help="compare recorded runs with the nominal twin, name the cause, extend the model",
         description="Simulate the nominal twin with the runs' own commands, compare the measured "
-        "IMU signals (describing-function ratios, harmonics, residual noise), fit candidate "
-        "extensions (delay, gain, platform_filter, resonance, lead, sensor_filter, backlash, "
-        "noise), name those the data support (BIC) and measure their gain on held-out data.",
+        "IMU signals (describing-function ratios with the measurement's own noise, harmonics, "
+        "residual noise), fit every extension and pair of extensions (delay, gain, "
+        "platform_filter, resonance, lead, sensor_filter, backlash) jointly, judge the noise "
+        "(motion noise a cause, the IMU's a nuisance), name what the data support (BIC, "
+        "held-out line error), and state what the runs could have shown.",
     )
     p.add_argument("runs", nargs="+", metavar="RUN_DIR", help="twin-run/1 folders (same platform)")
     p.add_argument("--config", help="nominal configuration (name or twin-config/1 file); "
@@ -71,15 +73,27 @@ def _cmd_diagnose(args: argparse.Namespace) -> int:
         print(json.dumps(d.to_dict(), indent=2))
         return 0
     if not d.findings:
-        print("no finding: the runs agree with the nominal model within their noise")
+        print("no finding: the runs agree with the nominal model within their noise; they "
+              "could have shown:")  # fmt: skip
+        for line in d.statements():
+            print(f"  {line}")
     for i, f in enumerate(d.findings, 1):
         g = f.gain
-        print(
-            f"{i}. {f.extension.describe()}  (BIC +{f.evidence['delta_bic']:.0f}; held out: "
-            f"VAF {g['vaf_before']:.1f} -> {g['vaf_after']:.1f} %, "
-            f"DF error {g['df_error_db_before']:.2f} -> {g['df_error_db_after']:.2f} dB, "
-            f"{g['df_error_deg_before']:.1f} -> {g['df_error_deg_after']:.1f} deg)"
-        )
+        if "chi2_per_line_before" in g:
+            held = (
+                f"line error {g['chi2_per_line_before']:.2f} -> {g['chi2_per_line_after']:.2f}"
+                f" chi2/line, DF error {g['df_error_db_before']:.2f} -> "
+                f"{g['df_error_db_after']:.2f} dB, {g['df_error_deg_before']:.1f} -> "
+                f"{g['df_error_deg_after']:.1f} deg, VAF {g['vaf_before']:.1f} -> "
+                f"{g['vaf_after']:.1f} %"
+            )
+        else:
+            held = (f"log-likelihood per bin {g['loglik_per_bin_before']:.3f} -> "
+                    f"{g['loglik_per_bin_after']:.3f}")  # fmt: skip
+        print(f"{i}. {f.extension.describe()}  (BIC +{f.delta_bic:.0f}; held out: {held})")
+    for dof, r in d.dofs.items():
+        print(f"{dof}: IMU noise x{r.noise.fit.to_json()['imu_noise_scale']:.2f} of the data "
+              "sheet (a nuisance, not a cause)")  # fmt: skip
     print(f"report: {out}/summary.md")
     if args.save_config:
         print(f"extended configuration: {args.save_config}")

@@ -1,20 +1,18 @@
-"""Candidate model extensions: predict a channel with an extension, and fit its parameters.
+"""Candidate model extensions: predict a channel with extensions, and fit sets of them jointly.
 
 A *model* of a DOF is the nominal configuration plus a list of extensions
-(:class:`twin.chain.extensions.Extension`). Its prediction of a channel is
+(:class:`twin.chain.extensions.Extension`). Its prediction of a channel is the nominal twin's
+noise-free prediction (re-simulated with the ``backlash`` extension when there is one: the
+only non-linear effect, it runs through the twin) times the frequency responses of the linear
+extensions (they act on one DOF's command path, or inside the IMU, and commute with the
+reduced platform and the post-processing). At the excited lines that is H(f) P(f).
 
-* the nominal twin's noise-free prediction, re-simulated with the ``backlash`` extension
-  when there is one (the only non-linear one: it runs through the twin);
-* times the frequency responses of the linear extensions (applied to the whole run in the
-  frequency domain: they act on one DOF's command path, or inside the IMU, and commute with
-  the reduced platform and the post-processing);
-* with a noise spectrum: the nominal one times ``scale^2`` (``noise``) and times
-  |H_sensor|^2 (a ``sensor_filter`` filters the sensor's noise with the signal).
-
-Parameters are fitted by maximising the Whittle likelihood of the measured spectrum over the
-analysis band (:meth:`twin.diagnose.residuals.Segment.loglik`): a grid over each parameter's
-physical range, then a local refinement. Standard deviations come from the curvature of the
-log-likelihood (the Cramér-Rao bound).
+A *set* of effects is fitted jointly (:func:`fit_set`) by least squares on the standardised
+line residuals (:mod:`twin.diagnose.evidence`): positive parameters in log space, every start
+of a coarse grid per effect and of the effects fitted one on top of the other, the best kept.
+The play of ``backlash`` is an outer one-dimensional search (each value is a simulation).
+Standard deviations and correlations come from the Jacobian at the optimum (Fisher
+information 2 J^T J of the log-likelihood -chi2).
 """
 
 from __future__ import annotations
@@ -28,12 +26,16 @@ from scipy import optimize
 
 from twin.chain.extensions import DOF_CHANNEL, EFFECTS, LINEAR, Extension
 from twin.diagnose.data import Case, Channel, simulate_measurement
-from twin.diagnose.residuals import TAPER_CORRELATION, Segment, line_bins
+from twin.diagnose.evidence import Lines
 from twin.errors import SignalError
 from twin.frames import dof_index
 
 FloatArray = NDArray[np.float64]
 ComplexArray = NDArray[np.complex128]
+#: The effects that change the deterministic response (everything but ``noise``).
+DYNAMIC = tuple(e for e in EFFECTS if e != "noise")
+#: Parameters searched in log space (positive, scale-like).
+_LOG = {"gain", "break_hz", "frequency_hz", "damping", "cutoff_hz", "play"}
 
 
 @dataclass
@@ -74,22 +76,24 @@ class Model:
             self._cache[key] = pred[:, ch.index]
         return self._cache[key]
 
+    @property
+    def nominal_break(self) -> float | None:
+        """The nominal configuration's filter break in this DOF [Hz] (None: no filter)."""
+        return self.case.config.breaks_hz[dof_index(self.dof)]
+
     def response(self, f: FloatArray) -> ComplexArray:
         """Product of the linear extensions' responses at ``f`` [Hz]."""
         h = np.ones(np.size(f), dtype=complex)
-        nominal_break = self.case.config.breaks_hz[dof_index(self.dof)]
         for e in self.extensions:
             if e.effect in LINEAR:
-                h = h * e.response(f, nominal_break)
+                h = h * e.response(f, self.nominal_break)
         return h
 
     def psd_factor(self, f: FloatArray) -> FloatArray:
-        """Factor on the nominal noise spectrum at ``f`` [Hz]."""
+        """Factor on the nominal IMU noise spectrum at ``f`` [Hz] (a sensor filter's)."""
         g = np.ones(np.size(f))
         for e in self.extensions:
-            if e.effect == "noise":
-                g = g * e.value("scale") ** 2
-            elif e.effect == "sensor_filter":
+            if e.effect == "sensor_filter":
                 g = g * np.abs(e.response(f)) ** 2
         return g
 
@@ -97,16 +101,21 @@ class Model:
         """Full-length prediction of a channel."""
         return apply_response(self.base(ch), ch.rate_hz, self.response)
 
-    def loglik(self, segments: Sequence[Segment]) -> float:
-        """Whittle log-likelihood summed over segments."""
-        total = 0.0
-        preds: dict[int, FloatArray] = {}
-        for seg in segments:
-            key = id(seg.channel)
-            if key not in preds:
-                preds[key] = self.predict(seg.channel)
-            total += seg.loglik(preds[key], self.psd_factor(seg.f))
-        return total
+    def line_prediction(self, lines: Lines) -> ComplexArray:
+        """Predicted amplitudes at the lines: H(f) times the (re-simulated) base's."""
+        if any(e.effect == "backlash" for e in self.extensions):
+            ch = lines.channel
+            key = ("lines", id(self.base(ch)), lines.window)
+            if key not in self._cache:
+                self._cache[key] = lines.amplitudes(self.base(ch))
+            base = self._cache[key]
+        else:
+            base = lines.nominal
+        return base * self.response(lines.f)
+
+    def chi2(self, evidence: Sequence[Lines]) -> float:
+        """Sum over the evidence of |Y - Yhat|^2 / sd^2 (minus the log-likelihood)."""
+        return sum(x.chi2(self.line_prediction(x)) for x in evidence)
 
 
 def apply_response(
@@ -180,156 +189,245 @@ def make_extension(
 
 
 @dataclass(frozen=True)
-class Fit:
-    """One candidate fitted on top of a model.
+class SetFit:
+    """A set of effects fitted jointly on top of a model.
 
     Attributes
     ----------
-    extension : Extension
-        The effect with its fitted parameters.
-    loglik : float
-        Log-likelihood with it.
-    std : dict of str to float
-        Cramér-Rao standard deviation per parameter (nan where the curvature is not
-        positive).
+    extensions : tuple of Extension
+        The effects with their fitted parameters.
+    chi2 : float
+        sum |Y - Yhat|^2 / sd^2 with them.
+    std : dict of str to dict of str to float
+        Standard deviation per effect and parameter (nan where not identifiable).
+    correlation : dict
+        ``labels`` ("effect.parameter") and the correlation ``matrix`` of all parameters.
 
     """
 
-    extension: Extension
-    loglik: float
-    std: dict[str, float]
+    extensions: tuple[Extension, ...]
+    chi2: float
+    std: dict[str, dict[str, float]]
+    correlation: dict[str, object]
+
+    @property
+    def effects(self) -> tuple[str, ...]:
+        """Effect names, in the set's order."""
+        return tuple(e.effect for e in self.extensions)
+
+    @property
+    def parameters(self) -> int:
+        """Number of fitted numeric parameters."""
+        return sum(len(numeric_names(e.effect)) for e in self.extensions)
 
 
-def fit_candidate(
-    effect: str, model: Model, segments: Sequence[Segment], start: Sequence[float] | None = None
-) -> Fit:
-    """Fit one effect's parameters on top of ``model`` over ``segments``.
+def numeric_names(effect: str) -> tuple[str, ...]:
+    """Return the fitted (numeric) parameter names of an effect."""
+    return tuple(k for k in EFFECTS[effect] if k != "channels")
 
-    ``start`` (e.g. the values fitted on other data) replaces the coarse grid by a local
-    search around it.
-    """
-    channels = list({id(s.channel): s.channel for s in segments}.values())
-    space = search_space(effect, model.case, model.dof, channels)
-    if effect == "noise":
-        return _fit_noise(model, segments)
 
-    def cost(x: Sequence[float]) -> float:
-        x = np.clip(x, [b[0] for b in space.bounds], [b[1] for b in space.bounds])
-        return -model.with_(make_extension(effect, space.names, x, model.dof)).loglik(segments)
+class _Layout:
+    """Map between the parameters of a set of linear effects and one unconstrained vector."""
 
+    def __init__(self, effects: Sequence[str], case: Case, dof: str, channels: Sequence[Channel]):
+        self.effects = tuple(effects)
+        self.dof = dof
+        self.spaces = [search_space(e, case, dof, channels) for e in self.effects]
+        self.names = [(e, n) for e, sp in zip(self.effects, self.spaces, strict=True)
+                      for n in sp.names]  # fmt: skip
+        self.log = np.array([n in _LOG for _, n in self.names])
+        lo = np.array([b[0] for sp in self.spaces for b in sp.bounds])
+        hi = np.array([b[1] for sp in self.spaces for b in sp.bounds])
+        self.lo, self.hi = self.to_u(np.where(self.log, np.maximum(lo, 1e-12), lo)), self.to_u(hi)
+
+    def to_u(self, x: FloatArray) -> FloatArray:
+        x = np.asarray(x, dtype=float)
+        return np.where(self.log, np.log(np.maximum(x, 1e-300)), x)
+
+    def to_x(self, u: FloatArray) -> FloatArray:
+        return np.where(self.log, np.exp(u), u)
+
+    def extensions(self, u: FloatArray) -> list[Extension]:
+        x = self.to_x(np.clip(u, self.lo, self.hi))
+        out, i = [], 0
+        for e, sp in zip(self.effects, self.spaces, strict=True):
+            out.append(make_extension(e, sp.names, x[i : i + len(sp.names)], self.dof))
+            i += len(sp.names)
+        return out
+
+
+def _grid_best(effect: str, model: Model, evidence: Sequence[Lines], layout: _Layout) -> FloatArray:
+    """Best point of an effect's coarse grid on top of ``model`` (physical values)."""
+    sp = layout.spaces[layout.effects.index(effect)]
+    grid = np.array(np.meshgrid(*sp.grids, indexing="ij")).reshape(len(sp.names), -1).T
+    base = [model.line_prediction(x) for x in evidence]
+    costs = []
+    for g in grid:
+        ext = make_extension(effect, sp.names, g, model.dof)
+        h = [ext.response(x.f, model.nominal_break) for x in evidence]
+        costs.append(sum(x.chi2(b * hh) for x, b, hh in zip(evidence, base, h, strict=True)))
+    return grid[int(np.argmin(costs))]
+
+
+def _fit_linear(
+    effects: Sequence[str],
+    model: Model,
+    evidence: Sequence[Lines],
+    start: dict[str, Sequence[float]] | None = None,
+) -> tuple[list[Extension], float, FloatArray, _Layout]:
+    """Fit linear effects jointly on top of ``model``: extensions, chi2, Jacobian, layout."""
+    channels = list({id(x.channel): x.channel for x in evidence}.values())
+    layout = _Layout(effects, model.case, model.dof, channels)
+    base = [model.line_prediction(x) for x in evidence]
+
+    def resid(u: FloatArray) -> FloatArray:
+        exts = layout.extensions(u)
+        out = []
+        for x, b in zip(evidence, base, strict=True):
+            h = np.ones(x.size, dtype=complex)
+            for e in exts:
+                h = h * e.response(x.f, model.nominal_break)
+            out.append(x.residuals(b * h))
+        return np.concatenate(out)
+
+    starts = []
     if start is not None:
-        x0 = np.asarray(start, dtype=float)
-    elif effect == "backlash":
-        x0 = _backlash_start(model, segments, space)
+        starts.append(np.concatenate([np.asarray(start[e], dtype=float) for e in effects]))
     else:
-        grid = np.array(np.meshgrid(*space.grids, indexing="ij")).reshape(len(space.names), -1).T
-        costs = np.array([cost(x) for x in grid])
-        x0 = grid[int(np.argmin(costs))]
-    x = _refine(cost, x0, space, effect, 2.0 if start is None else 1.25)
-    ext = make_extension(effect, space.names, x, model.dof)
-    std = _crlb(cost, x, space)
-    return Fit(ext, -cost(x), dict(zip(space.names, std, strict=True)))
+        singles = {e: _grid_best(e, model, evidence, layout) for e in effects}
+        starts.append(np.concatenate([singles[e] for e in effects]))
+        for order in (effects, effects[::-1]) if len(effects) > 1 else ():
+            current, vals = model, {}
+            for e in order:
+                vals[e] = _grid_best(e, current, evidence, layout)
+                sp = layout.spaces[layout.effects.index(e)]
+                current = current.with_(make_extension(e, sp.names, vals[e], model.dof))
+            starts.append(np.concatenate([vals[e] for e in effects]))
+    best = None
+    for x0 in starts:
+        u0 = np.clip(layout.to_u(x0), layout.lo + 1e-9, layout.hi - 1e-9)
+        sol = optimize.least_squares(resid, u0, bounds=(layout.lo, layout.hi), x_scale="jac")
+        if best is None or sol.cost < best.cost:
+            best = sol
+    assert best is not None
+    return layout.extensions(best.x), 2 * float(best.cost), best.jac, layout
 
 
-def _backlash_start(model: Model, segments: Sequence[Segment], space: Space) -> FloatArray:
-    """Return a start for the play: distortion power matched, or the grid's best.
-
-    The likelihood is often too narrow in the play for a coarse grid (the kinks must line up
-    in time), but the power a play adds off the excited lines grows smoothly with it: the
-    play that matches the measured excess power there (over the nominal noise, log-log
-    interpolation of the grid) is a start near the peak. Where that power is not monotonic
-    (large plays) the grid's best point is the better start: both are returned, and the
-    refinement scans near each.
-    """
-    grid = space.grids[0]
-    excess, predicted = 0.0, np.zeros(grid.size)
-    for seg in segments:
-        ch = seg.channel
-        off = np.ones(seg.size, dtype=bool)
-        k = line_bins(seg, ch.lines_hz)
-        for j in (-1, 0, 1):
-            off[np.clip(k[k >= 0] + j, 0, seg.size - 1)] = False
-        base = seg.spectrum(model.predict(ch))
-        noise = seg.noise_psd * model.psd_factor(seg.f)
-        excess += float(np.sum(np.abs(seg.measured - base)[off] ** 2 - noise[off]))
-        for i, p in enumerate(grid):
-            pred = model.with_(make_extension("backlash", ["play"], [p], model.dof)).predict(ch)
-            predicted[i] += float(np.sum(np.abs(seg.spectrum(pred) - base)[off] ** 2))
-    logp = np.log(np.maximum.accumulate(np.maximum(predicted, 1e-300)))
-    matched = float(np.exp(np.interp(np.log(max(excess, 1e-300)), logp, np.log(grid))))
-    # where the distortion power is not monotonic in the play (large plays), the grid's best
-    # point is the better start: return both
-    ll = [model.with_(make_extension("backlash", ["play"], [v], model.dof)).loglik(segments)
-          for v in grid]  # fmt: skip
-    return np.array([matched, grid[int(np.argmax(ll))]])
-
-
-def _refine(
-    cost: Callable, x0: FloatArray, space: Space, effect: str, span: float = 2.0
-) -> FloatArray:
-    """Refine a start value: bounded 1-D search, Nelder-Mead in log space for two parameters.
-
-    ``span`` is the factor around the start scanned for ``backlash``.
-    """
-    if len(space.names) == 1:
-        g = space.grids[0]
-        i = int(np.argmin(np.abs(g - x0[0])))
-        lo = g[max(i - 1, 0)] if g.size > 1 else space.bounds[0][0]
-        hi = g[min(i + 1, g.size - 1)] if g.size > 1 else space.bounds[0][1]
-        if effect == "backlash":  # the likelihood is narrow in the play: scan near x0 in
-            # steps of 10 %, then refine within one step
-            steps = 2 * round(np.log(span) / np.log(1.1)) + 1
-            local = np.concatenate([np.geomspace(v / span, v * span, steps) for v in x0])
-            best = local[int(np.argmin([cost([v]) for v in local]))]
-            r = optimize.minimize_scalar(
-                lambda u: cost([np.exp(u)]), bounds=(np.log(best / 1.1), np.log(best * 1.1)),
-                method="bounded", options={"xatol": 0.005},
-            )  # fmt: skip
-            return np.array([np.exp(r.x)])
-        lo, hi = max(min(lo, x0[0]), space.bounds[0][0]), min(max(hi, x0[0]), space.bounds[0][1])
-        r = optimize.minimize_scalar(lambda u: cost([u]), bounds=(lo, hi), method="bounded",
-                                     options={"xatol": 1e-6 * max(1.0, abs(hi))})  # fmt: skip
-        return np.array([r.x])
-    r = optimize.minimize(
-        lambda u: cost(np.exp(u)), np.log(x0), method="Nelder-Mead",
-        options={"xatol": 1e-4, "fatol": 1e-3, "maxiter": 400},
-    )  # fmt: skip
-    return np.clip(np.exp(r.x), [b[0] for b in space.bounds], [b[1] for b in space.bounds])
-
-
-def _crlb(cost: Callable, x: FloatArray, space: Space) -> list[float]:
-    """Return standard deviations from a finite-difference Hessian of -log L."""
-    n = x.size
-    h = np.maximum(np.abs(x) * 1e-3, 1e-6)
-    hess = np.empty((n, n))
-    f0 = cost(x)
-    for i in range(n):
-        for j in range(i, n):
-            ei, ej = np.eye(n)[i] * h[i], np.eye(n)[j] * h[j]
-            if i == j:
-                v = (cost(x + ei) - 2 * f0 + cost(x - ei)) / h[i] ** 2
-            else:
-                v = (
-                    cost(x + ei + ej) - cost(x + ei - ej) - cost(x - ei + ej) + cost(x - ei - ej)
-                ) / (4 * h[i] * h[j])
-            hess[i, j] = hess[j, i] = v
+def _statistics(
+    jac: FloatArray, names: Sequence[tuple[str, str]], x: FloatArray, log: NDArray[np.bool_]
+) -> tuple[dict[str, dict[str, float]], dict[str, object]]:
+    """Return standard deviations and correlations from the Jacobian of the residuals."""
+    fim = 2 * jac.T @ jac
     try:
-        cov = np.linalg.inv(hess)
-        d = np.diag(cov)
-        return [float(np.sqrt(v)) if v > 0 else float("nan") for v in d]
+        cov = np.linalg.pinv(fim, rcond=1e-12)
     except np.linalg.LinAlgError:
-        return [float("nan")] * n
+        cov = np.full(fim.shape, np.nan)
+    sd_u = np.sqrt(np.maximum(np.diag(cov), 0))
+    sd = np.where(log, x * sd_u, sd_u)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        corr = cov / np.outer(sd_u, sd_u)
+    std: dict[str, dict[str, float]] = {}
+    for (e, n), v in zip(names, sd, strict=True):
+        std.setdefault(e, {})[n] = float(v) if np.isfinite(v) and v > 0 else float("nan")
+    labels = [f"{e}.{n}" for e, n in names]
+    return std, {"labels": labels, "matrix": np.round(corr, 3).tolist()}
 
 
-def _fit_noise(model: Model, segments: Sequence[Segment]) -> Fit:
-    """Noise scale in closed form: scale^2 = mean(|Y_m - Y_p|^2 / S) over all bins."""
-    ratios, bins = 0.0, 0
-    for seg in segments:
-        r = seg.measured - seg.spectrum(model.predict(seg.channel))
-        ratios += float(np.sum(np.abs(r) ** 2 / (seg.noise_psd * model.psd_factor(seg.f))))
-        bins += seg.size
-    c2 = ratios / bins
-    ext = make_extension("noise", ("scale",), [np.sqrt(c2)], model.dof)
-    # var(c^2) = c^4 / bins (exponential periodogram): sd(c) = c / (2 sqrt(bins))
-    std = {"scale": float(np.sqrt(c2) / (2 * np.sqrt(bins / TAPER_CORRELATION)))}
-    return Fit(ext, model.with_(ext).loglik(segments), std)
+def fit_set(
+    effects: Sequence[str],
+    model: Model,
+    evidence: Sequence[Lines],
+    start: dict[str, Sequence[float]] | None = None,
+    coarse: bool = False,
+) -> SetFit:
+    """Fit a set of effects jointly on top of ``model`` over the line evidence.
+
+    Parameters
+    ----------
+    effects : sequence of str
+        Effects of :data:`DYNAMIC` (at most one ``backlash``).
+    model : Model
+        What they are added to (the nominal model, or one with findings of other DOFs).
+    evidence : sequence of Lines
+        The lines they are fitted on.
+    start : dict, optional
+        Values per effect to start from (e.g. fitted on other data): a local search only.
+    coarse : bool
+        With ``backlash``: screen (the play on its grid or at its start only, no refinement).
+
+    """
+    effects = tuple(effects)
+    linear = tuple(e for e in effects if e != "backlash")
+    if "backlash" not in effects:
+        exts, chi2, jac, layout = _fit_linear(linear, model, evidence, start)
+        x = np.array([e.value(n) for e in exts for n in numeric_names(e.effect)])
+        std, corr = _statistics(jac, layout.names, x, layout.log)
+        return SetFit(tuple(exts), chi2, std, corr)
+    return _fit_with_backlash(linear, model, evidence, start, coarse)
+
+
+def _fit_with_backlash(
+    linear: tuple[str, ...],
+    model: Model,
+    evidence: Sequence[Lines],
+    start: dict[str, Sequence[float]] | None,
+    coarse: bool = False,
+) -> SetFit:
+    """Backlash (outer search over the play, each a simulation) plus linear effects (inner).
+
+    ``coarse``: no refinement of the play (the grid, or the start's play, only): a screening
+    fit whose simulations are shared by every set with backlash.
+    """
+    channels = list({id(x.channel): x.channel for x in evidence}.values())
+    space = search_space("backlash", model.case, model.dof, channels)
+    inner_start = {e: v for e, v in (start or {}).items() if e != "backlash"} or None
+    memo: dict[float, tuple[float, list[Extension], FloatArray | None, object]] = {}
+
+    def profile(play: float) -> float:
+        if play not in memo:
+            ctx = model.with_(make_extension("backlash", ["play"], [play], model.dof))
+            if linear:
+                exts, chi2, jac, layout = _fit_linear(linear, ctx, evidence, inner_start)
+                memo[play] = (chi2, exts, jac, layout)
+            else:
+                memo[play] = (ctx.chi2(evidence), [], None, None)
+        return memo[play][0]
+
+    if start is not None and "backlash" in start:
+        centre = float(start["backlash"][0])
+        lo, hi = centre / 1.5, centre * 1.5
+        if coarse:
+            profile(centre)
+    else:
+        grid = space.grids[0]
+        costs = [profile(float(p)) for p in grid]
+        i = int(np.argmin(costs))
+        lo, hi = grid[max(i - 1, 0)], grid[min(i + 1, grid.size - 1)]
+    if not coarse:
+        lo, hi = max(lo, space.bounds[0][0]), min(max(hi, lo * 1.0001), space.bounds[0][1])
+        r = optimize.minimize_scalar(lambda u: profile(float(np.exp(u))),
+                                     bounds=(np.log(lo), np.log(hi)), method="bounded",
+                                     options={"xatol": 0.03})  # fmt: skip
+        profile(float(np.exp(r.x)))
+    play = min(memo, key=lambda p: memo[p][0])  # the best play evaluated
+    chi2, exts, jac, layout = memo[play]
+    ext_b = make_extension("backlash", ["play"], [play], model.dof)
+    # the play's column of the Jacobian: central difference with the linear effects held
+    col = []
+    for k in (1.01, 1 / 1.01):
+        m = model.with_(make_extension("backlash", ["play"], [play * k], model.dof))
+        for e in exts:
+            m = m.with_(e)
+        col.append(np.concatenate([x.residuals(m.line_prediction(x)) for x in evidence]))
+    dplay = ((col[0] - col[1]) / (2 * np.log(1.01)))[:, None]
+    names = [("backlash", "play")]
+    log = [True]
+    if layout is not None:
+        names += list(layout.names)  # type: ignore[attr-defined]
+        log += list(layout.log)  # type: ignore[attr-defined]
+        jac = np.hstack([dplay, jac])
+    else:
+        jac = dplay
+    x = np.array([play] + [e.value(n) for e in exts for n in numeric_names(e.effect)])
+    std, corr = _statistics(jac, names, x, np.array(log))
+    return SetFit((ext_b, *exts), chi2, std, corr)

@@ -3,10 +3,13 @@
 For every run and every driven DOF a :class:`Channel` holds, on the App. C.2.3 grid (100 Hz):
 the measured acceleration of the DOF (the IMU channel that measures it, post-processed), the
 nominal twin's noise-free prediction of it (the run's own commands through the nominal
-configuration, ideal IMU), and ``NOISE_REALISATIONS`` realisations of the nominal noise (the
-same run with the configuration's noise and the IMU's noise, minus the noise-free one). The
-noise realisations give the nominal noise spectrum of any segment of the run, with no model of
-the post-processing needed.
+configuration, ideal IMU), and realisations of each nominal noise *source* apart: the motion
+noise of the configuration (Eq 5.10; the same run with the configuration's noise and an ideal
+IMU, minus the noise-free one) and the IMU's own noise (noise-free configuration, the nominal
+IMU). Kept apart, the diagnosis can scale each to what the measurement shows: a real IMU is
+rarely the data sheet's, and its noise is a nuisance, not a cause
+(:mod:`twin.diagnose.nuisance`). The realisations give each source's spectrum over any segment
+of the run, with no model of the post-processing needed.
 """
 
 from __future__ import annotations
@@ -29,8 +32,10 @@ from twin.runs import read_run
 from twin.trajectory import Trajectory
 
 FloatArray = NDArray[np.float64]
-#: Noise realisations simulated per run for the nominal noise spectrum.
-NOISE_REALISATIONS = 8
+#: Noise realisations simulated per run and noise source for the nominal noise spectra.
+NOISE_REALISATIONS = 4
+#: The nominal noise sources, in the order of :attr:`Channel.sources`.
+NOISE_SOURCES = ("motion", "imu")
 #: A DOF is analysed when its commanded acceleration has at least this fraction of the RMS of
 #: the most-driven DOF (in its own units).
 DRIVEN_FRACTION = 0.05
@@ -50,8 +55,9 @@ class Channel:
         Time [s] (100 Hz).
     measured, nominal : ndarray, shape (n,)
         Measured acceleration and the nominal twin's noise-free prediction [m/s^2 or rad/s^2].
-    noise : ndarray, shape (k, n)
-        Realisations of the nominal noise on the same grid.
+    sources : ndarray, shape (2, k, n)
+        Realisations of the nominal noise on the same grid, per source of
+        :data:`NOISE_SOURCES` (motion noise all zero where the configuration has none).
     lines_hz : ndarray
         Excited frequencies.
     window : tuple of float
@@ -66,10 +72,20 @@ class Channel:
     t: FloatArray
     measured: FloatArray
     nominal: FloatArray
-    noise: FloatArray
+    sources: FloatArray
     lines_hz: FloatArray
     window: tuple[float, float]
     commands: Trajectory = field(repr=False)
+
+    @property
+    def noise(self) -> FloatArray:
+        """Realisations of the nominal total noise (the sources added), shape (k, n)."""
+        return self.sources.sum(axis=0)
+
+    @property
+    def has_motion_noise(self) -> bool:
+        """Whether the nominal configuration has motion noise in this DOF."""
+        return bool(np.any(self.sources[0]))
 
     @property
     def index(self) -> int:
@@ -205,18 +221,23 @@ def measurement_channels(
 ) -> list[Channel]:
     """Return the channels of one measurement: nominal prediction and noise per driven DOF.
 
-    Noise realisation ``i`` is simulated with seed ``seed + offset + i + 1``.
+    Realisation ``i`` of each source is simulated with seed ``seed + offset + i + 1``.
     """
-    pred = simulate_measurement(clean_config(nominal), m.commands, m.t, model, seed, imu.ideal())
-    noisy = [
-        simulate_measurement(nominal, m.commands, m.t, model, seed + offset + i + 1, imu)
-        for i in range(realisations)
+    clean = clean_config(nominal)
+    pred = simulate_measurement(clean, m.commands, m.t, model, seed, imu.ideal())
+    seeds = [seed + offset + i + 1 for i in range(realisations)]
+    motion = [
+        simulate_measurement(nominal, m.commands, m.t, model, s, imu.ideal()) - pred
+        if nominal.noise
+        else np.zeros_like(pred)
+        for s in seeds
     ]
+    sensor = [simulate_measurement(clean, m.commands, m.t, model, s, imu) - pred for s in seeds]
     out = []
     for k in driven_dofs(m, dofs):
         lines, window = periodic_design(m, k)
-        noise = np.array([n[:, k] - pred[:, k] for n in noisy])
-        out.append(Channel(m.source, DOF_NAMES[k], m.t, m.measured[:, k], pred[:, k], noise,
+        sources = np.array([[r[:, k] for r in motion], [r[:, k] for r in sensor]])
+        out.append(Channel(m.source, DOF_NAMES[k], m.t, m.measured[:, k], pred[:, k], sources,
                            lines, tuple(window), m.commands))  # fmt: skip
     return out
 

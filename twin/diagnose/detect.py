@@ -1,16 +1,19 @@
-"""What a run could have revealed: expected evidence and Cramér-Rao bounds of an effect.
+"""What a run could have revealed: expected evidence, Cramér-Rao bounds, smallest effects.
 
-For a true model (prediction Y_t, noise spectrum S_t) and the nominal one (Y_0, S_0) the
-expected log-likelihood gain per bin is the Kullback-Leibler divergence of two complex
-Gaussians,
+For a true set of effects (line prediction Y_t) on top of a model (Y_0) the expected chi2
+gain is sum |Y_t - Y_0|^2 / sd^2 over the lines (the Kullback-Leibler divergence of the two
+complex Gaussians), so the expected BIC improvement of naming them is
 
-    E[log L_t - log L_0] = |Y_t - Y_0|^2 / S_0 + S_t / S_0 - 1 - ln(S_t / S_0),
+    2 sum |Y_t - Y_0|^2 / sd^2 + p - p ln(n)
 
-so the expected BIC improvement of naming the effect is 2 sum(...) - p ln(n) (+ p for the
-fitted parameters' own gain). An effect is *detectable in principle* when that exceeds
-``BIC_MARGIN`` with room to spare; a clean bill of health excludes exactly the effects whose
-expected improvement is well above it. The Fisher information of the same likelihood gives
-the smallest standard deviation any unbiased fit of the parameters can reach.
+(+p: the fitted parameters' own expected gain). An effect is *detectable* when that exceeds
+``BIC_MARGIN``; :func:`smallest_detectable` states, per effect, the size at which it does (e.g.
+"a delay above 27 ms would have been found"), so that "no finding" has a meaning. The Fisher
+information of the same likelihood gives the smallest standard deviation any unbiased fit of
+the parameters can reach (:func:`fisher_std`).
+
+For the ``noise`` effect the same holds on the off-line bins with the Whittle likelihood:
+per bin S_t / S_0 - 1 - ln(S_t / S_0).
 """
 
 from __future__ import annotations
@@ -20,117 +23,194 @@ from collections.abc import Sequence
 import numpy as np
 from scipy import optimize
 
-from twin.chain.extensions import EFFECTS, Extension
-from twin.diagnose.candidates import Model, make_extension
+from twin.chain.extensions import DOF_CHANNEL, Extension
+from twin.diagnose.candidates import Model, make_extension, numeric_names
+from twin.diagnose.evidence import Lines
+from twin.diagnose.nuisance import off_line
 from twin.diagnose.residuals import TAPER_CORRELATION, Segment
 from twin.diagnose.select import BIC_MARGIN
 
 
-def _spectra(model: Model, seg: Segment) -> tuple[np.ndarray, np.ndarray]:
-    return seg.spectrum(model.predict(seg.channel)), seg.noise_psd * model.psd_factor(seg.f)
+def _on_top(model: Model, exts: Sequence[Extension]) -> Model:
+    for e in exts:
+        model = model.with_(e)
+    return model
 
 
-def expected_delta_bic(base: Model, ext: Extension, segments: Sequence[Segment]) -> float:
-    """Return the expected BIC improvement of adding ``ext`` to ``base`` if it is true."""
-    true = base.with_(ext)
-    kl = 0.0
+def expected_delta_bic(base: Model, exts: Sequence[Extension], evidence: Sequence[Lines]) -> float:
+    """Return the expected BIC improvement of adding ``exts`` to ``base`` if they are true."""
+    true = _on_top(base, exts)
+    gain = sum(
+        float(np.sum(np.abs(true.line_prediction(x) - base.line_prediction(x)) ** 2 / x.sd**2))
+        for x in evidence
+    )
+    p = sum(len(numeric_names(e.effect)) for e in exts)
+    n = 2 * sum(x.size for x in evidence)
+    return 2 * gain + p - p * np.log(n)
+
+
+def expected_noise_delta_bic(scale: float, segments: Sequence[Segment]) -> float:
+    """Return the expected BIC improvement of naming motion noise ``scale`` x the nominal.
+
+    The IMU's noise level is a nuisance fitted in both models, so the evidence is what the
+    motion noise adds that a rescaled IMU noise cannot mimic: the Kullback-Leibler divergence
+    of the true spectrum from the best nominal-motion-noise spectrum with the IMU factor free.
+    """
+    parts = []
     for seg in segments:
-        y0, s0 = _spectra(base, seg)
-        yt, st = _spectra(true, seg)
-        r = st / s0
-        kl += float(np.sum(np.abs(yt - y0) ** 2 / s0 + r - 1 - np.log(r)))
-    p = sum(1 for k in EFFECTS[ext.effect] if k != "channels")
-    n = 2 * sum(s.size for s in segments)
-    return 2 * kl / TAPER_CORRELATION + p - p * np.log(n)
+        keep = off_line(seg)
+        sm = seg.scales[0] * seg.source_psd[0][keep]
+        si = seg.scales[1] * seg.source_psd[1][keep]
+        parts.append((scale**2 * sm + si, sm, si))
+    bins = sum(p[0].size for p in parts)
+
+    def kl(log_b: float) -> float:
+        total = 0.0
+        for st, sm, si in parts:
+            r = st / np.maximum(sm + np.exp(log_b) * si, 1e-300)
+            total += float(np.sum(r - 1 - np.log(r)))
+        return total
+
+    best = optimize.minimize_scalar(kl, bounds=(np.log(1e-3), np.log(1e3)), method="bounded")
+    return 2 * float(best.fun) / TAPER_CORRELATION + 1 - np.log(bins / TAPER_CORRELATION)
 
 
-def fisher_std(base: Model, ext: Extension, segments: Sequence[Segment]) -> dict[str, float]:
-    """Cramér-Rao standard deviation of each numeric parameter of ``ext`` (true on ``base``)."""
-    names = [k for k in EFFECTS[ext.effect] if k != "channels"]
-    x = np.array([ext.value(k) for k in names])
-    h = np.maximum(np.abs(x) * 1e-4, 1e-7)
-    grads_y, grads_s = [], []
-    for i in range(x.size):
+def fisher_std(
+    base: Model, exts: Sequence[Extension], evidence: Sequence[Lines]
+) -> dict[str, float]:
+    """Return the Cramér-Rao standard deviation of every numeric parameter of ``exts``.
+
+    The parameters are fitted jointly, ``exts`` true on ``base``; keys ``effect.parameter``.
+    """
+    names = [(i, k) for i, e in enumerate(exts) for k in numeric_names(e.effect)]
+    x = np.array([exts[i].value(k) for i, k in names])
+    h = np.maximum(np.abs(x) * 1e-3, 1e-6)
+    cols = []
+    for j, (i, k) in enumerate(names):
         parts = []
         for sign in (1, -1):
-            v = x.copy()
-            v[i] += sign * h[i]
-            e = make_extension(ext.effect, names, v, base.dof)
-            e = Extension(e.effect, {**e.parameters, **_fixed(ext)}, ext.dofs)
-            parts.append([_spectra(base.with_(e), s) for s in segments])
-        grads_y.append([(a[0] - b[0]) / (2 * h[i]) for a, b in zip(*parts, strict=True)])
-        grads_s.append([(a[1] - b[1]) / (2 * h[i]) for a, b in zip(*parts, strict=True)])
-    s = [_spectra(base.with_(ext), seg)[1] for seg in segments]
-    fim = np.zeros((x.size, x.size))  # divided by TAPER_CORRELATION below
-    for i in range(x.size):
-        for j in range(x.size):
-            fim[i, j] = sum(
-                float(np.sum(2 * np.real(np.conj(gi) * gj) / sk + si * sj / sk**2))
-                for gi, gj, si, sj, sk in zip(
-                    grads_y[i], grads_y[j], grads_s[i], grads_s[j], s, strict=True
-                )
-            )
+            e = exts[i]
+            v = [e.value(n) + (sign * h[j] if n == k else 0.0) for n in numeric_names(e.effect)]
+            moved = make_extension(e.effect, numeric_names(e.effect), v, base.dof)
+            moved = Extension(moved.effect, {**e.parameters, **moved.parameters}, e.dofs)
+            m = _on_top(base, [*exts[:i], moved, *exts[i + 1 :]])
+            parts.append(np.concatenate([m.line_prediction(x) / x.sd for x in evidence]))
+        cols.append((parts[0] - parts[1]) / (2 * h[j]))
+    jac = np.array(cols).T
+    fim = 2 * np.real(jac.conj().T @ jac)
     try:
-        cov = np.linalg.inv(fim / TAPER_CORRELATION)
+        cov = np.linalg.inv(fim)
     except np.linalg.LinAlgError:
-        return {k: float("inf") for k in names}
+        return {f"{exts[i].effect}.{k}": float("inf") for i, k in names}
+    d = np.diag(cov)
     return {
-        k: float(np.sqrt(c)) if c > 0 else float("inf")
-        for k, c in zip(names, np.diag(cov), strict=True)
+        f"{exts[i].effect}.{k}": float(np.sqrt(v)) if v > 0 else float("inf")
+        for (i, k), v in zip(names, d, strict=True)
     }
 
 
-def _fixed(ext: Extension) -> dict[str, object]:
-    return {k: v for k, v in ext.parameters.items() if k == "channels"}
+def _threshold(excess, a: float, b: float, xtol: float) -> float | None:
+    """Where ``excess`` crosses zero between a (no effect, negative) and b; None if never."""
+    if excess(b) < 0:
+        return None
+    return float(optimize.brentq(excess, a, b, xtol=xtol))
 
 
-def smallest_detectable(base: Model, segments: Sequence[Segment]) -> dict[str, object]:
-    """Per one-parameter effect, the parameter values the data would have flagged.
+def smallest_detectable(
+    base: Model, evidence: Sequence[Lines], segments: Sequence[Segment] = ()
+) -> dict[str, object]:
+    """Per effect, the smallest size the runs would have shown (expected dBIC = the margin).
 
-    For ``delay``, ``gain``, ``lead`` and ``noise``: the value on each side of "no effect"
-    whose expected BIC improvement is ``BIC_MARGIN`` (None if not reached within the search
-    range); for ``sensor_filter``: the cut-off frequency below which a first-order filter
-    would have been named.
+    Returns a dict of entries ``{"parameter", "values" or "value", "statement"}``: delay and
+    gain on both sides of "no effect"; lead upwards; platform filter, sensor filter and
+    resonance (damping 0.3) by the highest break/cut-off/mode frequency that would still show;
+    motion noise on both sides where the configuration has it. Backlash is not stated (each
+    play is a simulation; its fit reports its own uncertainty).
     """
-    out: dict[str, object] = {}
     dof = base.dof
 
-    def crossing(effect: str, name: str, a: float, b: float) -> float | None:
+    def excess_of(effect: str, name: str, extra: dict | None = None):
         def excess(v: float) -> float:
-            e = make_extension(effect, [name], [v], dof)
-            return expected_delta_bic(base, e, segments) - BIC_MARGIN
+            e = Extension(effect, {name: float(v), **(extra or {})}, (dof,))
+            return expected_delta_bic(base, [e], evidence) - BIC_MARGIN
 
-        if excess(b) < 0:
-            return None
-        return float(optimize.brentq(excess, a, b, xtol=1e-6 * max(abs(a), abs(b), 1e-3)))
+        return excess
 
-    def near(effect: str, name: str, v0: float, far: float) -> float | None:
-        """Threshold between v0 (no effect) and far (a large effect)."""
-        lo, hi = (v0 + 1e-9 * (far - v0), far)
-        return crossing(effect, name, lo, hi) if far != v0 else None
+    out: dict[str, object] = {}
+    d = excess_of("delay", "extra_delay_s")
+    lo_d = -0.999 * float(base.case.config.delay_s)
+    less = _threshold(d, -1e-9, lo_d, 1e-5) if lo_d < -1e-6 else None
+    more = _threshold(d, 1e-9, 0.3, 1e-5)
+    out["delay"] = {
+        "parameter": "extra_delay_s",
+        "values": [less, more],
+        "statement": _both("delay", less, more, lambda v: f"{v * 1e3:+.0f} ms"),
+    }
+    g = excess_of("gain", "gain")
+    lo_g, hi_g = _threshold(g, 1 - 1e-9, 0.1, 1e-5), _threshold(g, 1 + 1e-9, 10.0, 1e-5)
+    out["gain"] = {
+        "parameter": "gain",
+        "values": [lo_g, hi_g],
+        "statement": _both("gain", lo_g, hi_g, lambda v: f"{v:.3f}"),
+    }
+    lead = _threshold(excess_of("lead", "time_constant_s"), 1e-9, 0.3, 1e-5)
+    out["lead"] = {
+        "parameter": "time_constant_s",
+        "value": lead,
+        "statement": "no lead up to 300 ms would have been found"
+        if lead is None
+        else f"a lead above {lead * 1e3:.1f} ms would have been found",
+    }
+    for effect, name, extra, what in (
+        ("platform_filter", "break_hz", None, "a platform filter (2nd order) breaking"),
+        ("sensor_filter", "cutoff_hz", {"channels": (DOF_CHANNEL[dof],)},
+         "a sensor filter cutting off"),
+        ("resonance", "frequency_hz", {"damping": 0.3}, "a resonance (damping 0.3)"),
+    ):  # fmt: skip
+        ex = excess_of(effect, name, extra)
+        nominal = base.nominal_break if effect == "platform_filter" else None
+        f = _highest_frequency(ex, 200.0 if nominal is None else nominal * 0.999)
+        out[effect] = {
+            "parameter": name,
+            "value": f,
+            "statement": f"{what} below {f:.3g} Hz would have been found"
+            if f is not None
+            else f"no {effect.replace('_', ' ')} above 0.1 Hz would have been found",
+        }
+    if segments and any(s.source_psd[0].any() for s in segments):
 
-    out["delay_s"] = [near("delay", "extra_delay_s", 0.0, -0.9 * base.case.config.delay_s or -1e-3),
-                      near("delay", "extra_delay_s", 0.0, 0.3)]  # fmt: skip
-    out["gain"] = [near("gain", "gain", 1.0, 0.2), near("gain", "gain", 1.0, 5.0)]
-    out["lead_time_constant_s"] = near("lead", "time_constant_s", 0.0, 0.3)
-    out["noise_scale"] = [near("noise", "scale", 1.0, 0.2), near("noise", "scale", 1.0, 5.0)]
-    out["sensor_filter_cutoff_hz"] = crossing_filter(base, segments, "sensor_filter", "cutoff_hz")
+        def nx(scale: float) -> float:
+            return expected_noise_delta_bic(scale, segments) - BIC_MARGIN
+
+        lo_n, hi_n = _threshold(nx, 1 - 1e-9, 0.01, 1e-4), _threshold(nx, 1 + 1e-9, 30.0, 1e-4)
+        out["noise"] = {
+            "parameter": "scale",
+            "values": [lo_n, hi_n],
+            "statement": _both("motion noise scale", lo_n, hi_n, lambda v: f"{v:.2f}"),
+        }
     return out
 
 
-def crossing_filter(
-    base: Model, segments: Sequence[Segment], effect: str, name: str
-) -> float | None:
-    """Highest cut-off/break frequency [Hz] at which a filter would still be flagged."""
-    dof = base.dof
+def _highest_frequency(excess, top: float, bottom: float = 0.1) -> float | None:
+    """Highest frequency in [bottom, top] at which ``excess`` (larger below) is still >= 0."""
 
-    def excess(logf: float) -> float:
-        e = make_extension(effect, [name], [float(np.exp(logf))], dof)
-        return expected_delta_bic(base, e, segments) - BIC_MARGIN
+    def g(u: float) -> float:
+        return excess(float(np.exp(u)))
 
-    a, b = np.log(0.1), np.log(200.0)
-    if excess(a) < 0:
+    lo, hi = np.log(bottom), np.log(top)
+    if g(lo) <= 0:
         return None
-    if excess(b) > 0:
-        return float(np.exp(b))
-    return float(np.exp(optimize.brentq(excess, a, b, xtol=1e-4)))
+    if g(hi) > 0:
+        return top
+    return float(np.exp(optimize.brentq(g, lo, hi, xtol=1e-4)))
+
+
+def _both(what: str, lo: float | None, hi: float | None, fmt) -> str:
+    parts = []
+    if lo is not None:
+        parts.append(f"below {fmt(lo)}")
+    if hi is not None:
+        parts.append(f"above {fmt(hi)}")
+    if not parts:
+        return f"no {what} in the searched range would have been found"
+    return f"a {what} {' or '.join(parts)} would have been found"

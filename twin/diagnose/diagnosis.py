@@ -23,6 +23,9 @@ from twin.chain.extensions import Extension
 from twin.diagnose.candidates import Model
 from twin.diagnose.data import NOISE_REALISATIONS, Case, load_case
 from twin.diagnose.detect import smallest_detectable
+from twin.diagnose.evidence import lines
+from twin.diagnose.merge import merge_across_dofs
+from twin.diagnose.nuisance import NoiseJudgement, judge_noise
 from twin.diagnose.residuals import (
     MAX_HZ,
     LineRatios,
@@ -32,7 +35,7 @@ from twin.diagnose.residuals import (
     residual_bands,
     segment,
 )
-from twin.diagnose.select import BIC_MARGIN, Finding, held_out_gain, scores, select
+from twin.diagnose.select import BIC_MARGIN, Finding, Selection, name_causes
 from twin.errors import SignalError, UsageError
 from twin.plotting import finish, pyplot
 
@@ -52,11 +55,13 @@ class DofReport:
     harmonics : list of PowerTest
         Residual power at harmonics and elsewhere (per run).
     residual_noise : list of PowerTest
-        Residual power per octave band (per run).
+        Residual power per octave band (per run), against the measured noise level.
     detectable : dict
-        Smallest effects the data could have revealed.
-    nominal_scores, extended_scores : dict
-        VAF and describing-function error over the whole window (fitting data).
+        Smallest effects the data could have revealed, per effect.
+    noise : NoiseJudgement
+        The measured noise: IMU (nuisance) and motion noise (a cause) power factors.
+    selection : Selection
+        Every set of effects tried, with its fit.
     findings : list of Finding
         Causes named, most important first.
     model : Model
@@ -69,9 +74,9 @@ class DofReport:
     extended_lines: LineRatios
     harmonics: list[list[PowerTest]]
     residual_noise: list[list[PowerTest]]
-    detectable: dict[str, object]
-    nominal_scores: dict[str, float]
-    extended_scores: dict[str, float]
+    detectable: dict[str, dict[str, object]]
+    noise: NoiseJudgement
+    selection: Selection
     findings: list[Finding]
     model: Model
 
@@ -125,7 +130,12 @@ class DofReport:
             "harmonics": [[t.to_json() for t in run] for run in self.harmonics],
             "residual_noise": [[t.to_json() for t in run] for run in self.residual_noise],
             "smallest_detectable": self.detectable,
-            "fit_window_scores": self.nominal_scores,
+            "noise": {
+                **self.noise.fit.to_json(),
+                "motion_noise_delta_bic": self.noise.delta_bic,
+                "held_out": self.noise.held_out,
+            },
+            "sets_tried": self.selection.table[:12],
         }
 
 
@@ -156,20 +166,17 @@ class Diagnosis:
 
     @property
     def findings(self) -> list[Finding]:
-        """Every finding, most important (largest BIC improvement) first."""
-        out = [f for r in self.dofs.values() for f in r.findings]
-        return sorted(out, key=lambda f: -float(f.evidence["delta_bic"]))  # type: ignore[arg-type]
+        """Every finding, most important (largest BIC improvement) first.
+
+        An effect found with the same parameters in several DOFs is one finding with its DOFs.
+        """
+        return merge_across_dofs([f for r in self.dofs.values() for f in r.findings])
 
     @property
     def extended_config(self) -> MotionSystem:
         """The nominal configuration with every finding added."""
         cfg = self.case.config
-        exts = [f.extension for f in self.findings if f.extension.effect != "noise"]
-        noise = [f.extension for f in self.findings if f.extension.effect == "noise"]
-        if noise:  # one factor on every noise source: the geometric mean over the DOFs
-            scale = float(np.exp(np.mean([np.log(e.value("scale")) for e in noise])))
-            dofs = tuple(d for e in noise for d in e.dofs)
-            exts.append(Extension("noise", {"scale": scale}, dofs))
+        exts = [f.extension for f in self.findings]
         if not exts:
             return cfg
         names = "+".join(sorted({e.effect for e in exts}))
@@ -178,6 +185,14 @@ class Diagnosis:
             extensions=(*cfg.extensions, *exts),
             description=f"{cfg.name} extended by twin diagnose of {', '.join(self.runs)}",
         )
+
+    def statements(self) -> list[str]:
+        """Return what the runs could have shown, per DOF and effect (what "no finding" means)."""
+        return [
+            f"{dof}: {entry['statement']}"
+            for dof, r in self.dofs.items()
+            for entry in r.detectable.values()
+        ]
 
     def _document(self) -> dict[str, object]:
         """Return the ``--json`` document: ``findings`` and ``nominal`` (numpy values)."""
@@ -190,8 +205,10 @@ class Diagnosis:
                 "runs": self.runs,
                 "validation_runs": self.validation,
                 "band_hz": [None, self.max_hz],
-                "criterion": "forward selection by BIC; a cause is named when BIC improves by "
-                f"> {BIC_MARGIN:g}",
+                "criterion": "joint fits of every effect and pair of effects on the excited "
+                "lines, uncertainty from the measurement's own noise; a set is named when its "
+                f"BIC and each member's improve by > {BIC_MARGIN:g} and each member improves "
+                "the held-out line error",
                 "dofs": {d: r.to_json() for d, r in self.dofs.items()},
             },
             "extended_config": self.extended_config.to_meta(),
@@ -296,29 +313,42 @@ def diagnose(
     reports = {}
     for dof in case.dofs:
         channels = case.of(dof)
-        segs = [segment(c, max_hz=max_hz) for c in channels]
-        findings, fitted = select(case, dof, max_hz, progress=progress)
-        for f, g in zip(
-            findings, held_out_gain(case, dof, findings, max_hz, val, fitted), strict=True
-        ):
-            f.gain = g
-        preds = [fitted.predict(c) for c in channels]
         base = Model(case, dof)
+        findings, fitted, sel = name_causes(case, dof, base, val, progress=progress)
+        if progress:
+            progress(f"{dof}: noise")
+        noise = judge_noise(fitted, BIC_MARGIN, max_hz)
+        if noise.named:
+            findings.append(_noise_finding(dof, noise))
+        segs = [segment(c, max_hz=max_hz).scaled(noise.fit.scales) for c in channels]
+        preds = [fitted.predict(c) for c in channels]
         reports[dof] = DofReport(
             dof,
             line_ratios(channels),
             line_ratios(channels, preds),
             [decomposition(s) for s in segs],
-            [residual_bands(s) for s in segs],
-            smallest_detectable(base, segs),
-            _mean_scores(base, segs),
-            _mean_scores(fitted, segs),
+            [residual_bands(s, p) for s, p in zip(segs, preds, strict=True)],
+            smallest_detectable(fitted, [lines(c) for c in channels], segs),
+            noise,
+            sel,
             findings,
             fitted,
         )
     return Diagnosis(case, reports, [str(r) for r in runs], [str(v) for v in validate], max_hz)
 
 
-def _mean_scores(model: Model, segs: Sequence) -> dict[str, float]:
-    rows = [scores(model, s.channel, s) for s in segs]
-    return {k: float(np.mean([r[k] for r in rows])) for k in rows[0]}
+def _noise_finding(dof: str, noise: NoiseJudgement) -> Finding:
+    """Return the motion noise named as the ``noise`` effect (amplitude factor)."""
+    a = float(noise.fit.motion or 1.0)
+    scale = float(np.sqrt(a))
+    return Finding(
+        Extension("noise", {"scale": scale}, (dof,)),
+        {
+            "criterion": f"BIC improvement > {BIC_MARGIN:g} of a free motion-noise power "
+            "factor (IMU noise free in both); held-out likelihood per bin rises",
+            "delta_bic": float(noise.delta_bic or 0.0),
+            "parameter_std": {"scale": float(noise.fit.std["motion"] / (2 * scale))},
+            "imu_noise_scale": float(np.sqrt(noise.fit.imu)),
+        },
+        {"held_out": "other half of the measurement window (two-fold)", **noise.held_out},
+    )

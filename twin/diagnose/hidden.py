@@ -1,21 +1,25 @@
-"""Runs with a hidden effect: the seeded generator the diagnosis is tested (and shown) on.
+"""Runs with hidden effects: the seeded generator the diagnosis is tested (and shown) on.
 
-:func:`draw` picks, from a seed only, a platform (MPI or SRS with their nominal
-configurations and noise), a DOF (heave or pitch) and one effect with random parameters;
-:func:`record` simulates both Table 5.2 multi-sines through the nominal configuration *plus*
-the effect and writes ``twin-run/1`` folders whose ``meta.json`` names only the nominal
-configuration, as a real platform's recording would.
+:func:`draw` picks, from a seed only, a platform (MPI or SRS with their nominal configurations
+and noise), a DOF (any of the six), one or two effects with random parameters and an IMU whose
+noise is drawn between 0.3 and 3 times the data sheet's (log-uniform: a real unit is rarely
+the nominal one); :func:`record` simulates both Table 5.2 multi-sines through the nominal
+configuration *plus* the effects, with that IMU, and writes ``twin-run/1`` folders whose
+``meta.json`` names only the nominal configuration, as a real platform's recording would.
 
 Drawing rule (parameters only where the runs could reveal them): a draw is kept when, on the
-nominal twin's prediction of the two runs and its noise, (1) the effect's expected BIC
-improvement (:func:`twin.diagnose.detect.expected_delta_bic`) is at least
-``DETECTABLE_FACTOR`` times the naming threshold and (2) the Cramér-Rao standard deviation of
-every parameter is at most a third of the test's tolerance (delay 5 ms, others 20 %), so that
-a fit within tolerance is likely; otherwise it is drawn again (the count is returned).
+nominal twin's prediction of the two runs and the drawn IMU's noise, (1) every effect's
+expected BIC improvement on top of the others (:func:`twin.diagnose.detect.expected_delta_bic`)
+is at least ``DETECTABLE_FACTOR`` times the naming threshold and (2) the Cramér-Rao standard
+deviation of every parameter, fitted jointly, is at most a third of the test's tolerance (delay
+5 ms, others 20 %), so that a fit within tolerance is likely; otherwise it is drawn again (the
+count is returned). Motion noise (``noise``) exists only where the configuration has it (the
+MPI's heave), so it is drawn only there.
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -24,13 +28,15 @@ import numpy as np
 from twin.chain.config import MotionSystem, motion_system
 from twin.chain.extensions import DOF_CHANNEL, EFFECTS, Extension
 from twin.chain.imu import ImuSpec
-from twin.chain.simulate import prepare
+from twin.chain.simulate import default_imu, prepare
 from twin.diagnose.candidates import Model
 from twin.diagnose.data import Case, Channel, clean_config, measurement_channels, nominal_imu
-from twin.diagnose.detect import expected_delta_bic, fisher_std
+from twin.diagnose.detect import expected_delta_bic, expected_noise_delta_bic, fisher_std
+from twin.diagnose.evidence import lines, nominal_line_sd
 from twin.diagnose.residuals import segment
 from twin.diagnose.select import BIC_MARGIN
 from twin.errors import SignalError
+from twin.frames import DOF_NAMES
 from twin.measurement.measure import from_imu
 from twin.run_folder import execute, run_meta, signal_meta
 from twin.signals import describing_signal
@@ -41,7 +47,9 @@ DETECTABLE_FACTOR = 3.0
 TOLERANCE = {"extra_delay_s": 0.005}
 RELATIVE_TOLERANCE = 0.2
 PLATFORMS = ("mpi", "srs")
-DOFS = ("heave", "pitch")
+DOFS = DOF_NAMES
+#: Range of the drawn IMU noise, in multiples of the data sheet's (log-uniform).
+IMU_NOISE = (0.3, 3.0)
 
 
 @dataclass(frozen=True)
@@ -56,8 +64,10 @@ class Hidden:
         Nominal configuration (what ``meta.json`` says).
     dof : str
         Driven DOF.
-    extension : Extension or None
-        The hidden effect (None: a clean run).
+    extensions : tuple of Extension
+        The hidden effects (empty: a clean run).
+    imu_noise : float
+        The recording IMU's noise over the data sheet's.
     redraws : int
         Draws rejected by the detectability rule.
 
@@ -66,15 +76,24 @@ class Hidden:
     seed: int
     config: MotionSystem
     dof: str
-    extension: Extension | None
+    extensions: tuple[Extension, ...] = ()
+    imu_noise: float = 1.0
     redraws: int = 0
 
     @property
+    def extension(self) -> Extension | None:
+        """The first hidden effect (None: a clean run)."""
+        return self.extensions[0] if self.extensions else None
+
+    @property
     def truth(self) -> MotionSystem:
-        """The configuration the runs are simulated with (nominal + effect)."""
-        if self.extension is None:
-            return self.config
-        return self.config.replace(extensions=(*self.config.extensions, self.extension))
+        """The configuration the runs are simulated with (nominal + effects)."""
+        return self.config.replace(extensions=(*self.config.extensions, *self.extensions))
+
+    @property
+    def imu(self) -> ImuSpec:
+        """The recording IMU (the platform's ADIS16355 with the drawn noise)."""
+        return default_imu(self.config.platform).with_noise(self.imu_noise)
 
 
 def _parameters(effect: str, rng: np.random.Generator, config: MotionSystem, dof: str) -> dict:
@@ -111,35 +130,116 @@ def _parameters(effect: str, rng: np.random.Generator, config: MotionSystem, dof
     raise SignalError(f"unknown effect {effect!r}")
 
 
-def clean(seed: int) -> Hidden:
-    """Draw a platform and DOF from ``seed`` with no effect (a run the nominal model explains)."""
-    rng = np.random.default_rng(seed)
-    return Hidden(seed, motion_system(str(rng.choice(PLATFORMS))), str(rng.choice(DOFS)), None)
+def _imu_noise(rng: np.random.Generator, imu_noise: tuple[float, float] | float) -> float:
+    if isinstance(imu_noise, int | float):
+        return float(imu_noise)
+    lo, hi = imu_noise
+    return float(np.exp(rng.uniform(np.log(lo), np.log(hi))))
 
 
-def draw(seed: int, effect: str | None = None, max_redraws: int = 50) -> Hidden:
-    """Draw a detectable hidden effect from ``seed`` (``effect`` fixes its type)."""
+def clean(
+    seed: int,
+    imu_noise: tuple[float, float] | float = 1.0,
+    dofs: Sequence[str] = ("heave", "pitch"),
+) -> Hidden:
+    """Draw a platform, a DOF and an IMU from ``seed`` with no effect (the nominal model holds).
+
+    ``imu_noise``: a range to draw the IMU's noise factor from, or the factor.
+    """
     rng = np.random.default_rng(seed)
+    platform, dof = str(rng.choice(PLATFORMS)), str(rng.choice(list(dofs)))
+    return Hidden(seed, motion_system(platform), dof, (), _imu_noise(rng, imu_noise))
+
+
+def _motion_noise(config: MotionSystem, dof: str) -> bool:
+    return bool(config.noise) and dof == "heave"
+
+
+def draw(
+    seed: int,
+    effect: str | Sequence[str] | None = None,
+    dofs: Sequence[str] = DOFS,
+    imu_noise: tuple[float, float] | float = IMU_NOISE,
+    count: int = 1,
+    max_redraws: int = 60,
+) -> Hidden:
+    """Draw detectable hidden effects from ``seed``.
+
+    Parameters
+    ----------
+    seed : int
+        Everything follows from it.
+    effect : str or sequence of str, optional
+        The effect type(s); ``count`` random distinct ones by default.
+    dofs : sequence of str
+        DOFs to draw from.
+    imu_noise : (float, float) or float
+        Range of the IMU's noise factor (log-uniform), or the factor.
+    count : int
+        Number of effects when ``effect`` is not given.
+    max_redraws : int
+        Draws tried before giving up.
+
+    """
+    rng = np.random.default_rng(seed)
+    kinds = (effect,) if isinstance(effect, str) else (tuple(effect) if effect else None)
     for attempt in range(max_redraws + 1):
         platform = str(rng.choice(PLATFORMS))
-        dof = str(rng.choice(DOFS))
-        kind = effect or str(rng.choice(list(EFFECTS)))
+        dof = str(rng.choice(list(dofs)))
+        if kinds and "noise" in kinds:  # motion noise exists in the MPI's heave only
+            platform, dof = "mpi", "heave"
         config = motion_system(platform)
-        ext = Extension(kind, _parameters(kind, rng, config, dof), (dof,))
-        # nominal prediction and noise of the two runs, from the twin itself
-        imu = nominal_imu({}, platform)
-        channels = [_channel(config, dof, number, imu, seed) for number in (1, 2)]
-        case = Case(config, "reduced", imu, channels, seed)
-        base = Model(case, dof)
-        segs = [segment(c) for c in channels]
-        ok = expected_delta_bic(base, ext, segs) >= DETECTABLE_FACTOR * BIC_MARGIN
-        if ok:
-            for name, sd in fisher_std(base, ext, segs).items():
-                tol = TOLERANCE.get(name, RELATIVE_TOLERANCE * abs(ext.value(name)))
-                ok &= sd <= tol / 3
-        if ok:
-            return Hidden(seed, config, dof, ext, attempt)
-    raise SignalError(f"seed {seed}: no detectable {effect or 'effect'} in {max_redraws} draws")
+        pool = [e for e in EFFECTS if e != "noise" or _motion_noise(config, dof)]
+        chosen = kinds or tuple(str(k) for k in rng.choice(pool, size=count, replace=False))
+        exts = tuple(Extension(k, _parameters(k, rng, config, dof), (dof,)) for k in chosen)
+        noise = _imu_noise(rng, imu_noise)
+        if "noise" in chosen and not _motion_noise(config, dof):
+            continue
+        if _detectable(config, dof, exts, noise, seed):
+            return Hidden(seed, config, dof, exts, noise, attempt)
+    what = " + ".join(kinds) if kinds else "effect"
+    raise SignalError(f"seed {seed}: no detectable {what} in {max_redraws} draws")
+
+
+_CHANNELS: dict[tuple[str, str, int], list[Channel]] = {}
+
+
+def _detectable(
+    config: MotionSystem, dof: str, exts: tuple[Extension, ...], imu_noise: float, seed: int
+) -> bool:
+    """Return whether a draw passes the drawing rule of the module docstring."""
+    imu = nominal_imu({}, config.platform)
+    key = (config.name, dof, seed)
+    if key not in _CHANNELS:  # the nominal runs depend on platform, DOF and seed only
+        if any(k[2] != seed for k in _CHANNELS):
+            _CHANNELS.clear()
+        _CHANNELS[key] = [_channel(config, dof, number, imu, seed) for number in (1, 2)]
+    channels = _CHANNELS[key]
+    case = Case(config, "reduced", imu, channels, seed)
+    base = Model(case, dof)
+    power = (1.0, imu_noise**2)
+    evidence = [lines(c, sd=nominal_line_sd(c, power)) for c in channels]
+    dynamic = [e for e in exts if e.effect != "noise"]
+    for e in exts:
+        others = [x for x in dynamic if x is not e]
+        if e.effect == "noise":
+            segs = [segment(c).scaled(power) for c in channels]
+            if expected_noise_delta_bic(e.value("scale"), segs) < DETECTABLE_FACTOR * BIC_MARGIN:
+                return False
+            continue
+        ctx = base
+        for x in others:
+            ctx = ctx.with_(x)
+        if expected_delta_bic(ctx, [e], evidence) < DETECTABLE_FACTOR * BIC_MARGIN:
+            return False
+    if dynamic:
+        for name, sd in fisher_std(base, dynamic, evidence).items():
+            effect, par = name.split(".")
+            ext = next(x for x in dynamic if x.effect == effect)
+            tol = TOLERANCE.get(par, RELATIVE_TOLERANCE * abs(ext.value(par)))
+            if not sd <= tol / 3:
+                return False
+    return True
 
 
 def _channel(config: MotionSystem, dof: str, number: int, imu: ImuSpec, seed: int) -> Channel:
@@ -161,7 +261,7 @@ def record(
     """Simulate the runs of a hidden case and write them (meta names the nominal only)."""
     return record_runs(
         hidden.truth, hidden.config, hidden.dof, out, hidden.seed, model, signals,
-        with_signal_meta,
+        with_signal_meta, hidden.imu,
     )  # fmt: skip
 
 
@@ -174,6 +274,7 @@ def record_runs(
     model: str = "reduced",
     signals: tuple[int, ...] = (1, 2),
     with_signal_meta: bool = True,
+    imu: ImuSpec | None = None,
 ) -> list[Path]:
     """Simulate Table 5.2 multi-sines through ``truth``; write run folders that name ``nominal``.
 
@@ -193,13 +294,15 @@ def record_runs(
         Table 5.2 signals to run.
     with_signal_meta : bool
         Write the signal design into ``meta.json`` (without it the diagnosis infers it).
+    imu : ImuSpec, optional
+        The recording IMU (the platform's nominal one by default).
 
     """
     out = Path(out)
     folders = []
     for number in signals:
         sig = describing_signal(number, dof, settle_s=None)
-        run = prepare(truth, sig.commands, model, 7919 * seed + number)
+        run = prepare(truth, sig.commands, model, 7919 * seed + number, imu)
         meta = run_meta(
             run, f"hidden-effect run, seed {seed}", nominal, sig if with_signal_meta else None
         )

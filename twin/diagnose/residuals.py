@@ -28,7 +28,7 @@ log-likelihood, which treats bins as independent, is divided by ``TAPER_CORRELAT
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -69,8 +69,10 @@ class Segment:
         Their frequencies [Hz].
     measured : ndarray of complex
         rfft of the measured signal at ``bins``.
-    noise_psd : ndarray
-        Nominal noise periodogram expectation at ``bins``.
+    source_psd : ndarray, shape (2, bins)
+        Periodogram expectation of each nominal noise source (motion, IMU) at ``bins``.
+    scales : tuple of float
+        Power factors on the sources (1, 1: the nominal noise; fitted: the measured noise).
 
     """
 
@@ -81,7 +83,17 @@ class Segment:
     bins: NDArray[np.int_]
     f: FloatArray
     measured: ComplexArray
-    noise_psd: FloatArray
+    source_psd: FloatArray
+    scales: tuple[float, float] = (1.0, 1.0)
+
+    @property
+    def noise_psd(self) -> FloatArray:
+        """Noise periodogram expectation at ``bins``: the sources times their scales."""
+        return np.maximum(np.asarray(self.scales) @ self.source_psd, 1e-30)
+
+    def scaled(self, scales: tuple[float, float]) -> Segment:
+        """Return the segment with other power factors on the noise sources."""
+        return replace(self, scales=(float(scales[0]), float(scales[1])))
 
     def spectrum(self, x: FloatArray) -> ComplexArray:
         """Return the tapered rfft of a full-length signal over this segment, at the band's bins."""
@@ -120,8 +132,14 @@ def segment(
     lo = max(0.5 * float(ch.lines_hz.min()), 2 * f[1])
     bins = np.flatnonzero((f >= lo) & (f <= max_hz))
     taper = signal.windows.hann(n, sym=False)
-    periodograms = np.abs(np.fft.rfft(ch.noise[:, mask] * taper, axis=1)) ** 2
-    mean = periodograms.mean(axis=0)
+    measured = np.fft.rfft(ch.measured[mask] * taper)[bins]
+    psd = np.array([_source_psd(x[:, mask] * taper, bins) for x in ch.sources])
+    return Segment(ch, tuple(w), mask, taper, bins, f[bins], measured, psd)
+
+
+def _source_psd(tapered: FloatArray, bins: NDArray[np.int_]) -> FloatArray:
+    """Smoothed mean periodogram of noise realisations (rows), bias-corrected, at ``bins``."""
+    mean = (np.abs(np.fft.rfft(tapered, axis=1)) ** 2).mean(axis=0)
     mean[0] = 0.0  # the DC bin holds the IMU's bias: keep it out of the smoothing
     weight = np.ones_like(mean)
     weight[0] = 0.0
@@ -129,10 +147,8 @@ def segment(
     smooth = np.convolve(mean, kernel, "same") / np.convolve(weight, kernel, "same")
     # 1 / S-hat is biased high by m / (m - 1) for an average of m exponential periodograms
     # (m counted in independent bins): scale S-hat up so that E[|R|^2 / S-hat] = 1
-    m = ch.noise.shape[0] * (2 * SMOOTH_BINS + 1) / TAPER_CORRELATION
-    psd = np.maximum(smooth[bins], 1e-30) * m / (m - 1)
-    measured = np.fft.rfft(ch.measured[mask] * taper)[bins]
-    return Segment(ch, tuple(w), mask, taper, bins, f[bins], measured, psd)
+    m = tapered.shape[0] * (2 * SMOOTH_BINS + 1) / TAPER_CORRELATION
+    return smooth[bins] * m / (m - 1)
 
 
 def line_bins(seg: Segment, f: FloatArray) -> NDArray[np.int_]:

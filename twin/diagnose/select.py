@@ -1,42 +1,56 @@
-"""Name the cause: forward selection of extensions by BIC, and the gain on held-out data.
+"""Name the causes: joint fits of sets of effects, BIC selection, and a held-out gate.
 
-For each analysed DOF, starting from the nominal model, every effect not yet in the model is
-fitted on top of it over the measurement windows of all runs; the one with the largest
-improvement of the Bayesian information criterion,
+For each analysed DOF the line evidence (:mod:`twin.diagnose.evidence`) is fitted, on top of
+the nominal model, with every single dynamic effect and every pair of them (parameters fitted
+jointly, :func:`twin.diagnose.candidates.fit_set`); pairs with ``backlash`` are screened on
+the plays of its grid (each play is a simulation, shared by all pairs) and the named set is
+refined. With chi2 = -log L,
 
-    dBIC = 2 (log L_with - log L_without) - p ln(n),
+    BIC = 2 chi2 + p ln(n)
 
-(p fitted parameters, n = 2 x the number of frequency bins: real observations) is added when
-dBIC > ``BIC_MARGIN`` (10: "very strong" evidence on Kass and Raftery's scale), and the search
-repeats. A run that the nominal model explains within its noise therefore yields no finding.
-Findings are ranked by dBIC, most important first.
+(p fitted parameters, n = 2 x the number of lines: real observations). A set can be named when
+it beats the nominal model by more than ``BIC_MARGIN`` (10: "very strong" evidence on Kass and
+Raftery's scale) *and* every member is needed: the set beats each of its subsets by the margin
+(so a pair is named only when both effects are). Of those, the sets within ``OCCAM_WINDOW`` of
+the best BIC are equally supported, and the one with the fewest parameters is named. From a
+named pair a third effect is added when it improves the BIC by the margin again. This is
+forward-backward selection over all pairs: a cause that only looked best alone is replaced when
+two others
+explain the data better.
 
-The gain of each finding is measured on data not used to fit it: two-fold cross-validation
-over the halves of the measurement window (parameters fitted on one half, evaluated on the
-other, and the reverse; the mean is reported), or a whole validation run. Reported: VAF of the
-measured signal, the describing-function error (mean |dB| and |deg| over the lines, measured
-over predicted) and the log-likelihood per bin, before -> after adding the finding (the
-findings ranked above it are in both).
+Then the held-out gate: every named effect must improve the data it was not fitted on, on the
+evidence it claims to explain: the set is refitted with and without the effect on one half of
+the measurement window and scored on the other (two-fold, both ways), or on validation runs;
+an effect whose held-out line error (chi2 per line: the describing-function error at the
+excited lines, weighted by its uncertainty) does not fall is dropped. Reported per finding,
+before -> after (the set without it -> with it): held-out chi2 per line, describing-function
+error (mean |dB| and |deg| of measured over predicted at the lines) and VAF.
+
+Alternatives (other sets within the margin of the named one) and the correlations of the
+jointly fitted parameters are reported, so trade-offs (delay vs lead vs filter) are visible.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from itertools import combinations
 
 import numpy as np
 from numpy.typing import NDArray
 
-from twin.chain.extensions import EFFECTS, Extension
-from twin.diagnose.candidates import Fit, Model, fit_candidate
+from twin.chain.extensions import Extension
+from twin.diagnose.candidates import DYNAMIC, Model, SetFit, fit_set, numeric_names
 from twin.diagnose.data import Case, Channel
-from twin.diagnose.residuals import MAX_HZ, Segment, decomposition, segment
+from twin.diagnose.evidence import Lines, lines
 
 FloatArray = NDArray[np.float64]
 #: Evidence needed to name a cause [BIC units].
 BIC_MARGIN = 10.0
-#: Most findings per DOF.
-MAX_FINDINGS = 3
+#: Sets whose BIC is within this of the best are equally supported: the one with the fewest
+#: parameters is named (a platform filter is a resonance with damping 1; the data cannot
+#: prefer the resonance for a better fit of the noise).
+OCCAM_WINDOW = 6.0
 
 
 @dataclass
@@ -46,17 +60,23 @@ class Finding:
     Attributes
     ----------
     extension : Extension
-        Effect and fitted parameters.
+        Effect, fitted parameters and DOFs.
     evidence : dict
-        Criterion, dBIC, log-likelihood gain, observations, parameter standard deviations.
+        Criterion, dBIC, chi2, observations, parameter standard deviations and correlations,
+        alternatives.
     gain : dict
-        Held-out VAF, describing-function error and log-likelihood before -> after.
+        Held-out describing-function error, chi2 per line and VAF, before -> after.
 
     """
 
     extension: Extension
     evidence: dict[str, object]
     gain: dict[str, object] = field(default_factory=dict)
+
+    @property
+    def delta_bic(self) -> float:
+        """BIC improvement that named it."""
+        return float(self.evidence["delta_bic"])  # type: ignore[arg-type]
 
     def to_json(self) -> dict[str, object]:
         """Return the finding in the fixed JSON vocabulary."""
@@ -70,173 +90,269 @@ class Finding:
         }
 
 
-def _needs_backlash(segments: Sequence[Segment]) -> bool:
-    """Fit backlash only where the residual has more than noise off the lines (it is slow)."""
-    return any(t.significant and t.ratio > 1 for s in segments for t in decomposition(s))
+@dataclass(frozen=True)
+class Selection:
+    """What :func:`select` decided for one DOF.
+
+    Attributes
+    ----------
+    fit : SetFit or None
+        The named set (None: the nominal model stands).
+    delta_bic : dict of str to float
+        BIC improvement of each named effect (the set against the set without it).
+    table : list of dict
+        Every set tried: effects, chi2, parameters, BIC improvement over the nominal model.
+    observations : int
+        Real observations (2 x lines).
+
+    """
+
+    fit: SetFit | None
+    delta_bic: dict[str, float]
+    table: list[dict[str, object]]
+    observations: int
+
+
+def bic_gain(chi2_0: float, chi2_1: float, extra_parameters: int, n: int) -> float:
+    """BIC improvement of a model with ``extra_parameters`` more: 2 dchi2 - dp ln n."""
+    return 2.0 * (chi2_0 - chi2_1) - extra_parameters * np.log(n)
 
 
 def select(
-    case: Case,
-    dof: str,
-    max_hz: float = MAX_HZ,
-    effects: Sequence[str] | None = None,
+    model: Model,
+    evidence: Sequence[Lines],
+    effects: Sequence[str] = DYNAMIC,
     progress: Callable[[str], None] | None = None,
-) -> tuple[list[Finding], Model]:
-    """Forward selection of extensions for one DOF (see module docstring)."""
-    channels = case.of(dof)
-    segments = [segment(ch, max_hz=max_hz) for ch in channels]
-    n_obs = 2 * sum(s.size for s in segments)
-    effects = list(effects or EFFECTS)
-    if "backlash" in effects and not _needs_backlash(segments):
-        effects.remove("backlash")
-    model = Model(case, dof)
-    ll = model.loglik(segments)
-    findings: list[Finding] = []
-    while len(findings) < MAX_FINDINGS:
-        used = {f.extension.effect for f in findings}
-        fits: list[tuple[float, Fit]] = []
-        for effect in effects:
-            if effect in used:
-                continue
+) -> Selection:
+    """Forward-backward selection over all single effects and pairs (see module docstring)."""
+    n = 2 * sum(x.size for x in evidence)
+    chi0 = model.chi2(evidence)
+    fits: dict[tuple[str, ...], SetFit] = {}
+
+    def fit(es: tuple[str, ...], start: dict | None = None, coarse: bool = False) -> SetFit:
+        key = tuple(sorted(es))
+        if key not in fits:
             if progress:
-                progress(f"{dof}: fitting {effect}")
-            fit = fit_candidate(effect, model, segments)
-            p = len(EFFECTS[effect]) - (effect == "sensor_filter")  # channels are not fitted
-            fits.append((2 * (fit.loglik - ll) - p * np.log(n_obs), fit))
-        if not fits:
-            break
-        dbic, best = max(fits, key=lambda x: x[0])
-        if dbic <= BIC_MARGIN:
-            break
-        findings.append(
-            Finding(
-                best.extension,
-                {
-                    "criterion": f"BIC improvement > {BIC_MARGIN:g}",
-                    "delta_bic": float(dbic),
-                    "log_likelihood_gain": float(best.loglik - ll),
-                    "observations": int(n_obs),
-                    "parameter_std": best.std,
-                    "runner_up": _runner_up(fits, best),
-                    "window_s": [list(s.window) for s in segments],
-                    "band_hz": [float(min(s.f[0] for s in segments)), float(max_hz)],
-                },
-            )
-        )
-        model = model.with_(best.extension)
-        ll = best.loglik
-    return findings, model
+                progress(f"{model.dof}: fitting {' + '.join(key)}")
+            fits[key] = fit_set(key, model, evidence, start, coarse)
+        return fits[key]
+
+    def gain_of(es: tuple[str, ...]) -> float:
+        f = fits[tuple(sorted(es))]
+        return bic_gain(chi0, f.chi2, f.parameters, n)
+
+    singles = [e for e in effects if e != "backlash"]
+    for e in singles:
+        fit((e,))
+    if "backlash" in effects:
+        fit(("backlash",))
+    for pair in combinations(effects, 2):
+        # pairs with backlash are screened on the plays of its grid (simulated once, for the
+        # single fit); the named set is refined below
+        fit(pair, coarse="backlash" in pair)
+
+    def needed(es: tuple[str, ...]) -> dict[str, float]:
+        """BIC improvement of each member over the set without it (inf for a single)."""
+        f = fits[tuple(sorted(es))]
+        out = {}
+        for e in es:
+            rest = tuple(x for x in es if x != e)
+            if rest:
+                r = fit(rest)
+                out[e] = bic_gain(r.chi2, f.chi2, f.parameters - r.parameters, n)
+            else:
+                out[e] = gain_of(es)
+        return out
+
+    def named_ok(k: tuple[str, ...]) -> bool:
+        return gain_of(k) > BIC_MARGIN and all(v > BIC_MARGIN for v in needed(k).values())
+
+    passing = [k for k in fits if named_ok(k)]
+    chosen: tuple[str, ...] = ()
+    if passing:  # Occam's window: the fewest parameters among the sets near the best
+        top = max(gain_of(k) for k in passing)
+        near = [k for k in passing if gain_of(k) >= top - OCCAM_WINDOW]
+        chosen = min(near, key=lambda k: (fits[k].parameters, -gain_of(k)))
+    if "backlash" in chosen and len(chosen) > 1:  # refine the screened play
+        fits[chosen] = fit_set(chosen, model, evidence, _start(fits[chosen]))
+    if len(chosen) == 2:  # forward: a third effect on top of the named pair
+        best = None
+        for e in effects:
+            if e in chosen or e == "backlash":
+                continue
+            start = {x.effect: [x.value(k) for k in numeric_names(x.effect)]
+                     for x in fits[chosen].extensions}  # fmt: skip
+            trio = tuple(sorted((*chosen, e)))
+            fits[trio] = fit_set(trio, model, evidence, None)
+            if fits[trio].chi2 > fits[chosen].chi2:  # a poor start: from the pair's values
+                start[e] = [float(v) for v in fit((e,)).extensions[0].parameters.values()
+                            if isinstance(v, float)]  # fmt: skip
+                fits[trio] = fit_set(trio, model, evidence, start)
+            if all(v > BIC_MARGIN for v in needed(trio).values()) and (
+                best is None or gain_of(trio) > gain_of(best)
+            ):
+                best = trio
+        if best is not None:
+            chosen = best
+    table = [
+        {
+            "effects": list(k),
+            "chi2": fits[k].chi2,
+            "delta_bic": gain_of(k),
+            "parameters": {
+                e.effect: {p: e.value(p) for p in numeric_names(e.effect)}
+                for e in fits[k].extensions
+            },
+        }
+        for k in sorted(fits, key=lambda k: -gain_of(k))
+    ]
+    if not chosen:
+        return Selection(None, {}, table, n)
+    return Selection(fits[chosen], needed(chosen), table, n)
 
 
-def _runner_up(fits: list[tuple[float, Fit]], best: Fit) -> dict[str, object] | None:
-    rest = sorted((f for f in fits if f[1] is not best), key=lambda x: -x[0])
-    if not rest:
-        return None
-    dbic, fit = rest[0]
-    return {"effect": fit.extension.effect, "delta_bic": float(dbic)}
+def alternatives(sel: Selection, limit: int = 3) -> list[dict[str, object]]:
+    """Other sets whose BIC is within the margin of the named one (what it trades off with)."""
+    if sel.fit is None:
+        return []
+    chosen = sorted(sel.fit.effects)
+    top = next(r["delta_bic"] for r in sel.table if r["effects"] == chosen)
+    out = [
+        {"effects": r["effects"], "delta_bic_below_named": float(top - r["delta_bic"])}  # type: ignore[operator]
+        for r in sel.table
+        if r["effects"] != chosen and top - r["delta_bic"] < BIC_MARGIN  # type: ignore[operator]
+    ]
+    return out[:limit]
 
 
-# --- gain on held-out data ---------------------------------------------------------------------
+# --- the held-out gate -------------------------------------------------------------------------
 
 
-def line_amplitudes(
-    t: FloatArray, y: FloatArray, f: FloatArray, window: tuple[float, float]
-) -> NDArray[np.complex128]:
-    """Least-squares complex amplitudes of sines at ``f`` over ``window`` (any length)."""
-    sel = (t >= window[0] - 1e-9) & (t < window[1] - 1e-9)
-    tt = t[sel]
-    a = np.hstack([np.sin(2 * np.pi * np.outer(tt, f)), np.cos(2 * np.pi * np.outer(tt, f))])
-    a = np.hstack([a, np.ones((tt.size, 1))])
-    c, *_ = np.linalg.lstsq(a, y[sel], rcond=None)
-    m = f.size
-    return c[:m] + 1j * c[m : 2 * m]
+def _start(fit: SetFit) -> dict[str, list[float]]:
+    return {e.effect: [e.value(k) for k in numeric_names(e.effect)] for e in fit.extensions}
 
 
-def scores(model: Model, ch: Channel, seg: Segment) -> dict[str, float]:
-    """VAF [%], describing-function error (mean |dB|, |deg|) and log-likelihood per bin."""
-    pred = model.predict(ch)
-    sel = seg.mask
+def _scores(model: Model, x: Lines) -> dict[str, float]:
+    """chi2 per line, describing-function error and VAF of a model on held-out lines."""
+    pred = model.line_prediction(x)
+    r = x.measured / pred
+    ch = x.channel
+    sel = (ch.t >= x.window[0] - 1e-9) & (ch.t < x.window[1] - 1e-9)
     y = ch.measured[sel]
-    vaf = 100 * (1 - np.var(y - pred[sel]) / np.var(y))
-    r = line_amplitudes(ch.t, ch.measured, ch.lines_hz, seg.window) / line_amplitudes(
-        ch.t, pred, ch.lines_hz, seg.window
-    )
+    vaf = 100 * (1 - np.var(y - model.predict(ch)[sel]) / np.var(y))
     return {
-        "vaf": float(vaf),
+        "chi2_per_line": x.chi2(pred) / x.size,
         "df_error_db": float(np.mean(np.abs(20 * np.log10(np.abs(r))))),
         "df_error_deg": float(np.mean(np.abs(np.degrees(np.angle(r))))),
-        "loglik_per_bin": model.loglik([seg]) / seg.size,
+        "vaf": float(vaf),
     }
-
-
-def _refit(
-    case: Case, dof: str, findings: Sequence[Finding], segments: Sequence[Segment]
-) -> list[Model]:
-    """Models with the first 0..m findings, parameters refitted on ``segments``."""
-    model = Model(case, dof)
-    models = [model]
-    for f in findings:
-        ext = f.extension
-        start = [v for k, v in ext.parameters.items() if k != "channels"]
-        fit = fit_candidate(ext.effect, model, segments, start=start)
-        model = model.with_(fit.extension)
-        models.append(model)
-    return models
 
 
 def _mean(rows: list[dict[str, float]]) -> dict[str, float]:
     return {k: float(np.mean([r[k] for r in rows])) for k in rows[0]}
 
 
-def held_out_gain(
-    case: Case,
-    dof: str,
-    findings: Sequence[Finding],
-    max_hz: float = MAX_HZ,
-    validation: Case | None = None,
-    model: Model | None = None,
-) -> list[dict[str, object]]:
-    """Gain of each finding on data not used to fit it (see module docstring)."""
-    if not findings:
-        return []
-    if validation is not None:
-        models = (
-            _models_of(model, len(findings))
-            if model
-            else _refit(case, dof, findings, [segment(c, max_hz=max_hz) for c in case.of(dof)])
-        )
-        tests = [(models, ch, segment(ch, max_hz=max_hz)) for ch in validation.of(dof)]
-        held_out = "validation run(s)"
-    else:
-        tests = []
-        for ch in case.of(dof):
-            a, b = ch.halves()
-            for fit_w, test_w in ((a, b), (b, a)):
-                models = _refit(case, dof, findings, [segment(ch, fit_w, max_hz)])
-                tests.append((models, ch, segment(ch, test_w, max_hz)))
-        held_out = "other half of the measurement window (two-fold)"
-    if not tests:
-        return [{"held_out": "no validation channel of this DOF"} for _ in findings]
+def folds(
+    case: Case, dof: str, validation: Case | None = None
+) -> tuple[list[tuple[list[Lines], list[Lines]]], str]:
+    """Fitting and held-out evidence: the halves of each window both ways, or validation runs."""
+    channels = case.of(dof)
+    if validation is not None and validation.of(dof):
+        fit_on = [lines(c) for c in channels]
+        return [(fit_on, [lines(c) for c in validation.of(dof)])], "validation run(s)"
     out = []
-    for i in range(len(findings)):
-        before = _mean([scores(ms[i], ch, seg) for ms, ch, seg in tests])
-        after = _mean([scores(ms[i + 1], ch, seg) for ms, ch, seg in tests])
-        out.append(
-            {
-                "held_out": held_out,
-                "vaf_before": before["vaf"],
-                "vaf_after": after["vaf"],
-                "df_error_db_before": before["df_error_db"],
-                "df_error_db_after": after["df_error_db"],
-                "df_error_deg_before": before["df_error_deg"],
-                "df_error_deg_after": after["df_error_deg"],
-                "loglik_per_bin_before": before["loglik_per_bin"],
-                "loglik_per_bin_after": after["loglik_per_bin"],
-            }
-        )
+    for i in (0, 1):
+        fit_on, test_on = [], []
+        for c in channels:
+            halves = c.halves()
+            full_sd = lines(c).sd
+            fit_on.append(lines(c, halves[i], full_sd))
+            test_on.append(lines(c, halves[1 - i], full_sd))
+        out.append((fit_on, test_on))
+    return out, "other half of the measurement window (two-fold)"
+
+
+def held_out(
+    model: Model, fit: SetFit, folds_: list[tuple[list[Lines], list[Lines]]]
+) -> dict[str, dict[str, float]]:
+    """Held-out scores of the set with and without each member (refitted on each fold)."""
+    start = _start(fit)
+    out: dict[str, dict[str, float]] = {}
+    for e in fit.effects:
+        rest = tuple(x for x in fit.effects if x != e)
+        before, after = [], []
+        for fit_on, test_on in folds_:
+            with_ = fit_set(fit.effects, model, fit_on, start)
+            m1 = model
+            for x in with_.extensions:
+                m1 = m1.with_(x)
+            m0 = model
+            if rest:
+                without = fit_set(rest, model, fit_on, {k: start[k] for k in rest})
+                for x in without.extensions:
+                    m0 = m0.with_(x)
+            before += [_scores(m0, x) for x in test_on]
+            after += [_scores(m1, x) for x in test_on]
+        b, a = _mean(before), _mean(after)
+        out[e] = {f"{k}_before": b[k] for k in b} | {f"{k}_after": a[k] for k in a}
     return out
 
 
-def _models_of(model: Model, m: int) -> list[Model]:
-    """Return the nested models of a selected model (first 0..m extensions)."""
-    return [Model(model.case, model.dof, model.extensions[:i], model._cache) for i in range(m + 1)]
+def name_causes(
+    case: Case,
+    dof: str,
+    base: Model,
+    validation: Case | None = None,
+    effects: Sequence[str] = DYNAMIC,
+    progress: Callable[[str], None] | None = None,
+) -> tuple[list[Finding], Model, Selection]:
+    """Select, gate on held-out data, and return the findings of one DOF with the model."""
+    evidence = [lines(c) for c in case.of(dof)]
+    sel = select(base, evidence, effects, progress)
+    if sel.fit is None:
+        return [], base, sel
+    fold_list, how = folds(case, dof, validation)
+    fit = sel.fit
+    gains = held_out(base, fit, fold_list)
+    keep = tuple(e for e in fit.effects if gains[e]["chi2_per_line_after"]
+                 < gains[e]["chi2_per_line_before"])  # fmt: skip
+    dropped = [e for e in fit.effects if e not in keep]
+    if dropped:
+        if not keep:
+            return [], base, Selection(None, {}, sel.table, sel.observations)
+        fit = fit_set(keep, base, evidence, {k: v for k, v in _start(fit).items() if k in keep})
+        gains = held_out(base, fit, fold_list)
+    model = base
+    for x in fit.extensions:
+        model = model.with_(x)
+    findings = []
+    for ext in fit.extensions:
+        e = ext.effect
+        findings.append(
+            Finding(
+                ext,
+                {
+                    "criterion": f"BIC improvement > {BIC_MARGIN:g} for the set and for each "
+                    "member; held-out line error falls",
+                    "delta_bic": float(sel.delta_bic.get(e, np.nan)),
+                    "set": list(fit.effects),
+                    "chi2_nominal": float(base.chi2(evidence)),
+                    "chi2_extended": float(fit.chi2),
+                    "observations": int(sel.observations),
+                    "parameter_std": fit.std.get(e, {}),
+                    "correlation": fit.correlation,
+                    "alternatives": alternatives(sel),
+                    "dropped_by_held_out_gate": dropped,
+                    "window_s": [list(c.window) for c in case.of(dof)],
+                    "lines_hz": sorted({float(f) for c in case.of(dof) for f in c.lines_hz}),
+                },
+                {"held_out": how, **gains[e]},
+            )
+        )
+    findings.sort(key=lambda f: -f.delta_bic)
+    return findings, model, sel
+
+
+def channels_of(evidence: Sequence[Lines]) -> list[Channel]:
+    """Distinct channels of some evidence."""
+    return list({id(x.channel): x.channel for x in evidence}.values())

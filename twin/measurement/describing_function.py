@@ -191,18 +191,29 @@ def neighbour_noise(
     ndarray, shape (m,)
 
     """
+    out = np.full(np.size(frequencies_hz), np.nan)
+    for i, fs in enumerate(neighbour_bins(frequencies_hz, window, bins)):
+        if fs.size:
+            out[i] = np.sqrt(np.mean(np.abs(fourier_coefficients(t, y, fs, window)) ** 2))
+    return out
+
+
+def neighbour_bins(
+    frequencies_hz: ArrayLike, window: tuple[float, float], bins: int = 3
+) -> list[FloatArray]:
+    """Return the frequencies of the noise-only bins next to each excited frequency.
+
+    Per frequency, up to ``2 bins`` bins of the window's resolution that are neither excited
+    nor a 2nd or 3rd harmonic of an excited frequency (see :func:`neighbour_noise`).
+    """
     f = np.asarray(frequencies_hz, dtype=float)
     df = 1.0 / (window[1] - window[0])
-    taken = np.round(np.concatenate([f, 2 * f, 3 * f]) / df).astype(int)
-    out = np.empty(f.size)
-    for i, fi in enumerate(f):
+    taken = set(np.round(np.concatenate([f, 2 * f, 3 * f]) / df).astype(int).tolist())
+    out = []
+    for fi in f:
         k0 = round(fi / df)
         ks = [k0 + j for j in range(-bins, bins + 1) if j and k0 + j > 0 and k0 + j not in taken]
-        if not ks:
-            out[i] = np.nan
-            continue
-        c = fourier_coefficients(t, y, np.array(ks) * df, window)
-        out[i] = np.sqrt(np.mean(np.abs(c) ** 2))
+        out.append(np.array(ks, dtype=float) * df)
     return out
 
 
