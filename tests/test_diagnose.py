@@ -35,8 +35,9 @@ def test_the_clean_seeds_cover_mpi_srs_heave_pitch():
 
 
 @pytest.mark.parametrize(
-    "seed",  # two clean cases in the default suite (one per platform), all four in the slow one
-    [s if s in (100, 101) else pytest.param(s, marks=pytest.mark.slow) for s in CLEAN_SEEDS],
+    "seed",  # one clean case in the default suite (test_diagnose_hidden.py has two more with
+    # another IMU), all four in the slow one
+    [s if s == 101 else pytest.param(s, marks=pytest.mark.slow) for s in CLEAN_SEEDS],
 )
 def test_clean_runs_yield_no_finding(seed, tmp_path):
     """Clean cases (MPI/SRS, heave/pitch): no finding."""
@@ -76,6 +77,7 @@ def test_2008_mpi_software_against_the_35_ms_nominal_is_a_65_ms_delay(dof, seed,
     assert [f.extension.effect for f in d.findings[1:]] in ([], ["noise"])
 
 
+@pytest.mark.slow
 def test_srs_resonance_of_eq_5_12_against_an_ideal_srs(tmp_path):
     """§5.6.1: the SRS baseline's heave response 1 + 0.023 s (Eq 5.12) -> lead in heave."""
     srs = motion_system("srs")
@@ -186,6 +188,6 @@ def test_malformed_runs_exit_2_with_one_line(tmp_path, delay_runs, capsys):
 
 
 def test_same_seed_same_diagnosis(delay_runs):
-    a = diagnose(delay_runs[0][:1], seed=3).to_json_safe()
-    b = diagnose(delay_runs[0][:1], seed=3).to_json_safe()
+    a = diagnose(delay_runs[0][:1], seed=3, realisations=2).to_json_safe()
+    b = diagnose(delay_runs[0][:1], seed=3, realisations=2).to_json_safe()
     assert json.dumps(a) == json.dumps(b)

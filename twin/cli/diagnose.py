@@ -41,6 +41,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--save-config", metavar="FILE", help="write the extended configuration (JSON)")
     p.add_argument("--max-hz", type=float, default=15.0, help="top of the band (default 15 Hz)")
     p.add_argument("--dof", nargs="+", help="DOFs to analyse (default: the driven ones)")
+    p.add_argument("--imu-noise", type=float, metavar="FACTOR",
+                   help="the IMU's noise over its data sheet's, when known (e.g. from a "
+                   "recording at rest); default: fitted as a nuisance")  # fmt: skip
     p.add_argument("--no-figures", action="store_true", help="skip figures and the .rrd")
     p.set_defaults(func=_cmd_diagnose)
 
@@ -63,7 +66,7 @@ def _cmd_diagnose(args: argparse.Namespace) -> int:
 
     d = diagnose(
         args.runs, _nominal(args), args.model, args.validate, args.max_hz, args.seed, args.dof,
-        progress=common.progress(args),
+        progress=common.progress(args), imu_noise=args.imu_noise,
     )  # fmt: skip
     out = Path(args.out) if args.out else Path("out") / f"diagnose-{Path(args.runs[0]).name}"
     write_report(d, out, figures=not args.no_figures, rrd=not args.no_figures)

@@ -395,7 +395,7 @@ def _fit_with_backlash(
 
     if start is not None and "backlash" in start:
         centre = float(start["backlash"][0])
-        lo, hi = centre / 1.5, centre * 1.5
+        lo, hi = centre / 2.0, centre * 2.0
         if coarse:
             profile(centre)
     else:
@@ -412,6 +412,10 @@ def _fit_with_backlash(
     play = min(memo, key=lambda p: memo[p][0])  # the best play evaluated
     chi2, exts, jac, layout = memo[play]
     ext_b = make_extension("backlash", ["play"], [play], model.dof)
+    if coarse:  # a screening fit: no statistics (they would cost two simulations per run)
+        nan = float("nan")
+        std = {e.effect: dict.fromkeys(numeric_names(e.effect), nan) for e in (ext_b, *exts)}
+        return SetFit((ext_b, *exts), chi2, std, {"labels": [], "matrix": []})
     # the play's column of the Jacobian: central difference with the linear effects held
     col = []
     for k in (1.01, 1 / 1.01):

@@ -49,12 +49,15 @@ def expected_delta_bic(base: Model, exts: Sequence[Extension], evidence: Sequenc
     return 2 * gain + p - p * np.log(n)
 
 
-def expected_noise_delta_bic(scale: float, segments: Sequence[Segment]) -> float:
+def expected_noise_delta_bic(
+    scale: float, segments: Sequence[Segment], imu_known: bool = False
+) -> float:
     """Return the expected BIC improvement of naming motion noise ``scale`` x the nominal.
 
     The IMU's noise level is a nuisance fitted in both models, so the evidence is what the
     motion noise adds that a rescaled IMU noise cannot mimic: the Kullback-Leibler divergence
-    of the true spectrum from the best nominal-motion-noise spectrum with the IMU factor free.
+    of the true spectrum from the best nominal-motion-noise spectrum with the IMU factor free
+    (``imu_known``: held at its value).
     """
     parts = []
     for seg in segments:
@@ -71,6 +74,8 @@ def expected_noise_delta_bic(scale: float, segments: Sequence[Segment]) -> float
             total += float(np.sum(r - 1 - np.log(r)))
         return total
 
+    if imu_known:
+        return 2 * kl(0.0) / TAPER_CORRELATION + 1 - np.log(bins / TAPER_CORRELATION)
     best = optimize.minimize_scalar(kl, bounds=(np.log(1e-3), np.log(1e3)), method="bounded")
     return 2 * float(best.fun) / TAPER_CORRELATION + 1 - np.log(bins / TAPER_CORRELATION)
 
@@ -117,7 +122,10 @@ def _threshold(excess, a: float, b: float, xtol: float) -> float | None:
 
 
 def smallest_detectable(
-    base: Model, evidence: Sequence[Lines], segments: Sequence[Segment] = ()
+    base: Model,
+    evidence: Sequence[Lines],
+    segments: Sequence[Segment] = (),
+    imu_known: bool = False,
 ) -> dict[str, object]:
     """Per effect, the smallest size the runs would have shown (expected dBIC = the margin).
 
@@ -180,7 +188,7 @@ def smallest_detectable(
     if segments and any(s.source_psd[0].any() for s in segments):
 
         def nx(scale: float) -> float:
-            return expected_noise_delta_bic(scale, segments) - BIC_MARGIN
+            return expected_noise_delta_bic(scale, segments, imu_known) - BIC_MARGIN
 
         lo_n, hi_n = _threshold(nx, 1 - 1e-9, 0.01, 1e-4), _threshold(nx, 1 + 1e-9, 30.0, 1e-4)
         out["noise"] = {

@@ -276,6 +276,7 @@ def diagnose(
     dofs: Sequence[str] | None = None,
     realisations: int = NOISE_REALISATIONS,
     progress: Callable[[str], None] | None = None,
+    imu_noise: float | None = None,
 ) -> Diagnosis:
     """Diagnose recorded runs against the nominal twin.
 
@@ -299,8 +300,13 @@ def diagnose(
         Noise realisations per run for the nominal noise spectrum.
     progress : callable, optional
         Called with a message at each step.
+    imu_noise : float, optional
+        The recording IMU's noise over the data sheet's (amplitude) when known, e.g. from a
+        recording at rest; by default it is fitted as a nuisance.
 
     """
+    if imu_noise is not None and not (np.isfinite(imu_noise) and imu_noise > 0):
+        raise SignalError(f"imu_noise must be a finite factor > 0; got {imu_noise!r}")
     if not np.isfinite(max_hz) or not 0.5 < max_hz <= 45.0:
         raise SignalError(
             f"max_hz must be in (0.5, 45] Hz (below the 50 Hz Nyquist frequency of the 100 Hz "
@@ -317,7 +323,7 @@ def diagnose(
         findings, fitted, sel = name_causes(case, dof, base, val, progress=progress)
         if progress:
             progress(f"{dof}: noise")
-        noise = judge_noise(fitted, BIC_MARGIN, max_hz)
+        noise = judge_noise(fitted, BIC_MARGIN, max_hz, imu_noise)
         if noise.named:
             findings.append(_noise_finding(dof, noise))
         segs = [segment(c, max_hz=max_hz).scaled(noise.fit.scales) for c in channels]
@@ -328,7 +334,7 @@ def diagnose(
             line_ratios(channels, preds),
             [decomposition(s) for s in segs],
             [residual_bands(s, p) for s, p in zip(segs, preds, strict=True)],
-            smallest_detectable(fitted, [lines(c) for c in channels], segs),
+            smallest_detectable(fitted, [lines(c) for c in channels], segs, imu_noise is not None),
             noise,
             sel,
             findings,

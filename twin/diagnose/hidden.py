@@ -162,6 +162,7 @@ def draw(
     imu_noise: tuple[float, float] | float = IMU_NOISE,
     count: int = 1,
     max_redraws: int = 60,
+    imu_known: bool = False,
 ) -> Hidden:
     """Draw detectable hidden effects from ``seed``.
 
@@ -179,6 +180,9 @@ def draw(
         Number of effects when ``effect`` is not given.
     max_redraws : int
         Draws tried before giving up.
+    imu_known : bool
+        Judge the detectability of motion noise as a diagnosis told the IMU's noise would
+        (else the IMU's noise level is a fitted nuisance, and motion noise is rarely separable).
 
     """
     rng = np.random.default_rng(seed)
@@ -195,7 +199,7 @@ def draw(
         noise = _imu_noise(rng, imu_noise)
         if "noise" in chosen and not _motion_noise(config, dof):
             continue
-        if _detectable(config, dof, exts, noise, seed):
+        if _detectable(config, dof, exts, noise, seed, imu_known):
             return Hidden(seed, config, dof, exts, noise, attempt)
     what = " + ".join(kinds) if kinds else "effect"
     raise SignalError(f"seed {seed}: no detectable {what} in {max_redraws} draws")
@@ -205,7 +209,12 @@ _CHANNELS: dict[tuple[str, str, int], list[Channel]] = {}
 
 
 def _detectable(
-    config: MotionSystem, dof: str, exts: tuple[Extension, ...], imu_noise: float, seed: int
+    config: MotionSystem,
+    dof: str,
+    exts: tuple[Extension, ...],
+    imu_noise: float,
+    seed: int,
+    imu_known: bool = False,
 ) -> bool:
     """Return whether a draw passes the drawing rule of the module docstring."""
     imu = nominal_imu({}, config.platform)
@@ -224,7 +233,8 @@ def _detectable(
         others = [x for x in dynamic if x is not e]
         if e.effect == "noise":
             segs = [segment(c).scaled(power) for c in channels]
-            if expected_noise_delta_bic(e.value("scale"), segs) < DETECTABLE_FACTOR * BIC_MARGIN:
+            evidence_ = expected_noise_delta_bic(e.value("scale"), segs, imu_known)
+            if evidence_ < DETECTABLE_FACTOR * BIC_MARGIN:
                 return False
             continue
         ctx = base

@@ -102,12 +102,25 @@ def _loglik(terms: list[tuple[FloatArray, ...]], a: float, b: float) -> float:
 
 
 def fit_noise(
-    model: Model, segments: Sequence[Segment], motion_fixed: float | None = None
+    model: Model,
+    segments: Sequence[Segment],
+    motion_fixed: float | None = None,
+    imu_fixed: float | None = None,
 ) -> NoiseFit:
-    """Fit the power factors (``motion_fixed``: hold the motion factor at that value)."""
+    """Fit the power factors (``motion_fixed`` / ``imu_fixed``: hold that factor)."""
     terms = _terms(model, segments)
     has_motion = any(t[1].any() for t in terms)
     bins = sum(t[0].size for t in terms)
+    if imu_fixed is not None:
+        b = float(imu_fixed)
+        if not has_motion or motion_fixed is not None:
+            a = 1.0 if motion_fixed is None else motion_fixed
+            return NoiseFit(a if has_motion else None, b, {}, _loglik(terms, a, b), bins)
+        r = optimize.minimize_scalar(lambda u: -_loglik(terms, float(np.exp(u)), b),
+                                     bounds=(np.log(1e-4), np.log(1e4)), method="bounded",
+                                     options={"xatol": 1e-5})  # fmt: skip
+        a = float(np.exp(r.x))
+        return NoiseFit(a, b, {"motion": _std(terms, a, b)["motion_alone"]}, -float(r.fun), bins)
     if not has_motion or motion_fixed is not None:
         a = 1.0 if motion_fixed is None else motion_fixed
 
@@ -148,11 +161,13 @@ def _std(terms: list[tuple[FloatArray, ...]], a: float, b: float) -> dict[str, f
         g = np.stack([sm / s, si / s])
         fim += g @ g.T
     fim /= TAPER_CORRELATION
+    alone = float(1 / np.sqrt(fim[0, 0])) if fim[0, 0] > 0 else float("nan")
     try:
         cov = np.linalg.inv(fim)
-        return {"motion": float(np.sqrt(cov[0, 0])), "imu": float(np.sqrt(cov[1, 1]))}
+        return {"motion": float(np.sqrt(cov[0, 0])), "imu": float(np.sqrt(cov[1, 1])),
+                "motion_alone": alone}  # fmt: skip
     except np.linalg.LinAlgError:
-        return {"motion": float("nan"), "imu": float("nan")}
+        return {"motion": float("nan"), "imu": float("nan"), "motion_alone": alone}
 
 
 @dataclass(frozen=True)
@@ -178,21 +193,30 @@ class NoiseJudgement:
     named: bool
 
 
-def judge_noise(model: Model, margin: float, max_hz: float) -> NoiseJudgement:
-    """Fit the noise of ``model``'s DOF and decide whether the motion noise is a cause."""
+def judge_noise(
+    model: Model, margin: float, max_hz: float, imu_noise: float | None = None
+) -> NoiseJudgement:
+    """Fit the noise of ``model``'s DOF and decide whether the motion noise is a cause.
+
+    ``imu_noise``: the IMU's noise over the data sheet's (amplitude) when it is known, e.g.
+    from a recording at rest; None fits it (a nuisance), which leaves the motion noise only as
+    separable as the two spectra's shapes allow.
+    """
     channels = model.case.of(model.dof)
     segs = [segment(c, max_hz=max_hz) for c in channels]
-    free = fit_noise(model, segs)
+    known = None if imu_noise is None else float(imu_noise) ** 2
+    free = fit_noise(model, segs, imu_fixed=known)
     if free.motion is None:
         return NoiseJudgement(free, None, {}, False)
-    nominal = fit_noise(model, segs, motion_fixed=1.0)
+    nominal = fit_noise(model, segs, motion_fixed=1.0, imu_fixed=known)
     dbic = 2 * (free.loglik - nominal.loglik) - np.log(free.bins / TAPER_CORRELATION)
     rows = []
     for c in channels:
         halves = c.halves()
         for i in (0, 1):
             a, b = segment(c, halves[i], max_hz), segment(c, halves[1 - i], max_hz)
-            f1, f0 = fit_noise(model, [a]), fit_noise(model, [a], motion_fixed=1.0)
+            f1 = fit_noise(model, [a], imu_fixed=known)
+            f0 = fit_noise(model, [a], motion_fixed=1.0, imu_fixed=known)
             test = _terms(model, [b])
             n = sum(t[0].size for t in test)
             rows.append((_loglik(test, *f0.scales) / n, _loglik(test, *f1.scales) / n))

@@ -144,8 +144,12 @@ def select(
     singles = [e for e in effects if e != "backlash"]
     for e in singles:
         fit((e,))
-    if "backlash" in effects:
-        fit(("backlash",))
+    if "backlash" in effects:  # on its grid first; refined only where it helps at all
+        fit(("backlash",), coarse=True)
+        if gain_of(("backlash",)) > 0:
+            fits[("backlash",)] = fit_set(
+                ("backlash",), model, evidence, _start(fits[("backlash",)])
+            )
     for pair in combinations(effects, 2):
         # pairs with backlash are screened on the plays of its grid (simulated once, for the
         # single fit); the named set is refined below
@@ -282,13 +286,15 @@ def held_out(
         rest = tuple(x for x in fit.effects if x != e)
         before, after = [], []
         for fit_on, test_on in folds_:
-            with_ = fit_set(fit.effects, model, fit_on, start)
+            # coarse: a backlash play is held at its full-data value (each play is a
+            # simulation); the linear parameters are refitted on the fold
+            with_ = fit_set(fit.effects, model, fit_on, start, coarse=True)
             m1 = model
             for x in with_.extensions:
                 m1 = m1.with_(x)
             m0 = model
             if rest:
-                without = fit_set(rest, model, fit_on, {k: start[k] for k in rest})
+                without = fit_set(rest, model, fit_on, {k: start[k] for k in rest}, coarse=True)
                 for x in without.extensions:
                     m0 = m0.with_(x)
             before += [_scores(m0, x) for x in test_on]
