@@ -90,7 +90,7 @@ class Model:
         return h
 
     def psd_factor(self, f: FloatArray) -> FloatArray:
-        """Factor on the nominal IMU noise spectrum at ``f`` [Hz] (a sensor filter's)."""
+        """Factor on the measured noise spectrum at ``f`` [Hz] (a sensor filter's)."""
         g = np.ones(np.size(f))
         for e in self.extensions:
             if e.effect == "sensor_filter":

@@ -315,12 +315,12 @@ def diagnose(
     case = load_case(runs, config, model, seed, dofs, realisations, progress)
     val = None
     if validate:
-        val = load_case(validate, case.config, model, seed + 1, dofs, realisations, progress)
+        val = load_case(validate, case.config, model, seed + 1, None, realisations, progress)
     reports = {}
     for dof in case.dofs:
         channels = case.of(dof)
         base = Model(case, dof)
-        findings, fitted, sel = name_causes(case, dof, base, val, progress=progress)
+        findings, fitted, sel = name_causes(case, dof, base, val, progress=progress, max_hz=max_hz)
         if progress:
             progress(f"{dof}: noise")
         noise = judge_noise(fitted, BIC_MARGIN, max_hz, imu_noise)
@@ -334,7 +334,9 @@ def diagnose(
             line_ratios(channels, preds),
             [decomposition(s) for s in segs],
             [residual_bands(s, p) for s, p in zip(segs, preds, strict=True)],
-            smallest_detectable(fitted, [lines(c) for c in channels], segs, imu_noise is not None),
+            smallest_detectable(
+                fitted, [lines(c, max_hz=max_hz) for c in channels], segs, imu_noise is not None
+            ),
             noise,
             sel,
             findings,

@@ -26,6 +26,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from twin.diagnose.data import Channel
+from twin.errors import SignalError
 from twin.measurement.describing_function import fourier_coefficients, neighbour_bins
 
 FloatArray = NDArray[np.float64]
@@ -108,9 +109,11 @@ def measured_line_sd(ch: Channel, prediction: FloatArray | None = None) -> Float
     resid = ch.measured - (ch.nominal if prediction is None else prediction)
     out = np.empty(ch.lines_hz.size)
     for i, fs in enumerate(neighbour_bins(ch.lines_hz, ch.window, NEIGHBOURS)):
+        if fs.size < 2:
+            out[i] = np.nan
+            continue
         c = fourier_coefficients(ch.t, resid, fs, ch.window)
-        m = max(fs.size, 2)
-        out[i] = np.sqrt(np.mean(np.abs(c) ** 2) * (2 * m) / (2 * m - 2))
+        out[i] = np.sqrt(np.mean(np.abs(c) ** 2) * (2 * fs.size) / (2 * fs.size - 2))
     return out
 
 
@@ -120,7 +123,7 @@ def nominal_line_sd(ch: Channel, scales: Sequence[float] = (1.0, 1.0)) -> FloatA
     The sources are taken times ``scales`` (power); the result is the mean power of the noise
     realisations at the lines' neighbours.
     """
-    noise = np.tensordot(np.asarray(scales, dtype=float), ch.sources, axes=1)
+    noise = np.tensordot(np.sqrt(np.asarray(scales, dtype=float)), ch.sources, axes=1)
     out = np.empty(ch.lines_hz.size)
     for i, fs in enumerate(neighbour_bins(ch.lines_hz, ch.window, NEIGHBOURS)):
         c = fourier_coefficients(ch.t, noise.T, fs, ch.window)
@@ -129,17 +132,28 @@ def nominal_line_sd(ch: Channel, scales: Sequence[float] = (1.0, 1.0)) -> FloatA
 
 
 def lines(
-    ch: Channel, window: tuple[float, float] | None = None, sd: FloatArray | None = None
+    ch: Channel,
+    window: tuple[float, float] | None = None,
+    sd: FloatArray | None = None,
+    max_hz: float = np.inf,
 ) -> Lines:
     """Return the line evidence of ``ch`` over ``window`` (its measurement window by default).
 
     ``sd`` overrides the measured standard deviation (e.g. the nominal noise model's, to
     predict what a run could show); over part of the window the full window's is scaled by
-    sqrt(full / part).
+    sqrt(full / part). Lines above ``max_hz`` are left out.
     """
     w = ch.window if window is None else tuple(window)
     base = measured_line_sd(ch) if sd is None else np.asarray(sd, dtype=float)
     part = np.sqrt((ch.window[1] - ch.window[0]) / (w[1] - w[0]))
+    if not np.all(np.isfinite(base) & (base > 0)):
+        bad = ch.lines_hz[~(np.isfinite(base) & (base > 0))]
+        raise SignalError(
+            f"{ch.run}: no noise estimate at the line(s) {', '.join(f'{f:g}' for f in bad)} Hz "
+            "(no non-excited bin beside them, or a noise-free recording); the diagnosis needs "
+            "the measurement's own noise next to every excited line"
+        )
     y = line_amplitudes(ch.t, ch.measured, ch.lines_hz, w)
     p = line_amplitudes(ch.t, ch.nominal, ch.lines_hz, w)
-    return Lines(ch, w, ch.lines_hz, y, p, base * part)
+    keep = ch.lines_hz <= max_hz
+    return Lines(ch, w, ch.lines_hz[keep], y[keep], p[keep], (base * part)[keep])

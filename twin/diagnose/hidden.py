@@ -12,15 +12,18 @@ nominal twin's prediction of the two runs and the drawn IMU's noise, (1) every e
 expected BIC improvement on top of the others (:func:`twin.diagnose.detect.expected_delta_bic`)
 is at least ``DETECTABLE_FACTOR`` times the naming threshold and (2) the Cramér-Rao standard
 deviation of every parameter, fitted jointly, is at most a third of the test's tolerance (delay
-5 ms, others 20 %), so that a fit within tolerance is likely; otherwise it is drawn again (the
-count is returned). Motion noise (``noise``) exists only where the configuration has it (the
+5 ms, others 20 %), so that a fit within tolerance is likely, and (3) for two effects, no other
+single or pair of linear effects explains their noise-free lines within the naming margin (they
+can be told apart at all); otherwise it is drawn again (the count is returned). Motion noise
+(``noise``) exists only where the configuration has it (the
 MPI's heave), so it is drawn only there.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+from itertools import combinations
 from pathlib import Path
 
 import numpy as np
@@ -29,10 +32,10 @@ from twin.chain.config import MotionSystem, motion_system
 from twin.chain.extensions import DOF_CHANNEL, EFFECTS, Extension
 from twin.chain.imu import ImuSpec
 from twin.chain.simulate import default_imu, prepare
-from twin.diagnose.candidates import Model
+from twin.diagnose.candidates import DYNAMIC, Model, fit_set, numeric_names
 from twin.diagnose.data import Case, Channel, clean_config, measurement_channels, nominal_imu
 from twin.diagnose.detect import expected_delta_bic, expected_noise_delta_bic, fisher_std
-from twin.diagnose.evidence import lines, nominal_line_sd
+from twin.diagnose.evidence import Lines, lines, nominal_line_sd
 from twin.diagnose.residuals import segment
 from twin.diagnose.select import BIC_MARGIN
 from twin.errors import SignalError
@@ -248,6 +251,33 @@ def _detectable(
             ext = next(x for x in dynamic if x.effect == effect)
             tol = TOLERANCE.get(par, RELATIVE_TOLERANCE * abs(ext.value(par)))
             if not sd <= tol / 3:
+                return False
+    if len(dynamic) > 1:
+        return _distinguishable(base, dynamic, evidence)
+    return True
+
+
+def _distinguishable(base: Model, exts: list[Extension], evidence: list[Lines]) -> bool:
+    """Whether no other set of as many linear effects explains the noise-free truth.
+
+    The true lines (noise-free) are fitted with every other single and pair of linear effects;
+    if one comes within the naming margin in BIC (2 chi2 + extra parameters x ln n), no method
+    can tell them apart from these runs, and the draw is not admitted.
+    """
+    true = base
+    for e in exts:
+        true = true.with_(e)
+    clean = [replace(x, measured=true.line_prediction(x)) for x in evidence]
+    n = 2 * sum(x.size for x in clean)
+    p_true = sum(len(numeric_names(e.effect)) for e in exts)
+    names = {e.effect for e in exts}
+    linear = [e for e in DYNAMIC if e != "backlash"]
+    for k in range(1, len(exts) + 1):
+        for alt in combinations(linear, k):
+            if set(alt) == names:
+                continue
+            fit = fit_set(alt, base, clean)
+            if 2 * fit.chi2 + (fit.parameters - p_true) * np.log(n) < BIC_MARGIN:
                 return False
     return True
 

@@ -3,7 +3,7 @@
 Off the excited lines (and the two bins the Hann taper spreads each over) the residual
 measured - model is noise. Its spectrum is modelled as
 
-    S(f) = a S_motion(f) + b S_imu(f) |H_sensor(f)|^2,
+    S(f) = (a S_motion(f) + b S_imu(f)) |H_sensor(f)|^2,
 
 the nominal spectra of the configuration's motion noise (Eq 5.10) and of the IMU's own noise
 (:mod:`twin.diagnose.data` keeps them apart), with power factors ``a`` and ``b`` fitted by the
@@ -87,8 +87,9 @@ def _terms(model: Model, segments: Sequence[Segment]) -> list[tuple[FloatArray, 
     for seg in segments:
         keep = off_line(seg)
         r = seg.measured - seg.spectrum(model.predict(seg.channel))
-        sm = seg.source_psd[0]
-        si = seg.source_psd[1] * model.psd_factor(seg.f)
+        h2 = model.psd_factor(seg.f)  # a sensor filter filters every noise it measures
+        sm = seg.source_psd[0] * h2
+        si = seg.source_psd[1] * h2
         out.append((np.abs(r[keep]) ** 2, sm[keep], si[keep]))
     return out
 

@@ -41,8 +41,8 @@ from numpy.typing import NDArray
 
 from twin.chain.extensions import Extension
 from twin.diagnose.candidates import DYNAMIC, Model, SetFit, fit_set, numeric_names
-from twin.diagnose.data import Case, Channel
-from twin.diagnose.evidence import Lines, lines
+from twin.diagnose.data import Case
+from twin.diagnose.evidence import Lines, lines, measured_line_sd
 
 FloatArray = NDArray[np.float64]
 #: Evidence needed to name a cause [BIC units].
@@ -257,21 +257,25 @@ def _mean(rows: list[dict[str, float]]) -> dict[str, float]:
 
 
 def folds(
-    case: Case, dof: str, validation: Case | None = None
+    case: Case, dof: str, validation: Case | None = None, max_hz: float = np.inf
 ) -> tuple[list[tuple[list[Lines], list[Lines]]], str]:
-    """Fitting and held-out evidence: the halves of each window both ways, or validation runs."""
+    """Return fitting and held-out evidence: window halves both ways, or validation runs.
+
+    Validation runs are used for a DOF when they drive it.
+    """
     channels = case.of(dof)
     if validation is not None and validation.of(dof):
-        fit_on = [lines(c) for c in channels]
-        return [(fit_on, [lines(c) for c in validation.of(dof)])], "validation run(s)"
+        fit_on = [lines(c, max_hz=max_hz) for c in channels]
+        test_on = [lines(c, max_hz=max_hz) for c in validation.of(dof)]
+        return [(fit_on, test_on)], "validation run(s)"
     out = []
     for i in (0, 1):
         fit_on, test_on = [], []
         for c in channels:
             halves = c.halves()
-            full_sd = lines(c).sd
-            fit_on.append(lines(c, halves[i], full_sd))
-            test_on.append(lines(c, halves[1 - i], full_sd))
+            full_sd = measured_line_sd(c)
+            fit_on.append(lines(c, halves[i], full_sd, max_hz))
+            test_on.append(lines(c, halves[1 - i], full_sd, max_hz))
         out.append((fit_on, test_on))
     return out, "other half of the measurement window (two-fold)"
 
@@ -311,23 +315,36 @@ def name_causes(
     validation: Case | None = None,
     effects: Sequence[str] = DYNAMIC,
     progress: Callable[[str], None] | None = None,
+    max_hz: float = np.inf,
 ) -> tuple[list[Finding], Model, Selection]:
     """Select, gate on held-out data, and return the findings of one DOF with the model."""
-    evidence = [lines(c) for c in case.of(dof)]
+    evidence = [lines(c, max_hz=max_hz) for c in case.of(dof)]
     sel = select(base, evidence, effects, progress)
     if sel.fit is None:
         return [], base, sel
-    fold_list, how = folds(case, dof, validation)
-    fit = sel.fit
-    gains = held_out(base, fit, fold_list)
-    keep = tuple(e for e in fit.effects if gains[e]["chi2_per_line_after"]
-                 < gains[e]["chi2_per_line_before"])  # fmt: skip
-    dropped = [e for e in fit.effects if e not in keep]
-    if dropped:
-        if not keep:
-            return [], base, Selection(None, {}, sel.table, sel.observations)
-        fit = fit_set(keep, base, evidence, {k: v for k, v in _start(fit).items() if k in keep})
+    fold_list, how = folds(case, dof, validation, max_hz)
+    fit, delta = sel.fit, dict(sel.delta_bic)
+    chi0, n = base.chi2(evidence), sel.observations
+    dropped: list[str] = []
+    while True:  # drop what the held-out data do not support, re-check what is left
         gains = held_out(base, fit, fold_list)
+        g = {e: (gains[e]["chi2_per_line_before"], gains[e]["chi2_per_line_after"]) for e in gains}
+        bad = [e for e in fit.effects if not g[e][1] < g[e][0]]
+        if not bad:
+            break
+        dropped += bad
+        keep = tuple(e for e in fit.effects if e not in bad)
+        if not keep:
+            return [], base, Selection(None, {}, sel.table, n)
+        fit = fit_set(keep, base, evidence, {k: v for k, v in _start(fit).items() if k in keep})
+        delta = {}
+        for e in keep:
+            rest = tuple(x for x in keep if x != e)
+            ref = fit_set(rest, base, evidence, {k: _start(fit)[k] for k in rest}) if rest else None
+            extra = fit.parameters - (ref.parameters if ref else 0)
+            delta[e] = bic_gain(ref.chi2 if ref else chi0, fit.chi2, extra, n)
+        if min(delta.values()) <= BIC_MARGIN:  # what is left is not named on its own
+            return [], base, Selection(None, {}, sel.table, n)
     model = base
     for x in fit.extensions:
         model = model.with_(x)
@@ -340,7 +357,7 @@ def name_causes(
                 {
                     "criterion": f"BIC improvement > {BIC_MARGIN:g} for the set and for each "
                     "member; held-out line error falls",
-                    "delta_bic": float(sel.delta_bic.get(e, np.nan)),
+                    "delta_bic": float(delta.get(e, np.nan)),
                     "set": list(fit.effects),
                     "chi2_nominal": float(base.chi2(evidence)),
                     "chi2_extended": float(fit.chi2),
@@ -357,8 +374,3 @@ def name_causes(
         )
     findings.sort(key=lambda f: -f.delta_bic)
     return findings, model, sel
-
-
-def channels_of(evidence: Sequence[Lines]) -> list[Channel]:
-    """Distinct channels of some evidence."""
-    return list({id(x.channel): x.channel for x in evidence}.values())
