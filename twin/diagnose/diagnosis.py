@@ -327,6 +327,9 @@ def diagnose(
         if noise.named:
             findings.append(_noise_finding(dof, noise))
         segs = [segment(c, max_hz=max_hz).scaled(noise.fit.scales) for c in channels]
+        # what motion noise would have been found: relative to the nominal motion noise, on
+        # top of the IMU noise the measurement shows
+        nominal_motion = [s.scaled((1.0, noise.fit.imu)) for s in segs]
         preds = [fitted.predict(c) for c in channels]
         reports[dof] = DofReport(
             dof,
@@ -335,7 +338,10 @@ def diagnose(
             [decomposition(s) for s in segs],
             [residual_bands(s, p) for s, p in zip(segs, preds, strict=True)],
             smallest_detectable(
-                fitted, [lines(c, max_hz=max_hz) for c in channels], segs, imu_noise is not None
+                fitted,
+                [lines(c, max_hz=max_hz) for c in channels],
+                nominal_motion,
+                imu_noise is not None,
             ),
             noise,
             sel,
@@ -353,7 +359,8 @@ def _noise_finding(dof: str, noise: NoiseJudgement) -> Finding:
         Extension("noise", {"scale": scale}, (dof,)),
         {
             "criterion": f"BIC improvement > {BIC_MARGIN:g} of a free motion-noise power "
-            "factor (IMU noise free in both); held-out likelihood per bin rises",
+            "factor (the IMU's noise fitted in both, or held at the given level); held-out "
+            "likelihood per bin rises",
             "delta_bic": float(noise.delta_bic or 0.0),
             "parameter_std": {"scale": float(noise.fit.std["motion"] / (2 * scale))},
             "imu_noise_scale": float(np.sqrt(noise.fit.imu)),

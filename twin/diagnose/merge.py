@@ -56,14 +56,23 @@ def merged(group: Sequence[Finding]) -> Finding:
     if channels:
         pars["channels"] = tuple(dict.fromkeys(channels))
     dofs = tuple(d for f in group for d in f.extension.dofs)
-    per_dof = {",".join(f.extension.dofs): f.evidence for f in group}
     evidence = {
-        **group[0].evidence,
+        "criterion": group[0].evidence.get("criterion"),
         "delta_bic": float(sum(f.delta_bic for f in group)),
         "parameter_std": std,
-        "per_dof": per_dof,
+        "merged": f"one effect in {len(group)} DOFs: parameters agree within {AGREEMENT:g} "
+        "combined standard deviations; values are inverse-variance weighted means",
+        "per_dof": {",".join(f.extension.dofs): f.evidence for f in group},
     }
-    gain = {**group[0].gain, "per_dof": {",".join(f.extension.dofs): f.gain for f in group}}
+    # held-out figures: the mean over the DOFs of each number they all report
+    keys = set.intersection(*(set(f.gain) for f in group))
+    gain: dict[str, object] = {
+        k: float(np.mean([f.gain[k] for f in group]))  # type: ignore[arg-type]
+        for k in sorted(keys)
+        if all(isinstance(f.gain[k], float) for f in group)
+    }
+    gain["held_out"] = "; ".join(sorted({str(f.gain.get("held_out")) for f in group}))
+    gain["per_dof"] = {",".join(f.extension.dofs): f.gain for f in group}
     return Finding(Extension(effect, pars, dofs), evidence, gain)
 
 
