@@ -57,8 +57,12 @@ def test_clean_runs_false_finding_rate(tmp_path):
 
 
 @pytest.mark.parametrize(
-    ("dof", "seed"),  # pitch in the default suite, heave (the same check) in the slow one
-    [("pitch", 11), pytest.param("heave", 12, marks=pytest.mark.slow)],
+    ("dof", "seed"),  # the slow suite (diagnoses take 5-10 s each; the default suite keeps the
+    # issue cases of test_diagnose_hidden.py and the command line)
+    [
+        pytest.param("pitch", 11, marks=pytest.mark.slow),
+        pytest.param("heave", 12, marks=pytest.mark.slow),
+    ],
 )
 def test_2008_mpi_software_against_the_35_ms_nominal_is_a_65_ms_delay(dof, seed, tmp_path):
     """Ch 3 / §5.5.2: the MPI ran with 100 ms before its software update; nominal 35 ms.
@@ -89,6 +93,7 @@ def test_srs_resonance_of_eq_5_12_against_an_ideal_srs(tmp_path):
         assert top.extension.value("time_constant_s") == pytest.approx(0.023, rel=0.2)
 
 
+@pytest.mark.slow
 def test_imu_with_internal_filtering_in_pitch_is_a_sensor_filter(tmp_path):
     """§5.6.1: the SRS IMU attenuated pitch above 1 Hz and added delay (internal filtering)."""
     srs = motion_system("srs")
