@@ -8,6 +8,9 @@ from twin.frames import DOF_NAMES
 from twin.platform.facts import load_facts
 from twin.thesis import TABLE_5_5
 
+#: Full-MuJoCo reproductions of Table 5.5 and Fig 5.6-5.8 (about 30 s): the slow suite.
+pytestmark = pytest.mark.slow
+
 
 @pytest.fixture(scope="module")
 def mpi_dynamics():

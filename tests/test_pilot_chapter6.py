@@ -32,6 +32,7 @@ def test_felt_motion_is_the_filtered_delayed_attitude():
     assert n == 8192
 
 
+@pytest.mark.slow  # 32 closed-loop runs (15-20 s)
 def test_the_1_hz_filter_dominates_delay_and_noise():
     """§6.4 with the pilot fixed: the 1 Hz filter costs the felt motion more than 30 deg of
     lead at the disturbance crossover and has a larger effect than the 10 ms delay or the noise
