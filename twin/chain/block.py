@@ -13,6 +13,7 @@ Besides the base class this module holds the small blocks: :class:`Gain`, :class
 
 from __future__ import annotations
 
+from abc import ABC, abstractmethod
 from dataclasses import dataclass
 from typing import Any, overload
 
@@ -27,7 +28,7 @@ FloatArray = NDArray[np.float64]
 ComplexArray = NDArray[np.complex128]
 
 
-class Block:
+class Block(ABC):
     """Base of the chain's blocks (see the module docstring)."""
 
     name = "block"
@@ -36,9 +37,9 @@ class Block:
         """Return the state before the first sample, from its jets ``(runs, 6, 3)``."""
         return None
 
+    @abstractmethod
     def stream(self, jets: FloatArray, state: Any) -> tuple[FloatArray, Any]:
         """Map consecutive samples' jets ``(runs, n, 6, 3)``; return the output and the state."""
-        raise NotImplementedError(f"{type(self).__name__} has no stream form")
 
     @overload
     def __call__(self, sig: JetSignal) -> JetSignal: ...

@@ -18,6 +18,7 @@ interface, several runs at once where they want (``runs`` axis first).
 
 from __future__ import annotations
 
+from abc import ABC, abstractmethod
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -100,7 +101,7 @@ class Reference:
     acc: FloatArray
 
 
-class Platform:
+class Platform(ABC):
     """Base of the full and the reduced platform (see the module docstring).
 
     Subclasses set ``kind``, ``platform``, ``geometry``, ``limits``, ``own_lag_s`` and
@@ -223,6 +224,6 @@ class Platform:
         """Return the subclass's own state at rest."""
         return None
 
+    @abstractmethod
     def _advance(self, ref: Reference, state: PlatformState) -> PlatformResponse:
         """Turn the reference into motion (subclass)."""
-        raise NotImplementedError(f"{type(self).__name__} must implement _advance")
