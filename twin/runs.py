@@ -22,6 +22,7 @@ from __future__ import annotations
 import json
 import shutil
 import tempfile
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from types import TracebackType
@@ -205,10 +206,18 @@ class RunWriter:
         ``meta.json`` contents (checked against the format).
     overwrite : bool
         Replace an existing folder.
+    files : sequence of str
+        The CSV files the run has (``actuators.csv`` is optional in the format).
 
     """
 
-    def __init__(self, folder: str | Path, meta: dict, overwrite: bool = False) -> None:
+    def __init__(
+        self,
+        folder: str | Path,
+        meta: dict,
+        overwrite: bool = False,
+        files: Sequence[str] = tuple(HEADERS),
+    ) -> None:
         self.folder = Path(folder)
         if self.folder.exists() and not overwrite:
             raise RunFormatError(f"{self.folder}: already exists (choose another --out)")
@@ -218,9 +227,9 @@ class RunWriter:
         self.tmp = Path(tempfile.mkdtemp(prefix=f".{self.folder.name}.", dir=self.folder.parent))
         self.tmp.chmod(0o755)
         self._files = {}
-        for name, header in HEADERS.items():
+        for name in files:
             fh = (self.tmp / name).open("w")
-            fh.write(",".join(header) + "\n")
+            fh.write(",".join(HEADERS[name]) + "\n")
             self._files[name] = fh
         self.overwrite = overwrite
 

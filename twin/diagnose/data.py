@@ -120,6 +120,9 @@ class Case:
         Every driven DOF of every run.
     seed : int
         Seed of the noise realisations.
+    unidentifiable : dict
+        Effects these runs cannot show, with the reason (e.g. ``delay`` when ``twin import``
+        had to estimate the clock offset from the response).
 
     """
 
@@ -128,6 +131,7 @@ class Case:
     imu: ImuSpec
     channels: list[Channel]
     seed: int
+    unidentifiable: dict[str, str] = field(default_factory=dict)
 
     @property
     def clean(self) -> MotionSystem:
@@ -305,9 +309,17 @@ def load_case(
                 f"are of the {platforms.pop()}"
             )
     imu = nominal_imu(measurements[0].meta, nominal.platform)
+    unidentifiable = {}
+    for m in measurements:
+        clock = m.meta.get("import", {}).get("clock", {})
+        if clock.get("delay_identifiable") is False:
+            unidentifiable["delay"] = (
+                f"not identifiable: twin import estimated the clock offset of {m.source} by "
+                "aligning its response with the nominal twin, which absorbs any extra delay"
+            )
     channels = []
     for r, m in enumerate(measurements):
         if progress:
             progress(f"nominal twin on {m.source} ({model})")
         channels += measurement_channels(m, nominal, model, imu, seed, 1000 * r, dofs, realisations)
-    return Case(nominal, model, imu, channels, seed)
+    return Case(nominal, model, imu, channels, seed, unidentifiable)

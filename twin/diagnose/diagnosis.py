@@ -20,7 +20,7 @@ import numpy as np
 
 from twin.chain.config import MotionSystem
 from twin.chain.extensions import Extension
-from twin.diagnose.candidates import Model
+from twin.diagnose.candidates import DYNAMIC, Model
 from twin.diagnose.data import NOISE_REALISATIONS, Case, load_case
 from twin.diagnose.detect import smallest_detectable
 from twin.diagnose.evidence import lines
@@ -320,7 +320,8 @@ def diagnose(
     for dof in case.dofs:
         channels = case.of(dof)
         base = Model(case, dof)
-        findings, fitted, sel = name_causes(case, dof, base, val, progress=progress, max_hz=max_hz)
+        effects = tuple(e for e in DYNAMIC if e not in case.unidentifiable)
+        findings, fitted, sel = name_causes(case, dof, base, val, effects, progress, max_hz)
         if progress:
             progress(f"{dof}: noise")
         noise = judge_noise(fitted, BIC_MARGIN, max_hz, imu_noise)
@@ -331,18 +332,19 @@ def diagnose(
         # top of the IMU noise the measurement shows
         nominal_motion = [s.scaled((1.0, noise.fit.imu)) for s in segs]
         preds = [fitted.predict(c) for c in channels]
+        detectable = smallest_detectable(
+            fitted, [lines(c, max_hz=max_hz) for c in channels], nominal_motion,
+            imu_noise is not None,
+        )  # fmt: skip
+        for effect, why in case.unidentifiable.items():
+            detectable[effect] = {"statement": f"{effect}: {why}", "identifiable": False}
         reports[dof] = DofReport(
             dof,
             line_ratios(channels),
             line_ratios(channels, preds),
             [decomposition(s) for s in segs],
             [residual_bands(s, p) for s, p in zip(segs, preds, strict=True)],
-            smallest_detectable(
-                fitted,
-                [lines(c, max_hz=max_hz) for c in channels],
-                nominal_motion,
-                imu_noise is not None,
-            ),
+            detectable,
             noise,
             sel,
             findings,
