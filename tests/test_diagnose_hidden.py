@@ -7,7 +7,8 @@ it measures it), kept only where the two Table 5.2 runs could reveal the effects
 improvement >= 3x the naming threshold, Cramér-Rao sd <= 1/3 of the tolerance, jointly; two
 effects only where no other single or pair of linear effects explains them).
 
-Acceptance (slow suite, seeds not tuned): a single effect named first with its parameter
+Acceptance (slow suite, seeds not tuned): a single effect (any of the eight, motion noise
+included) named first with its parameter
 (delay +-5 ms, others +-20 %) in >= 95 % of draws; clean runs with mismatched IMU noise: no
 dynamic cause in >= 95 %; two effects at once: both named in >= 85 %. The default suite runs
 two of the cases that failed before (a quieter IMU, gain + delay) and a clean run with a
@@ -89,16 +90,17 @@ def _diagnose(h: Hidden, tmp_path):
     return diagnose(record(h, tmp_path), seed=h.seed)
 
 
-DYNAMIC = [e for e in EFFECTS if e != "noise"]
+#: Draws tried per seed: motion noise is detectable only with a quiet IMU or a large scale.
+MAX_REDRAWS = 400
 
 
 @pytest.mark.parametrize(
     "effect",
-    [e if e in FAST_EFFECTS else pytest.param(e, marks=pytest.mark.slow) for e in DYNAMIC],
+    [e if e in FAST_EFFECTS else pytest.param(e, marks=pytest.mark.slow) for e in EFFECTS],
 )
 def test_a_hidden_effect_is_named_whatever_the_imu_noise(effect, tmp_path):
     """One seed per effect type, IMU noise 0.3-3x nominal: named first with its parameter."""
-    h = draw(1000 * list(EFFECTS).index(effect), effect)
+    h = draw(1000 * list(EFFECTS).index(effect), effect, max_redraws=MAX_REDRAWS)
     assert check_single(h, _diagnose(h, tmp_path)) == [], h
 
 
@@ -141,6 +143,20 @@ def test_a_quiet_imu_and_a_heave_delay_is_a_delay_not_a_sensor_filter(tmp_path):
     d = diagnose(runs, seed=5)
     assert check_single(h, d) == []
     assert dynamic_findings(d) == [d.findings[0].extension.describe()]
+
+
+@pytest.mark.slow
+def test_a_gain_before_a_backlash_leaves_the_play_as_it_is(tmp_path):
+    """The chain applies a gain *before* the backlash; fitted in the other order a gain of 1.4
+    made a 3 mm play read 2.07 mm. Both within the hidden-effect tolerance (20 %)."""
+    exts = [Extension("gain", {"gain": 1.4}, ("heave",)),
+            Extension("backlash", {"play": 0.003}, ("heave",))]  # fmt: skip
+    h, runs = _runs(exts, "srs", "heave", 1.0, tmp_path)
+    d = diagnose(runs, seed=5)
+    assert check_all(h, d) == []
+    found = {f.extension.effect: f.extension for f in d.findings}
+    for e in exts:
+        assert _parameter_errors(e, found[e.effect]) == []
 
 
 def test_gain_and_delay_in_heave_are_both_named(tmp_path):
@@ -192,14 +208,15 @@ def test_a_delay_behind_the_1_hz_filter_is_found_or_said_undetectable(tmp_path):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("effect", DYNAMIC)
+@pytest.mark.parametrize("effect", EFFECTS)
 def test_single_effect_acceptance_rate(effect, tmp_path):
-    """20 draws per dynamic effect type (any DOF, IMU noise 0.3-3x): named first with its
-    parameter in at least 19 (95 %). Motion noise with an unknown IMU noise level is not in
-    this test: it is only weakly separable (see test_motion_noise_is_named_...)."""
+    """20 draws per effect type (any DOF, IMU noise 0.3-3x, not told to the diagnosis): named
+    first with its parameter in at least 19 (95 %). Motion noise exists in the MPI's heave
+    only; with the IMU's level unknown it is told from the IMU's noise by its shape below
+    1 Hz, so the drawing rule admits it only large or behind a quiet IMU."""
     failures = []
     for i in range(1, 21):
-        h = draw(1000 * list(EFFECTS).index(effect) + i, effect)
+        h = draw(1000 * list(EFFECTS).index(effect) + i, effect, max_redraws=MAX_REDRAWS)
         failures += [
             f"seed {h.seed} {h.dof}: {e}" for e in check_single(h, _diagnose(h, tmp_path / str(i)))
         ]

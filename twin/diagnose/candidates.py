@@ -11,8 +11,12 @@ A *set* of effects is fitted jointly (:func:`fit_set`) by least squares on the s
 line residuals (:mod:`twin.diagnose.evidence`): positive parameters in log space, every start
 of a coarse grid per effect and of the effects fitted one on top of the other, the best kept.
 The play of ``backlash`` is an outer one-dimensional search (each value is a simulation).
-Standard deviations and correlations come from the Jacobian at the optimum (Fisher
-information 2 J^T J of the log-likelihood -chi2).
+That fast form applies the linear effects after the backlash; the chain applies gain, filter,
+resonance and lead before it, so a fitted set with backlash and one of those is refitted in
+the chain's order (:meth:`Model.anchored`: the backlash simulated behind them, the play
+searched around the fast fit's play times their mean gain over the lines). Standard
+deviations and correlations come from the Jacobian at the optimum (Fisher information 2 J^T J
+of the log-likelihood -chi2).
 """
 
 from __future__ import annotations
@@ -56,20 +60,34 @@ class Model:
     case: Case
     dof: str
     extensions: list[Extension] = field(default_factory=list)
+    anchor: tuple[Extension, ...] = ()
     _cache: dict = field(default_factory=dict, repr=False)
 
     def with_(self, ext: Extension) -> Model:
         """Return this model plus one extension (sharing the simulation cache)."""
-        return Model(self.case, self.dof, [*self.extensions, ext], self._cache)
+        return Model(self.case, self.dof, [*self.extensions, ext], self.anchor, self._cache)
+
+    def anchored(self, anchor: Sequence[Extension]) -> Model:
+        """Return this model with ``anchor`` simulated in the chain's order with the backlash.
+
+        The chain applies the command-side linear effects (delay, gain, filter, resonance,
+        lead) *before* the backlash; the fast form applies them after it, which is exact for
+        a delay only (a gain g before a play p acts as a play p / g after it). An anchored
+        model simulates the backlash behind ``anchor`` and applies the linear extensions as
+        their responses relative to the anchor's, so near the anchor it is the chain's order.
+        """
+        return Model(self.case, self.dof, list(self.extensions), tuple(anchor), self._cache)
 
     def base(self, ch: Channel) -> FloatArray:
         """Prediction before the linear extensions (re-simulated if there is backlash)."""
         plays = [e for e in self.extensions if e.effect == "backlash"]
         if not plays:
             return ch.nominal
-        key = (ch.run, ch.dof, ch.window, tuple(e.value("play") for e in plays))
+        key = (ch.run, ch.dof, ch.window, tuple(e.value("play") for e in plays),
+               tuple((e.effect, repr(e.parameters), e.dofs) for e in self.anchor))  # fmt: skip
         if key not in self._cache:
-            cfg = self.case.clean.replace(extensions=(*self.case.clean.extensions, *plays))
+            exts = (*self.case.clean.extensions, *self.anchor, *plays)
+            cfg = self.case.clean.replace(extensions=exts)
             pred = simulate_measurement(
                 cfg, ch.commands, ch.t, self.case.model, self.case.seed, self.case.imu.ideal()
             )
@@ -87,6 +105,9 @@ class Model:
         for e in self.extensions:
             if e.effect in LINEAR:
                 h = h * e.response(f, self.nominal_break)
+        if self.anchor and any(e.effect == "backlash" for e in self.extensions):
+            for e in self.anchor:  # simulated with the backlash already (see anchored)
+                h = h / e.response(f, self.nominal_break)
         return h
 
     def psd_factor(self, f: FloatArray) -> FloatArray:
@@ -366,6 +387,76 @@ def fit_set(
     return _fit_with_backlash(linear, model, evidence, start, coarse)
 
 
+#: Command-side linear effects that change what reaches the backlash (a delay does not).
+BEFORE_BACKLASH = ("gain", "platform_filter", "resonance", "lead")
+#: Log step of the play around its chain-order start (:func:`_parabola`).
+ANCHOR_STEP = 1.1
+_Memo = dict[float, tuple[float, list[Extension], FloatArray | None, object]]
+
+
+def _profile(
+    linear: tuple[str, ...],
+    model: Model,
+    evidence: Sequence[Lines],
+    start: dict[str, Sequence[float]] | None,
+    memo: _Memo,
+) -> Callable[[float], float]:
+    """chi2 of the best linear effects behind a given play (memoised: each is a simulation)."""
+
+    def profile(play: float) -> float:
+        if play not in memo:
+            ctx = model.with_(make_extension("backlash", ["play"], [play], model.dof))
+            if linear:
+                exts, chi2, jac, layout = _fit_linear(linear, ctx, evidence, start)
+                memo[play] = (chi2, exts, jac, layout)
+            else:
+                memo[play] = (ctx.chi2(evidence), [], None, None)
+        return memo[play][0]
+
+    return profile
+
+
+def _refine(profile: Callable[[float], float], lo: float, hi: float, space: Space) -> None:
+    """Bounded search of the play in [lo, hi] (log scale) within the effect's bounds."""
+    lo, hi = max(lo, space.bounds[0][0]), min(max(hi, lo * 1.0001), space.bounds[0][1])
+    hi = max(hi, lo * 1.0001)
+    r = optimize.minimize_scalar(lambda u: profile(float(np.exp(u))),
+                                 bounds=(np.log(lo), np.log(hi)), method="bounded",
+                                 options={"xatol": 0.03})  # fmt: skip
+    profile(float(np.exp(r.x)))
+
+
+def _amplitude_ratio(
+    shaping: Sequence[Extension], evidence: Sequence[Lines], model: Model
+) -> float:
+    """Mean gain of ``shaping`` over the lines, weighted by their power (exact for a gain).
+
+    A play p behind the effects in the fast order acts roughly as p times this in the
+    chain's order: the start of the chain-order search.
+    """
+    num = den = 0.0
+    for x in evidence:
+        w = np.abs(x.nominal) ** 2
+        h = np.ones(x.size, dtype=complex)
+        for e in shaping:
+            h = h * e.response(x.f, model.nominal_break)
+        num += float(np.sum(w * np.log(np.maximum(np.abs(h), 1e-12))))
+        den += float(np.sum(w))
+    return float(np.exp(num / den)) if den > 0 else 1.0
+
+
+def _parabola(profile: Callable[[float], float], centre: float, space: Space) -> None:
+    """Three plays around ``centre`` (log steps of ANCHOR_STEP) and the parabola's vertex."""
+    lo_b, hi_b = space.bounds[0]
+    centre = float(np.clip(centre, lo_b * ANCHOR_STEP, hi_b / ANCHOR_STEP))
+    u = np.log(centre) + np.log(ANCHOR_STEP) * np.array([-1.0, 0.0, 1.0])
+    c = np.array([profile(float(np.exp(v))) for v in u])
+    curvature = c[0] - 2 * c[1] + c[2]
+    if curvature > 0:
+        shift = 0.5 * (c[0] - c[2]) / curvature  # in steps, kept within twice the bracket
+        profile(float(np.exp(u[1] + np.clip(shift, -2.0, 2.0) * np.log(ANCHOR_STEP))))
+
+
 def _fit_with_backlash(
     linear: tuple[str, ...],
     model: Model,
@@ -381,18 +472,8 @@ def _fit_with_backlash(
     channels = list({id(x.channel): x.channel for x in evidence}.values())
     space = search_space("backlash", model.case, model.dof, channels)
     inner_start = {e: v for e, v in (start or {}).items() if e != "backlash"} or None
-    memo: dict[float, tuple[float, list[Extension], FloatArray | None, object]] = {}
-
-    def profile(play: float) -> float:
-        if play not in memo:
-            ctx = model.with_(make_extension("backlash", ["play"], [play], model.dof))
-            if linear:
-                exts, chi2, jac, layout = _fit_linear(linear, ctx, evidence, inner_start)
-                memo[play] = (chi2, exts, jac, layout)
-            else:
-                memo[play] = (ctx.chi2(evidence), [], None, None)
-        return memo[play][0]
-
+    memo: _Memo = {}
+    profile = _profile(linear, model, evidence, inner_start, memo)
     if start is not None and "backlash" in start:
         centre = float(start["backlash"][0])
         lo, hi = centre / 2.0, centre * 2.0
@@ -404,11 +485,7 @@ def _fit_with_backlash(
         i = int(np.argmin(costs))
         lo, hi = grid[max(i - 1, 0)], grid[min(i + 1, grid.size - 1)]
     if not coarse:
-        lo, hi = max(lo, space.bounds[0][0]), min(max(hi, lo * 1.0001), space.bounds[0][1])
-        r = optimize.minimize_scalar(lambda u: profile(float(np.exp(u))),
-                                     bounds=(np.log(lo), np.log(hi)), method="bounded",
-                                     options={"xatol": 0.03})  # fmt: skip
-        profile(float(np.exp(r.x)))
+        _refine(profile, lo, hi, space)
     play = min(memo, key=lambda p: memo[p][0])  # the best play evaluated
     chi2, exts, jac, layout = memo[play]
     ext_b = make_extension("backlash", ["play"], [play], model.dof)
@@ -416,6 +493,18 @@ def _fit_with_backlash(
         nan = float("nan")
         std = {e.effect: dict.fromkeys(numeric_names(e.effect), nan) for e in (ext_b, *exts)}
         return SetFit((ext_b, *exts), chi2, std, {"labels": [], "matrix": []})
+    shaping = [e for e in exts if e.effect in BEFORE_BACKLASH]
+    if shaping:  # the chain's order: these shape what reaches the backlash (Model.anchored)
+        anchored = model.anchored(shaping)
+        fitted = {e.effect: [e.value(n) for n in numeric_names(e.effect)] for e in exts}
+        memo_a: _Memo = {}
+        profile_a = _profile(linear, anchored, evidence, fitted, memo_a)
+        _parabola(profile_a, play * _amplitude_ratio(shaping, evidence, model), space)
+        play_a = min(memo_a, key=lambda p: memo_a[p][0])
+        if memo_a[play_a][0] <= chi2:
+            model, play = anchored, play_a
+            chi2, exts, jac, layout = memo_a[play_a]
+            ext_b = make_extension("backlash", ["play"], [play], model.dof)
     # the play's column of the Jacobian: central difference with the linear effects held
     col = []
     for k in (1.01, 1 / 1.01):

@@ -62,8 +62,8 @@ def expected_noise_delta_bic(
     parts = []
     for seg in segments:
         keep = off_line(seg)
-        sm = seg.scales[0] * seg.source_psd[0][keep]
-        si = seg.scales[1] * seg.source_psd[1][keep]
+        shape = seg.shape_psd
+        sm, si = seg.scales[0] * shape[0][keep], seg.scales[1] * shape[1][keep]
         parts.append((scale**2 * sm + si, sm, si))
     bins = sum(p[0].size for p in parts)
 

@@ -6,13 +6,17 @@ measured - model is noise. Its spectrum is modelled as
     S(f) = (a S_motion(f) + b S_imu(f)) |H_sensor(f)|^2,
 
 the nominal spectra of the configuration's motion noise (Eq 5.10) and of the IMU's own noise
-(:mod:`twin.diagnose.data` keeps them apart), with power factors ``a`` and ``b`` fitted by the
+(:mod:`twin.diagnose.data` keeps them apart; smoothed over a third of an octave,
+:attr:`~twin.diagnose.residuals.Segment.shape_psd`, because the two are told apart by their
+shapes only), with power factors ``a`` and ``b`` fitted by the
 Whittle likelihood. ``b`` is the IMU's noise power relative to the data sheet (a better or
 worse IMU than the ADIS16355's nominal figures): a property of the sensor, reported, never a
 cause. ``a`` is the motion noise; where the configuration has motion noise in the DOF it is
 named as the ``noise`` effect (``scale`` = sqrt(a), an amplitude factor) when a free ``a``
 improves the BIC by more than the margin over a = 1 (``b`` free in both) and its held-out
-likelihood (the other half of the window) improves too.
+likelihood improves too: ``a`` fitted on one half of the window, carried to the other half,
+against a = 1 there, with ``b`` refitted on that half in both (a nuisance is fitted wherever
+it is used; only the claim is held out).
 """
 
 from __future__ import annotations
@@ -88,8 +92,8 @@ def _terms(model: Model, segments: Sequence[Segment]) -> list[tuple[FloatArray, 
         keep = off_line(seg)
         r = seg.measured - seg.spectrum(model.predict(seg.channel))
         h2 = model.psd_factor(seg.f)  # a sensor filter filters every noise it measures
-        sm = seg.source_psd[0] * h2
-        si = seg.source_psd[1] * h2
+        shape = seg.shape_psd
+        sm, si = shape[0] * h2, shape[1] * h2
         out.append((np.abs(r[keep]) ** 2, sm[keep], si[keep]))
     return out
 
@@ -216,11 +220,12 @@ def judge_noise(
         halves = c.halves()
         for i in (0, 1):
             a, b = segment(c, halves[i], max_hz), segment(c, halves[1 - i], max_hz)
-            f1 = fit_noise(model, [a], imu_fixed=known)
-            f0 = fit_noise(model, [a], motion_fixed=1.0, imu_fixed=known)
-            test = _terms(model, [b])
-            n = sum(t[0].size for t in test)
-            rows.append((_loglik(test, *f0.scales) / n, _loglik(test, *f1.scales) / n))
+            # the claim (the motion factor) is carried to the other half; the nuisance (the
+            # IMU's factor, unless known) is refitted there for both, as it is everywhere
+            claimed = fit_noise(model, [a], imu_fixed=known).scales[0]
+            f0 = fit_noise(model, [b], motion_fixed=1.0, imu_fixed=known)
+            f1 = fit_noise(model, [b], motion_fixed=claimed, imu_fixed=known)
+            rows.append((f0.loglik / f0.bins, f1.loglik / f1.bins))
     before, after = (float(np.mean(v)) for v in zip(*rows, strict=True))
     held = {"loglik_per_bin_before": before, "loglik_per_bin_after": after}
     return NoiseJudgement(free, float(dbic), held, bool(dbic > margin and after > before))
