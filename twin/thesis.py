@@ -135,3 +135,25 @@ TABLE_2_3 = MappingProxyType(
      "k_m": (2.71e-1, 9.64e-2), "tau_m": (1.38e-2, 8.31e-3), "zeta_nm": (5.87e-2, 2.76e-2),
      "omega_nm": (6.56e-1, 4.62e-1)}
 )  # fmt: skip
+
+#: Tables 6.4-6.7: main effects of the repeated-measures ANOVA (df 1, 8) on the Chapter 6
+#: measures: measure -> factor -> (F, direction of the mean with the factor's second level
+#: minus its first: "+", "-", or None where not significant and no direction is stated).
+#: Directions from §6.4: with the 1 Hz filter var(e) rose, var(u) fell slightly, both
+#: crossovers fell, both phase margins rose, K_v and K_m fell.
+TABLES_6_4_TO_6_7 = MappingProxyType(
+    {
+        "var_e": {"filter": (357.79, "+"), "delay": (0.39, None), "noise": (3.23, None)},
+        "var_u": {"filter": (15.00, "-"), "delay": (2.74, None), "noise": (0.18, None)},
+        "crossover_disturbance_rad_s": {"filter": (159.68, "-"), "delay": (1.34, None),
+                                        "noise": (0.00, None)},
+        "crossover_target_rad_s": {"filter": (5.98, "-"), "delay": (1.24, None),
+                                   "noise": (0.45, None)},
+        "phase_margin_disturbance_deg": {"filter": (68.95, "+"), "delay": (1.17, None),
+                                         "noise": (0.54, None)},
+        "phase_margin_target_deg": {"filter": (27.05, "+"), "delay": (0.17, None),
+                                    "noise": (0.21, None)},
+        "k_v": {"filter": (43.36, "-"), "delay": (3.82, None), "noise": (0.44, None)},
+        "k_m": {"filter": (66.20, "-"), "delay": (4.67, None), "noise": (0.36, None)},
+    }
+)  # fmt: skip

@@ -8,6 +8,7 @@ import json
 import numpy as np
 
 from twin.cli import common
+from twin.errors import UsageError
 from twin.plotting import pyplot
 
 DEG2 = (180 / np.pi) ** 2
@@ -59,7 +60,34 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
     )
     exp.add_argument("--runs", type=int, default=5, help="runs per condition (default 5)")
     exp.add_argument("--plot", help="save a figure of the measures per condition (PNG)")
+    exp.add_argument(
+        "--pilot",
+        choices=("fixed", "adaptive"),
+        default="fixed",
+        help="fixed: one pilot model in every condition; adaptive: simulated subjects who adapt "
+        "their equalisation to each motion system, with the thesis' repeated-measures ANOVA",
+    )
+    exp.add_argument(
+        "--subjects",
+        type=int,
+        default=6,
+        help="simulated subjects with --pilot adaptive (default 6)",
+    )
+    exp.add_argument(
+        "--workers", type=int, default=1, help="processes for --pilot adaptive (default 1)"
+    )
     exp.set_defaults(func=_cmd_experiment)
+    ada = cmds.add_parser(
+        "adapt",
+        parents=[common.json_parent()],
+        help="the pitch-task pilot's equalisation adapted to a motion configuration "
+        "(minimises var(e) + r var(u))",
+    )
+    ada.add_argument("config", metavar="CONFIG", help=config_help())
+    ada.add_argument(
+        "--weight", type=float, default=None, help="r of the cost (default: twin.pilot.adapt's)"
+    )
+    ada.set_defaults(func=_cmd_adapt)
     ide = cmds.add_parser(
         "identify", parents=[common.json_parent()], help="FC, ARX and MLE on a twin-pilot/1 CSV"
     )
@@ -173,9 +201,29 @@ def _cmd_run(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_adapt(args: argparse.Namespace) -> int:
+    from twin.chain.config import motion_system
+    from twin.pilot.adapt import CONTROL_WEIGHT, adapt
+
+    a = adapt(motion_system(args.config), weight=args.weight or CONTROL_WEIGHT)
+    print(json.dumps(a.to_dict(), indent=2) if args.json else a.format())
+    return 0
+
+
 def _cmd_experiment(args: argparse.Namespace) -> int:
     from twin.pilot.experiment import run_experiment
 
+    if args.pilot == "adaptive":
+        from twin.pilot.population import run_population
+
+        if args.workers < 1:
+            raise UsageError(f"--workers must be >= 1; got {args.workers}")
+        p = run_population(args.subjects, args.seed, common.progress(args), args.workers)
+        if args.plot:
+            plt = pyplot()
+            plt.close(p.plot(args.plot))
+        print(json.dumps(p.to_dict(), indent=2) if args.json else p.format_table())
+        return 0
     _check_runs(args.runs)
     r = run_experiment(runs=args.runs, seed=args.seed, progress=common.progress(args), fit=True)
     if args.plot:

@@ -499,9 +499,12 @@ def _fit_with_backlash(
         fitted = {e.effect: [e.value(n) for n in numeric_names(e.effect)] for e in exts}
         memo_a: _Memo = {}
         profile_a = _profile(linear, anchored, evidence, fitted, memo_a)
-        _parabola(profile_a, play * _amplitude_ratio(shaping, evidence, model), space)
-        play_a = min(memo_a, key=lambda p: memo_a[p][0])
-        if memo_a[play_a][0] <= chi2:
+        try:
+            _parabola(profile_a, play * _amplitude_ratio(shaping, evidence, model), space)
+        except SignalError:  # the chain cannot run them (a pole beyond the commands' Nyquist
+            memo_a.clear()  # frequency): the fast order's fit stands
+        play_a = min(memo_a, key=lambda p: memo_a[p][0], default=None)
+        if play_a is not None and memo_a[play_a][0] <= chi2:
             model, play = anchored, play_a
             chi2, exts, jac, layout = memo_a[play_a]
             ext_b = make_extension("backlash", ["play"], [play], model.dof)

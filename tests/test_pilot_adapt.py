@@ -1,0 +1,101 @@
+"""The adaptive pilot (twin.pilot.adapt) and the Chapter 6 statistics (twin.pilot.population)."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+
+import numpy as np
+import pytest
+
+from twin.cli.main import main
+from twin.errors import SignalError
+from twin.pilot.adapt import Task, adapt, predict, stable
+from twin.pilot.pitch import PitchPilot, simulate_pitch
+from twin.pilot.population import FACTORS, MEASURES, anova, levels
+from twin.thesis import TABLE_6_3
+
+
+@pytest.fixture(scope="module")
+def srs_and_filter():
+    """The default subject adapted to condition 1 (SRS) and condition 5 (1 Hz filter)."""
+    return adapt("condition-1"), adapt("condition-5")
+
+
+def test_behind_the_1_hz_filter_the_pilot_drops_motion_and_lowers_its_crossover(srs_and_filter):
+    """§6.4.2 (Tables 6.5, 6.6): with the 1 Hz filter K_m fell to about zero, K_v fell, the
+    visual lead rose, the disturbance crossover fell and its phase margin rose; var(e) rose
+    (Table 6.4). The adapted pilot must do each of these by itself."""
+    srs, filt = srs_and_filter
+    assert srs.pilot.k_m > 0.2
+    assert filt.pilot.k_m < 0.05 * srs.pilot.k_m
+    assert filt.pilot.k_v < srs.pilot.k_v
+    assert filt.pilot.t_lead > srs.pilot.t_lead
+    assert filt.loops.crossover_d < srs.loops.crossover_d
+    assert filt.loops.phase_margin_d > srs.loops.phase_margin_d
+    assert filt.performance.var_e > srs.performance.var_e
+
+
+def test_the_adapted_pilot_beats_its_neighbours(srs_and_filter):
+    """Optimality: moving any adapted parameter by 10 % raises the cost (or breaks the loop)."""
+    task = Task.pitch("condition-1")
+    a = srs_and_filter[0]
+    for name in ("k_v", "t_lead", "t_lag", "k_m"):
+        for k in (0.9, 1.1):
+            p = dataclasses.replace(a.pilot, **{name: getattr(a.pilot, name) * k})
+            assert predict(p, task).cost >= a.performance.cost * (1 - 1e-6) or not stable(p, task)
+
+
+def test_the_frequency_domain_prediction_matches_a_flown_run():
+    """predict()'s var(e) and var(u) without remnant equal those of the pitch task flown in the
+    time domain through the whole chain (condition 1, no noise) within 5 %."""
+    pilot = PitchPilot()
+    perf = predict(pilot, Task.pitch("condition-1"), noise_ratio=1e-12)
+    run = simulate_pitch(pilot, "condition-1", 1, 0, 0.0)
+    assert float(np.var(run.e)) == pytest.approx(perf.var_e, rel=0.05)
+    assert float(np.var(run.u)) == pytest.approx(perf.var_u, rel=0.05)
+
+
+def test_stability_is_nyquists():
+    task = Task.pitch("condition-1")
+    assert stable(PitchPilot(), task)
+    assert not stable(dataclasses.replace(PitchPilot(), k_v=40.0), task)
+
+
+def test_bad_weights_are_refused():
+    with pytest.raises(SignalError, match="weight"):
+        adapt("srs", weight=-1.0)
+    with pytest.raises(SignalError, match="noise ratio"):
+        adapt("srs", noise_ratio=float("nan"))
+
+
+def test_the_anova_finds_a_planted_effect_and_keeps_the_json_contract():
+    """Rows with a planted filter effect (+1 on every measure, subject offsets, noise sd 0.2):
+    filter F large, p < 0.01, direction '+'; the contract's keys and types."""
+    rng = np.random.default_rng(3)
+    rows = []
+    for s in range(1, 7):
+        offset = rng.normal(0, 1)
+        for n in TABLE_6_3:
+            lv = levels(n)
+            values = {m: offset + lv["filter"] + rng.normal(0, 0.2) for m in MEASURES}
+            rows.append({"subject": s, "condition": n, **lv, **values})
+    result = anova(rows)
+    doc = json.loads(json.dumps({"anova": result}))
+    assert set(doc["anova"]) == set(MEASURES)
+    for m in MEASURES:
+        assert set(doc["anova"][m]) == set(FACTORS)
+        f = doc["anova"][m]["filter"]
+        assert f["F"] > 50 and f["p"] < 0.01 and f["direction"] == "+"
+        for factor in FACTORS:
+            assert isinstance(doc["anova"][m][factor]["F"], float)
+            assert doc["anova"][m][factor]["direction"] in "+-"
+
+
+def test_cli_adapt_prints_parameters_and_margins(capsys):
+    assert main(["pilot", "adapt", "condition-5", "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["pilot"]["k_m"] < 0.05
+    assert doc["crossover_disturbance_rad_s"] > 0
+    assert main(["pilot", "experiment", "--pilot", "adaptive", "--subjects", "1"]) == 2
+    assert "at least 2 subjects" in capsys.readouterr().err

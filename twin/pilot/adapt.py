@@ -1,0 +1,338 @@
+"""A pilot who adapts: the multi-modal pilot's equalisation chosen for each motion system.
+
+Chapter 6's pilots changed their control behaviour with the motion system (§6.4.2): behind the
+1 Hz platform filter the motion gain fell to about zero, the visual gain fell, the visual lead
+rose and both crossover frequencies fell. A fixed pilot model cannot show that. Here the pilot
+*chooses* its equalisation - visual gain K_v, lead and lag t_lead, t_lag (Eq 6.5) and motion
+gain K_m (Eq 6.7) - to minimise
+
+    J = var(e) + r var(u)
+
+for the motion system at hand, while its limitations (visual and motion delays, the
+neuromuscular system of Eq 6.6) stay its own: the optimal-control view of manual control
+(Kleinman, Baron and Levison 1970; McRuer's adjustment rules, McRuer and Jex 1967, as the
+outcome), restricted to the structure of Eq 6.5-6.7 as in Hess (1990) and Zaal et al. (2009).
+
+Everything is computed in the frequency domain, so one evaluation takes about a millisecond:
+
+* the loop u = H_pe e^{-s T_d} e - H_ptheta (H_m theta + m) + n, theta = K H_theta,de (u + f_d),
+  e = f_t - theta (Eq 6.3-6.7; H_m the motion system's pitch response, Eq 5.11 and its
+  extensions; T_d the display's 25 ms);
+* the forcing functions' lines (Table 6.2) give their parts of var(e) and var(u) exactly;
+* the remnant n is the Eq 2.21-shaped noise with a power that is a fixed fraction
+  ``remnant_ratio`` of var(u) (the observation-noise view of remnant: it scales with the
+  pilot's own activity), so var(u) = var_forced(u) / (1 - ratio I_u) with I_u the remnant's
+  gain to u; a loop that amplifies its own remnant pays for it, and ratio I_u >= 1 is not
+  allowed;
+* the motion noise m (Eq 5.10 heave at the pilot station, read as attitude -z / l, §6.3.5)
+  where the configuration has it.
+
+Stability is required (Nyquist's criterion on the disturbance open loop, :func:`stable`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy import optimize
+
+from twin.chain.config import MotionSystem, motion_system
+from twin.chain.noise import shaping_response
+from twin.errors import SignalError
+from twin.pilot.forcing import ForcingFunction, pitch_task
+from twin.pilot.pitch import (
+    DISPLAY_DELAY_S,
+    PILOT_STATION_M,
+    OpenLoops,
+    PitchPilot,
+    aircraft,
+    motion_response,
+    open_loops,
+)
+
+FloatArray = NDArray[np.float64]
+ComplexArray = NDArray[np.complex128]
+
+#: Parameters the pilot adapts (equalisation); the rest (limitations) are the pilot's own.
+ADAPTED = ("k_v", "t_lead", "t_lag", "k_m")
+#: Bounds of the adapted parameters.
+BOUNDS = {"k_v": (0.05, 20.0), "t_lead": (0.0, 2.0), "t_lag": (0.02, 2.0), "k_m": (0.0, 3.0)}
+#: Weight r on var(u) in the cost (rad^2 / rad^2).
+CONTROL_WEIGHT = 0.03
+#: Observation-noise ratio of the remnant (-20 dB, Kleinman, Baron and Levison 1970).
+NOISE_RATIO = 0.01
+#: Starting equalisations (K_v, t_lead, t_lag, K_m) of the search: with and without motion.
+STARTS = ((3.0, 0.2, 0.6, 0.5), (2.0, 0.3, 0.8, 0.0))
+#: Cost given to unstable or remnant-dominated equalisations (relative to the start's).
+UNSTABLE_COST = 1e6
+#: Frequency grid of the Nyquist test [rad/s] (|L| >> 1 at its start, << 1 at its end).
+STABILITY_GRID_RAD_S = np.geomspace(1e-2, 1e2, 3000)
+#: Frequency grid of the remnant and noise integrals [rad/s].
+GRID_RAD_S = np.geomspace(0.05, 200.0, 1500)
+
+
+@dataclass(frozen=True)
+class Task:
+    """What the pilot adapts to: the forcing functions and the motion system.
+
+    Attributes
+    ----------
+    config : MotionSystem
+        The motion system.
+    disturbance, target : ForcingFunction
+        Table 6.2's forcing functions.
+
+    """
+
+    config: MotionSystem
+    disturbance: ForcingFunction
+    target: ForcingFunction
+    _plant: dict = field(default_factory=dict, compare=False, repr=False)
+
+    def plant(self, w: FloatArray) -> tuple[ComplexArray, ComplexArray]:
+        """Aircraft K H and motion response H_m at ``w`` (cached per grid: they do not adapt)."""
+        key = (w.size, float(w[0]), float(w[-1]))
+        if key not in self._plant:
+            self._plant[key] = (aircraft(w), motion_response(self.config, w))
+        return self._plant[key]
+
+    @classmethod
+    def pitch(cls, config: MotionSystem | str) -> Task:
+        """Return the Chapter 6 pitch task through ``config``."""
+        cfg = motion_system(config) if isinstance(config, str) else config
+        fd, ft = pitch_task()
+        return cls(cfg, fd, ft)
+
+
+def _felt_noise_psd(config: MotionSystem, w: FloatArray) -> FloatArray:
+    """One-sided PSD [rad^2 per rad/s] of the heave noise read as attitude at the pilot station."""
+    block = config.noise_block()
+    if block is None:
+        return np.zeros_like(w)
+    f = w / (2 * np.pi)
+    s_acc = block.scale**2 * np.abs(shaping_response(f)) ** 2 * 2.0 / block.rate_hz  # per Hz
+    if block.highpass_hz is not None:
+        s_acc = s_acc / (1 + (block.highpass_hz / np.maximum(f, 1e-9)) ** 8)
+    s_z = s_acc / np.maximum(w, 1e-9) ** 4
+    return s_z / PILOT_STATION_M**2 / (2 * np.pi)
+
+
+@dataclass(frozen=True)
+class Performance:
+    """Predicted variances of a pilot's loop [rad^2] and its cost.
+
+    Attributes
+    ----------
+    var_e, var_u : float
+        Error and control variance (forcing functions, remnant and motion noise).
+    var_rate : float
+        Variance of the felt pitch rate [rad^2/s^2].
+    cost : float
+        var(e) + r var(u) (infinite when the remnant feeds itself: ``remnant_gain`` >= 1).
+    remnant_gain : float
+        Spectral radius of the remnant's feedback on the variances it scales with.
+
+    """
+
+    var_e: float
+    var_u: float
+    var_rate: float
+    cost: float
+    remnant_gain: float
+
+
+def predict(
+    pilot: PitchPilot,
+    task: Task,
+    weight: float = CONTROL_WEIGHT,
+    noise_ratio: float = NOISE_RATIO,
+) -> Performance:
+    """Predict var(e), var(u) and the cost of ``pilot`` flying ``task`` (frequency domain).
+
+    The remnant is observation noise (Kleinman, Baron and Levison 1970): white, on the
+    displayed error and on the felt pitch rate, each with a one-sided density of
+    ``noise_ratio`` times its signal's variance per rad/s (the optimal-control model's
+    V = pi rho E[y^2]). Visual lead differentiates the visual noise; the motion channel senses
+    the rate directly. Both variances depend on the noise they scale: a 2 x 2 linear system.
+    """
+    cfg = task.config
+
+    def responses(w: FloatArray) -> tuple[dict, dict, dict]:
+        s = 1j * w
+        hc, hm = task.plant(w)
+        hpe = pilot.h_pe(w) * np.exp(-s * DISPLAY_DELAY_S)
+        hpm = pilot.h_ptheta(w)
+        den = 1 + hc * (hpe + hpm * hm)
+        # theta per input: target, disturbance, visual noise (on e), platform noise (attitude
+        # at the station) and rate noise (on the felt rate)
+        theta = {"t": hc * hpe / den, "d": hc / den, "v": hc * hpe / den, "m": -hc * hpm / den}
+        theta["r"] = theta["m"] / s
+        e = {k: (1.0 if k == "t" else 0.0) - v for k, v in theta.items()}
+        u = {k: v / hc - (1.0 if k == "d" else 0.0) for k, v in theta.items()}
+        rate = {k: s * (hm * v + (1.0 if k == "m" else 0.0)) for k, v in theta.items()}
+        return e, u, rate
+
+    forced = np.zeros(3)  # e, u, rate
+    for key, ff in (("t", task.target), ("d", task.disturbance)):
+        out = responses(ff.omega_rad_s)
+        p = ff.amplitude**2 / 2
+        forced += [float(np.sum(np.abs(x[key]) ** 2 * p)) for x in out]
+    w = GRID_RAD_S
+    out = responses(w)
+    s_m = _felt_noise_psd(cfg, w)
+    forced += [float(np.trapezoid(np.abs(x["m"]) ** 2 * s_m, w)) for x in out]
+    # gains of the two observation noises (unit density) on e, u and rate
+    gains = np.array([[float(np.trapezoid(np.abs(x[k]) ** 2, w)) for k in ("v", "r")]
+                      for x in out])  # fmt: skip
+    # [ve, vr] = forced[e, rate] + noise_ratio * G [ve, vr], G from the e and rate rows
+    g = noise_ratio * gains[[0, 2]]
+    radius = float(np.max(np.abs(np.linalg.eigvals(g))))
+    if radius >= 1:
+        return Performance(float("inf"), float("inf"), float("inf"), float("inf"), radius)
+    ve, vr = np.linalg.solve(np.eye(2) - g, forced[[0, 2]])
+    vu = forced[1] + noise_ratio * (gains[1, 0] * ve + gains[1, 1] * vr)
+    return Performance(float(ve), float(vu), float(vr), float(ve + weight * vu), radius)
+
+
+def stable(pilot: PitchPilot, task: Task) -> bool:
+    """Whether the closed loop is stable (Nyquist's criterion on 1 + L, L the disturbance loop).
+
+    L = K H (H_pe e^{-s T_d} + H_ptheta H_m) has one pole at the origin (the aircraft's
+    integrator, K0 / s with K0 > 0) and none in the right half-plane, so the loop is stable
+    when the phase of 1 + L, unwrapped from -90 deg just above 0 rad/s, ends at 0 (not at a
+    multiple of -360 deg) where L has died out.
+    """
+    w = STABILITY_GRID_RAD_S
+    hc, hm = task.plant(w)
+    hpe = pilot.h_pe(w) * np.exp(-1j * w * DISPLAY_DELAY_S)
+    loop = hc * (hpe + pilot.h_ptheta(w) * hm)
+    phase = np.unwrap(np.angle(1 + loop))
+    return bool(abs(phase[-1] - phase[0] - np.pi / 2) < np.pi / 2)
+
+
+@dataclass(frozen=True)
+class Adapted:
+    """A pilot adapted to a task.
+
+    Attributes
+    ----------
+    pilot : PitchPilot
+        The adapted pilot (limitations as given, equalisation optimal).
+    performance : Performance
+        Its predicted variances and cost.
+    loops : OpenLoops
+        Crossover frequencies and phase margins.
+    config : str
+        The motion configuration's name.
+
+    """
+
+    pilot: PitchPilot
+    performance: Performance
+    loops: OpenLoops
+    config: str
+
+    def to_dict(self) -> dict[str, object]:
+        """JSON-ready: parameters, predicted variances [deg^2], crossovers and margins."""
+        deg2 = (180 / np.pi) ** 2
+        return {
+            "config": self.config,
+            "pilot": dataclasses.asdict(self.pilot),
+            "adapted": list(ADAPTED),
+            "var_e_deg2": self.performance.var_e * deg2,
+            "var_u_deg2": self.performance.var_u * deg2,
+            "cost": self.performance.cost,
+            "crossover_disturbance_rad_s": self.loops.crossover_d,
+            "phase_margin_disturbance_deg": self.loops.phase_margin_d,
+            "crossover_target_rad_s": self.loops.crossover_t,
+            "phase_margin_target_deg": self.loops.phase_margin_t,
+        }
+
+    def format(self) -> str:
+        """Plain-text summary."""
+        p = self.pilot
+        d = self.to_dict()
+        return "\n".join([
+            f"pilot adapted to {self.config} (minimises var(e) + r var(u))",
+            f"  K_v {p.k_v:.3f}  t_lead {p.t_lead:.3f} s  t_lag {p.t_lag:.3f} s  "
+            f"K_m {p.k_m:.3f} s",
+            f"  limitations: tau_v {p.tau_v:.3f} s  tau_m {p.tau_m:.3f} s  "
+            f"omega_nm {p.omega_nm:.2f} rad/s  zeta_nm {p.zeta_nm:.2f}",
+            f"  var(e) {d['var_e_deg2']:.3f} deg^2  var(u) {d['var_u_deg2']:.3f} deg^2",
+            f"  disturbance loop: crossover {self.loops.crossover_d:.2f} rad/s, "
+            f"phase margin {self.loops.phase_margin_d:.1f} deg",
+            f"  target loop: crossover {self.loops.crossover_t:.2f} rad/s, "
+            f"phase margin {self.loops.phase_margin_t:.1f} deg",
+        ])  # fmt: skip
+
+
+def adapt(
+    task: Task | MotionSystem | str,
+    limitations: PitchPilot | None = None,
+    weight: float = CONTROL_WEIGHT,
+    noise_ratio: float = NOISE_RATIO,
+    starts: Sequence[PitchPilot] | None = None,
+) -> Adapted:
+    """Choose the equalisation (:data:`ADAPTED`) that minimises the cost on ``task``.
+
+    Parameters
+    ----------
+    task : Task, MotionSystem or str
+        The pitch task through a motion configuration (a configuration name or object is the
+        Chapter 6 pitch task through it).
+    limitations : PitchPilot, optional
+        The pilot whose delays and neuromuscular system are kept (Eq 6.5-6.7 defaults).
+    weight : float
+        r in J = var(e) + r var(u) (> 0).
+    noise_ratio : float
+        Observation-noise ratio of the remnant (> 0; :func:`predict`).
+    starts : sequence of PitchPilot, optional
+        Starting points (the ``limitations`` pilot and two others by default).
+
+    Raises
+    ------
+    SignalError
+        A weight or ratio out of range, or no stable equalisation found.
+
+    """
+    if not np.isfinite(weight) or weight <= 0:
+        raise SignalError(f"control weight r must be > 0; got {weight}")
+    if not np.isfinite(noise_ratio) or noise_ratio <= 0:
+        raise SignalError(f"observation-noise ratio must be > 0; got {noise_ratio}")
+    t = task if isinstance(task, Task) else Task.pitch(task)
+    base = limitations or PitchPilot()
+    lo = np.array([BOUNDS[k][0] for k in ADAPTED])
+    hi = np.array([BOUNDS[k][1] for k in ADAPTED])
+
+    def pilot_of(x: FloatArray) -> PitchPilot:
+        return dataclasses.replace(base, **dict(zip(ADAPTED, np.clip(x, lo, hi), strict=True)))
+
+    def cost(x: FloatArray) -> float:
+        p = pilot_of(x)
+        perf = predict(p, t, weight, noise_ratio)
+        if not np.isfinite(perf.cost) or perf.remnant_gain >= 0.95 or not stable(p, t):
+            return UNSTABLE_COST
+        return perf.cost / scale
+
+    scale = predict(base, t, weight, noise_ratio).cost
+    scale = scale if np.isfinite(scale) and scale > 0 else 1.0
+    firsts = list(starts) if starts else [
+        dataclasses.replace(base, **dict(zip(ADAPTED, x, strict=True))) for x in STARTS
+    ]  # fmt: skip
+    best = None
+    for s in firsts:
+        x0 = np.clip([getattr(s, k) for k in ADAPTED], lo, hi)
+        if cost(x0) >= UNSTABLE_COST:
+            continue
+        r = optimize.minimize(cost, x0, method="Nelder-Mead",
+                              options={"xatol": 1e-3, "fatol": 1e-6, "maxiter": 800})  # fmt: skip
+        if r.fun < UNSTABLE_COST and (best is None or r.fun < best.fun):
+            best = r
+    if best is None:
+        raise SignalError(f"no stable equalisation found for {t.config.name}")
+    p = pilot_of(best.x)
+    return Adapted(p, predict(p, t, weight, noise_ratio), open_loops(p, t.config), t.config.name)

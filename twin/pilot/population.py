@@ -1,0 +1,289 @@
+"""Chapter 6's experiment flown by a population of adaptive simulated subjects, with its ANOVA.
+
+Each subject (seeded) has its own limitations - visual and motion delays, neuromuscular
+frequency and damping - and its own priorities (control weight r, observation-noise ratio),
+drawn around the values of :mod:`twin.pilot.adapt`. In every Table 6.3 condition the subject
+adapts its equalisation (K_v, t_lead, t_lag, K_m) to the motion system
+(:func:`twin.pilot.adapt.adapt`, warm-started from its previous condition) and then flies it
+with an imperfect adaptation: each adapted parameter is off by a log-normal factor
+(``ADAPTATION_SD``), as a person's control behaviour varies from run to run. The measures per
+subject and condition are the adapted loop's predicted var(e), var(u) (frequency domain,
+:func:`twin.pilot.adapt.predict`), crossover frequencies and phase margins
+(:func:`twin.pilot.pitch.open_loops`), and K_v, K_m.
+
+The statistics are the thesis' (§6.4, Tables 6.4-6.7): a repeated-measures ANOVA per measure
+(statsmodels ``AnovaRM``, within-subject factors filter x delay x noise), F, p and the
+direction of each main effect (mean at the second level - 1 Hz filter, 35 ms, noise on -
+minus the first), beside the thesis' F and directions.
+
+Assumptions (stated, not from the thesis): the spreads of :data:`SUBJECT_SPREAD` and the
+adaptation noise; the cost J = var(e) + r var(u) and the observation-noise remnant of
+:mod:`twin.pilot.adapt`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from twin.errors import SignalError
+from twin.pilot.adapt import ADAPTED, CONTROL_WEIGHT, NOISE_RATIO, Task, adapt, predict
+from twin.pilot.pitch import PitchPilot, open_loops
+from twin.thesis import TABLE_6_3, TABLES_6_4_TO_6_7
+
+#: Factors of Table 6.3 and their levels (first, second).
+FACTORS = {"filter": ("none", "1 Hz"), "delay": ("25 ms", "35 ms"), "noise": ("off", "on")}
+#: Measures of the JSON contract, in the order printed.
+MEASURES = (
+    "crossover_disturbance_rad_s",
+    "crossover_target_rad_s",
+    "phase_margin_disturbance_deg",
+    "phase_margin_target_deg",
+    "var_u",
+    "var_e",
+    "k_m",
+    "k_v",
+)
+#: Subject spread: parameter -> (mean, sd) for limitations; log-normal sd for the priorities.
+SUBJECT_SPREAD = {
+    "tau_v": (0.30, 0.03),
+    "tau_m": (0.20, 0.03),
+    "omega_nm": (11.0, 1.5),
+    "zeta_nm": (0.25, 0.05),
+    "weight": (CONTROL_WEIGHT, 0.3),
+    "noise_ratio": (NOISE_RATIO, 0.3),
+}
+#: Run-to-run variation of the adapted parameters (log-normal sd).
+ADAPTATION_SD = 0.1
+
+
+@dataclass(frozen=True)
+class Subject:
+    """A simulated subject: its limitations and priorities.
+
+    Attributes
+    ----------
+    number : int
+        Subject number (from 1).
+    limitations : PitchPilot
+        Delays and neuromuscular system (the equalisation here is only a start).
+    weight, noise_ratio : float
+        r of the cost and observation-noise ratio of the remnant.
+
+    """
+
+    number: int
+    limitations: PitchPilot
+    weight: float
+    noise_ratio: float
+
+
+def subjects(n: int, seed: int = 0) -> list[Subject]:
+    """Draw ``n`` subjects from ``seed`` (:data:`SUBJECT_SPREAD`)."""
+    if n < 2:
+        raise SignalError(f"an ANOVA needs at least 2 subjects; got {n}")
+    rng = np.random.default_rng(np.random.SeedSequence([seed, 14]))
+    out = []
+    for i in range(n):
+        lim = {k: float(max(rng.normal(*SUBJECT_SPREAD[k]), 0.3 * SUBJECT_SPREAD[k][0]))
+               for k in ("tau_v", "tau_m", "omega_nm", "zeta_nm")}  # fmt: skip
+        w, nr = (float(SUBJECT_SPREAD[k][0] * np.exp(rng.normal(0, SUBJECT_SPREAD[k][1])))
+                 for k in ("weight", "noise_ratio"))  # fmt: skip
+        out.append(Subject(i + 1, dataclasses.replace(PitchPilot(), **lim), w, nr))
+    return out
+
+
+def levels(condition: int) -> dict[str, int]:
+    """Factor levels (0 first, 1 second) of a Table 6.3 condition."""
+    fb, delay, noise = TABLE_6_3[condition]
+    return {"filter": int(fb is not None), "delay": int(delay > 0.03), "noise": int(noise)}
+
+
+def fly_subject(subject: Subject, seed: int = 0) -> list[dict[str, float]]:
+    """Adapt ``subject`` to every condition and return its measures (one row per condition)."""
+    rng = np.random.default_rng(np.random.SeedSequence([seed, 15, subject.number]))
+    rows, previous = [], None
+    for n in TABLE_6_3:
+        task = Task.pitch(f"condition-{n}")
+        starts = None if previous is None else [previous, subject.limitations]
+        a = adapt(task, subject.limitations, subject.weight, subject.noise_ratio, starts)
+        previous = a.pilot
+        noisy = {k: getattr(a.pilot, k) * float(np.exp(rng.normal(0, ADAPTATION_SD)))
+                 for k in ADAPTED}  # fmt: skip
+        pilot = dataclasses.replace(a.pilot, **noisy)
+        perf = predict(pilot, task, subject.weight, subject.noise_ratio)
+        loops = open_loops(pilot, task.config)
+        deg2 = (180 / np.pi) ** 2
+        rows.append({
+            "subject": subject.number, "condition": n, **levels(n),
+            "crossover_disturbance_rad_s": loops.crossover_d,
+            "crossover_target_rad_s": loops.crossover_t,
+            "phase_margin_disturbance_deg": loops.phase_margin_d,
+            "phase_margin_target_deg": loops.phase_margin_t,
+            "var_u": perf.var_u * deg2, "var_e": perf.var_e * deg2,
+            "k_m": pilot.k_m, "k_v": pilot.k_v,
+            "t_lead": pilot.t_lead, "t_lag": pilot.t_lag,
+        })  # fmt: skip
+    return rows
+
+
+def anova(rows: list[dict[str, float]]) -> dict[str, dict[str, dict[str, object]]]:
+    """Repeated-measures ANOVA (statsmodels ``AnovaRM``) of every measure's main effects.
+
+    Returns
+    -------
+    dict
+        ``{MEASURE: {FACTOR: {"F", "p", "df", "direction", "mean_first", "mean_second"}}}``.
+
+    """
+    import pandas as pd  # statsmodels' own dependency; imported only here (slow import)
+    from statsmodels.stats.anova import AnovaRM
+
+    df = pd.DataFrame(rows)
+    out: dict[str, dict[str, dict[str, object]]] = {}
+    for m in MEASURES:
+        if df[m].std() == 0:
+            raise SignalError(f"{m} does not vary over subjects and conditions: no ANOVA")
+        table = AnovaRM(df, m, "subject", within=list(FACTORS)).fit().anova_table
+        out[m] = {}
+        for f in FACTORS:
+            first, second = (float(df.loc[df[f] == k, m].mean()) for k in (0, 1))
+            out[m][f] = {
+                "F": float(table.loc[f, "F Value"]),
+                "p": float(table.loc[f, "Pr > F"]),
+                "df": [int(table.loc[f, "Num DF"]), int(table.loc[f, "Den DF"])],
+                "direction": "+" if second > first else "-",
+                "mean_first": first,
+                "mean_second": second,
+            }
+    return out
+
+
+@dataclass(frozen=True)
+class PopulationResult:
+    """Measures of every subject in every condition and their ANOVA.
+
+    Attributes
+    ----------
+    rows : list of dict
+        One row per subject and condition (measures, levels, adapted parameters).
+    anova : dict
+        :func:`anova`'s result.
+    seed : int
+        The seed.
+
+    """
+
+    rows: list[dict[str, float]]
+    anova: dict[str, dict[str, dict[str, object]]]
+    seed: int
+
+    def agreement(self) -> dict[str, dict[str, bool]]:
+        """Per measure and factor, whether the prediction agrees with the thesis.
+
+        Where the thesis found an effect (p < 0.05, Tables 6.4-6.7): same direction and
+        p < 0.05; where it found none: p >= 0.05.
+        """
+        out: dict[str, dict[str, bool]] = {}
+        for m, by_factor in TABLES_6_4_TO_6_7.items():
+            out[m] = {}
+            for f, (_, direction) in by_factor.items():
+                got = self.anova[m][f]
+                if direction is None:
+                    out[m][f] = bool(got["p"] >= 0.05)
+                else:
+                    out[m][f] = bool(got["p"] < 0.05 and got["direction"] == direction)
+        return out
+
+    def to_dict(self) -> dict[str, object]:
+        """JSON-ready: ``anova`` (the contract), ``thesis``, ``agreement``, ``rows``."""
+        thesis = {m: {f: {"F": v[0], "direction": v[1]} for f, v in by.items()}
+                  for m, by in TABLES_6_4_TO_6_7.items()}  # fmt: skip
+        return {"anova": self.anova, "thesis": thesis, "agreement": self.agreement(),
+                "subjects": len({r["subject"] for r in self.rows}), "seed": self.seed,
+                "rows": self.rows}  # fmt: skip
+
+    def format_table(self) -> str:
+        """Plain-text table: predicted F, p, direction beside the thesis' F and direction."""
+        agree = self.agreement()
+        lines = [
+            f"Chapter 6 predicted by {len({r['subject'] for r in self.rows})} adaptive "
+            f"subjects (seed {self.seed}); repeated-measures ANOVA, main effects",
+            f"{'measure':30s} {'factor':6s} {'F':>8s} {'p':>7s} dir | thesis F  dir  agrees",
+        ]
+        for m in MEASURES:
+            for f in FACTORS:
+                a = self.anova[m][f]
+                tf, td = TABLES_6_4_TO_6_7[m][f]
+                lines.append(
+                    f"{m:30s} {f:6s} {a['F']:8.2f} {a['p']:7.4f} {a['direction']:>3s} | "
+                    f"{tf:8.2f} {td or 'ns':>4s}  {'yes' if agree[m][f] else 'NO'}"
+                )
+        return "\n".join(lines)
+
+    def plot(self, path: str | None = None):
+        """Predicted vs thesis main effects: signed F per measure and factor.
+
+        Parameters
+        ----------
+        path : str, optional
+            Save the figure here.
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+
+        """
+        from twin.plotting import finish, pyplot
+
+        plt = pyplot()
+        fig, axes = plt.subplots(1, 3, figsize=(13, 4.5), sharey=True)
+        y = np.arange(len(MEASURES))
+        for ax, f in zip(axes, FACTORS, strict=True):
+            pred = [np.sign(1 if self.anova[m][f]["direction"] == "+" else -1)
+                    * self.anova[m][f]["F"] for m in MEASURES]  # fmt: skip
+            th = [(-1 if TABLES_6_4_TO_6_7[m][f][1] == "-" else 1) * TABLES_6_4_TO_6_7[m][f][0]
+                  for m in MEASURES]  # fmt: skip
+            ax.barh(y + 0.2, np.sign(pred) * np.log10(1 + np.abs(pred)), 0.4, label="twin")
+            ax.barh(y - 0.2, np.sign(th) * np.log10(1 + np.abs(th)), 0.4, label="thesis")
+            ax.axvline(0, color="k", lw=0.5)
+            ax.set_title(f"{f} ({FACTORS[f][1]} vs {FACTORS[f][0]})", fontsize=9)
+            ax.set_xlabel("sign(effect) log10(1 + F)", fontsize=8)
+        axes[0].set_yticks(y, MEASURES, fontsize=8)
+        axes[0].legend(fontsize=8)
+        fig.suptitle("Chapter 6 main effects: adaptive simulated subjects vs Tables 6.4-6.7 "
+                     "(F(1,8) = 5.3 is p = 0.05; thesis directions only where significant)",
+                     fontsize=9)  # fmt: skip
+        return finish(fig, path, dpi=110)
+
+
+def run_population(
+    n_subjects: int = 6,
+    seed: int = 0,
+    progress: Callable[[str], None] | None = None,
+    workers: int = 1,
+) -> PopulationResult:
+    """Fly the eight conditions with ``n_subjects`` adaptive subjects and run the ANOVA.
+
+    ``workers`` > 1 flies subjects in that many processes (same result: every subject's
+    randomness comes from its own seed).
+    """
+    subs = subjects(n_subjects, seed)
+    rows: list[dict[str, float]] = []
+    if workers > 1:
+        from concurrent.futures import ProcessPoolExecutor
+
+        with ProcessPoolExecutor(workers) as pool:
+            for s, r in zip(subs, pool.map(fly_subject, subs, [seed] * len(subs)), strict=True):
+                rows += r
+                if progress:
+                    progress(f"subject {s.number} of {len(subs)} done")
+    else:
+        for s in subs:
+            rows += fly_subject(s, seed)
+            if progress:
+                progress(f"subject {s.number} of {len(subs)} done")
+    return PopulationResult(rows, anova(rows), seed)
