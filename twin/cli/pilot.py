@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 
 import numpy as np
 
@@ -74,7 +75,10 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
         help="simulated subjects with --pilot adaptive (default 6)",
     )
     exp.add_argument(
-        "--workers", type=int, default=1, help="processes for --pilot adaptive (default 1)"
+        "--workers",
+        type=int,
+        default=None,
+        help="processes for --pilot adaptive (default: one per CPU core)",
     )
     exp.set_defaults(func=_cmd_experiment)
     ada = cmds.add_parser(
@@ -216,9 +220,10 @@ def _cmd_experiment(args: argparse.Namespace) -> int:
     if args.pilot == "adaptive":
         from twin.pilot.population import run_population
 
-        if args.workers < 1:
-            raise UsageError(f"--workers must be >= 1; got {args.workers}")
-        p = run_population(args.subjects, args.seed, common.progress(args), args.workers)
+        workers = args.workers if args.workers is not None else (os.cpu_count() or 1)
+        if workers < 1:
+            raise UsageError(f"--workers must be >= 1; got {workers}")
+        p = run_population(args.subjects, args.seed, common.progress(args), workers)
         if args.plot:
             plt = pyplot()
             plt.close(p.plot(args.plot))

@@ -5,16 +5,18 @@ loop (task, motion system, pilot), as the maximum-likelihood method of the thesi
 does: fitting u to the measured e and theta instead is biased, because in closed loop they
 carry the pilot's own remnant (the motion gain came out 34 % low that way at 15 % remnant).
 The prediction is computed over the measurement window in the frequency domain (the window
-holds whole periods of the forcing functions, so it is exact), and the eight parameters
-minimise the sum of squared output errors: the maximum-likelihood estimate for a white
-Gaussian output error. The fit reports the Variance-Accounted-For (Eq 2.25) and the
-Cramer-Rao lower bound of each parameter's standard deviation (Eq 2.26: the inverse Fisher
-information, sigma^2 (J^T J)^-1 at the optimum).
+holds whole periods of the forcing functions, so it is exact); it is deterministic at the
+forcing functions' lines only, so the eight parameters minimise the line residuals weighted
+by the remnant's variance at each line (from the neighbouring bins): the maximum-likelihood
+estimate for a coloured Gaussian remnant. The fit reports the Variance-Accounted-For (Eq 2.25)
+and the Cramer-Rao lower bound of each parameter's standard deviation (Eq 2.26: the inverse
+Fisher information at the optimum), and names the parameters it cannot pin down.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import itertools
 from dataclasses import dataclass
 
 import numpy as np
@@ -48,10 +50,7 @@ def model_output(
     n = ft.size
     w = 2 * np.pi * np.fft.rfftfreq(n, 1.0 / rate_hz)
     w[0] = 1e-9  # the integrator of H_c: the mean is not predicted
-    hv = pilot.h_pe(w) * np.exp(-1j * w * DISPLAY_DELAY_S)
-    hm = pilot.h_ptheta(w) * motion_response(config, w)
-    hc = aircraft(w)
-    U = (hv * np.fft.rfft(ft) - (hv + hm) * hc * np.fft.rfft(fd)) / (1 + (hv + hm) * hc)
+    U = _closed_loop_u(pilot, w, np.fft.rfft(ft), np.fft.rfft(fd), config)
     U[0] = 0.0
     return np.fft.irfft(U, n)
 
@@ -70,6 +69,8 @@ class PilotFit:
         Variance-Accounted-For of u [%].
     residual_sd : float
         Standard deviation of the output error.
+    unidentifiable : tuple of str
+        Parameters whose Cramer-Rao bound exceeds their value (reported, not hidden).
 
     """
 
@@ -77,12 +78,14 @@ class PilotFit:
     crlb: dict[str, float]
     vaf_percent: float
     residual_sd: float
+    unidentifiable: tuple[str, ...] = ()
 
     def to_dict(self) -> dict[str, object]:
         """JSON-ready."""
         p = dataclasses.asdict(self.pilot)
         return {"parameters": p, "crlb_sd": self.crlb, "vaf_percent": self.vaf_percent,
-                "residual_sd": self.residual_sd}  # fmt: skip
+                "residual_sd": self.residual_sd,
+                "not_identifiable": list(self.unidentifiable)}  # fmt: skip
 
     def plot(self, path: str | None = None):
         """Estimated parameters with their Cramer-Rao bounds (1 sd), relative to the estimate.
@@ -110,6 +113,60 @@ class PilotFit:
         return finish(fig, path)
 
 
+#: Largest Cramer-Rao sd relative to the estimate for which a parameter counts as identified:
+#: beyond it the linearisation the bound rests on fails (the lead-lag pair at the thesis'
+#: remnant level: estimates spread 2-3x wider than their bound).
+IDENTIFIABLE_REL_SD = 1 / 3
+#: Neighbouring bins on each side of a line whose power estimates the remnant there.
+NEIGHBOURS = 4
+#: Starting delays (tau_v, tau_m), lead-lag pairs and motion gains of the multi-start search.
+START_DELAYS = ((0.30, 0.20), (0.20, 0.15), (0.40, 0.30), (0.25, 0.10))
+START_LEADS = (None, (0.1, 0.1), (0.5, 0.5))
+START_KM = (None, 0.0)
+
+
+def _closed_loop_u(pilot: PitchPilot, w: FloatArray, Ft, Fd, config: MotionSystem):
+    hv = pilot.h_pe(w) * np.exp(-1j * w * DISPLAY_DELAY_S)
+    hm = pilot.h_ptheta(w) * motion_response(config, w)
+    hc = aircraft(w)
+    return (hv * Ft - (hv + hm) * hc * Fd) / (1 + (hv + hm) * hc)
+
+
+def line_data(
+    ft: FloatArray, fd: FloatArray, u: FloatArray, rate_hz: float
+) -> tuple[FloatArray, NDArray[np.complex128], NDArray[np.complex128], NDArray[np.complex128],
+           FloatArray]:  # fmt: skip
+    """Spectra at the forcing functions' lines and the remnant's variance at each.
+
+    Returns
+    -------
+    w, Ft, Fd, U, variance
+        Line frequencies [rad/s], the forcing functions' and u's DFT there, and E|U_remnant|^2
+        at each line from the mean power of the ``NEIGHBOURS`` non-line bins on each side.
+
+    """
+    n = u.size
+    spectra = [np.fft.rfft(x) for x in (ft, fd, u)]
+    power = np.abs(spectra[0]) ** 2 + np.abs(spectra[1]) ** 2
+    lines = np.flatnonzero(power > 1e-12 * power.max())
+    lines = lines[lines > 0]
+    if lines.size < 4:
+        raise SignalError("the forcing functions excite fewer than 4 lines in the window")
+    is_line = np.zeros(power.size, dtype=bool)
+    is_line[lines] = True
+    var = np.empty(lines.size)
+    for i, k in enumerate(lines):
+        nb = np.arange(k - NEIGHBOURS, k + NEIGHBOURS + 1)
+        nb = nb[(nb > 0) & (nb < power.size)]
+        nb = nb[~is_line[nb]]
+        var[i] = float(np.mean(np.abs(spectra[2][nb]) ** 2)) if nb.size else np.nan
+    scale = float(np.mean(np.abs(spectra[2][lines]) ** 2))
+    var = np.where(np.isfinite(var), var, np.nanmedian(var))
+    var = np.maximum(var, 1e-12 * scale)  # a noise-free run: equal weights, not infinite ones
+    w = 2 * np.pi * lines * rate_hz / n
+    return w, spectra[0][lines], spectra[1][lines], spectra[2][lines], var
+
+
 def fit_pitch_pilot(
     ft: FloatArray,
     fd: FloatArray,
@@ -120,8 +177,15 @@ def fit_pitch_pilot(
 ) -> PilotFit:
     """Fit Eq 6.5-6.7 to one measurement window of u, given the forcing functions.
 
-    Several starting delays are tried (the cost has local minima in the delays) and the best
-    fit is kept.
+    The closed-loop model's output is deterministic at the forcing functions' lines only; off
+    them u is remnant. So the likelihood is that of the line residuals U - U_hat, each with the
+    remnant's variance there, estimated from the neighbouring non-line bins (as the FC method
+    and AGARD-AR-144 do): a weighted least-squares fit whose inverse Fisher information is an
+    honest Cramer-Rao bound for a coloured remnant (a time-domain fit with one white-noise
+    variance for every sample is not). The cost has local minima in the delays and the
+    lead-lag pair, so a grid of starts (delays, lead-lag, motion gain on or off) is tried and
+    the best kept. Parameters whose bound exceeds ``IDENTIFIABLE_REL_SD`` of their value are
+    listed as not identifiable (often t_lead and t_lag, which trade off with K_v).
 
     Parameters
     ----------
@@ -132,7 +196,7 @@ def fit_pitch_pilot(
     rate_hz : float
         Sample rate [Hz].
     start : PitchPilot, optional
-        Initial guess; the defaults otherwise.
+        Initial guess (added to the grid of starts); the defaults otherwise.
 
     """
     ft, fd, u = (np.asarray(a, dtype=float) for a in (ft, fd, u))
@@ -142,30 +206,38 @@ def fit_pitch_pilot(
         raise SignalError("f_t, f_d and u must be finite")
     p0 = start or PitchPilot()
     u = u - u.mean()
+    w, Ft, Fd, U, var = line_data(ft, fd, u, rate_hz)
+    sd = np.sqrt(var / 2)  # real and imaginary parts each carry half the variance
 
     def make(v: FloatArray) -> PitchPilot:
         return dataclasses.replace(p0, **dict(zip(PARAMETERS, map(float, v), strict=True)))
 
     def residual(v: FloatArray) -> FloatArray:
-        return model_output(make(v), ft, fd, config, rate_hz) - u
+        r = (U - _closed_loop_u(make(v), w, Ft, Fd, config)) / sd
+        return np.concatenate([r.real, r.imag])
 
     base = np.clip(np.array([getattr(p0, n) for n in PARAMETERS]), LOWER, UPPER)
-    best = None
-    for tv, tm in ((0.30, 0.20), (0.20, 0.15), (0.40, 0.30)):
+    starts = [base]
+    for (tv, tm), lead, km in itertools.product(START_DELAYS, START_LEADS, START_KM):
         x0 = base.copy()
         x0[3], x0[5] = tv, tm
+        if lead is not None:
+            x0[1], x0[2] = lead
+        if km is not None:
+            x0[4] = km
+        starts.append(np.clip(x0, LOWER, UPPER))
+    best = None
+    for x0 in starts:
         sol = least_squares(residual, x0, bounds=(LOWER, UPPER), x_scale=np.maximum(x0, 0.05))
         if best is None or sol.cost < best.cost:
             best = sol
-    r = best.fun
-    dof = max(1, r.size - best.x.size)
-    sigma2 = float(r @ r / dof)
     try:
-        cov = sigma2 * np.linalg.inv(best.jac.T @ best.jac)
-        sd = np.sqrt(np.clip(np.diag(cov), 0, None))
+        crlb = np.sqrt(np.clip(np.diag(np.linalg.inv(best.jac.T @ best.jac)), 0, None))
     except np.linalg.LinAlgError:
-        sd = np.full(best.x.size, np.inf)
+        crlb = np.full(best.x.size, np.inf)
     fitted = make(best.x)
     u_hat = model_output(fitted, ft, fd, config, rate_hz)
-    return PilotFit(fitted, dict(zip(PARAMETERS, map(float, sd), strict=True)), vaf(u, u_hat),
-                    float(np.sqrt(sigma2)))  # fmt: skip
+    bounds = dict(zip(PARAMETERS, map(float, crlb), strict=True))
+    weak = tuple(n for n, v in zip(PARAMETERS, best.x, strict=True)
+                 if not bounds[n] < IDENTIFIABLE_REL_SD * max(abs(float(v)), 1e-9))  # fmt: skip
+    return PilotFit(fitted, bounds, vaf(u, u_hat), float(np.std(u - u_hat)), weak)

@@ -4,8 +4,8 @@ Each subject (seeded) has its own limitations - visual and motion delays, neurom
 frequency and damping - and its own priorities (control weight r, observation-noise ratio),
 drawn around the values of :mod:`twin.pilot.adapt`. In every Table 6.3 condition the subject
 adapts its equalisation (K_v, t_lead, t_lag, K_m) to the motion system
-(:func:`twin.pilot.adapt.adapt`, warm-started from its previous condition) and then flies it
-with an imperfect adaptation: each adapted parameter is off by a log-normal factor
+(:func:`twin.pilot.adapt.adapt`, from the standard starts and its previous condition's) and
+then flies it with an imperfect adaptation: each adapted parameter is off by a log-normal factor
 (``ADAPTATION_SD``), as a person's control behaviour varies from run to run. The measures per
 subject and condition are the adapted loop's predicted var(e), var(u) (frequency domain,
 :func:`twin.pilot.adapt.predict`), crossover frequencies and phase margins
@@ -30,7 +30,15 @@ from dataclasses import dataclass
 import numpy as np
 
 from twin.errors import SignalError
-from twin.pilot.adapt import ADAPTED, CONTROL_WEIGHT, NOISE_RATIO, Task, adapt, predict
+from twin.pilot.adapt import (
+    ADAPTED,
+    CONTROL_WEIGHT,
+    NOISE_RATIO,
+    STARTS,
+    Task,
+    adapt,
+    predict,
+)
 from twin.pilot.pitch import PitchPilot, open_loops
 from twin.thesis import TABLE_6_3, TABLES_6_4_TO_6_7
 
@@ -108,7 +116,8 @@ def fly_subject(subject: Subject, seed: int = 0) -> list[dict[str, float]]:
     rows, previous = [], None
     for n in TABLE_6_3:
         task = Task.pitch(f"condition-{n}")
-        starts = None if previous is None else [previous, subject.limitations]
+        starts = [dataclasses.replace(subject.limitations, **dict(zip(ADAPTED, x, strict=True)))
+                  for x in STARTS] + ([previous] if previous is not None else [])  # fmt: skip
         a = adapt(task, subject.limitations, subject.weight, subject.noise_ratio, starts)
         previous = a.pilot
         noisy = {k: getattr(a.pilot, k) * float(np.exp(rng.normal(0, ADAPTATION_SD)))
