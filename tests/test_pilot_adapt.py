@@ -12,8 +12,7 @@ from twin.cli.main import main
 from twin.errors import SignalError
 from twin.pilot.adapt import Task, adapt, predict, stable
 from twin.pilot.pitch import PitchPilot, simulate_pitch
-from twin.pilot.population import FACTORS, MEASURES, anova, levels
-from twin.thesis import TABLE_6_3
+from twin.pilot.population import COMPARED, FACTORS, MEASURES, anova, levels
 
 
 @pytest.fixture(scope="module")
@@ -69,27 +68,47 @@ def test_bad_weights_are_refused():
         adapt("srs", noise_ratio=float("nan"))
 
 
-def test_the_anova_finds_a_planted_effect_and_keeps_the_json_contract():
-    """Rows with a planted filter effect (+1 on every measure, subject offsets, noise sd 0.2):
-    filter F large, p < 0.01, direction '+'; the contract's keys and types."""
+#: Table 6.3 by hand: condition -> (1 Hz filter, 35 ms delay, noise on).
+LEVELS = {1: (0, 0, 0), 2: (0, 0, 1), 3: (0, 1, 0), 4: (0, 1, 1),
+          5: (1, 0, 0), 6: (1, 0, 1), 7: (1, 1, 0), 8: (1, 1, 1)}  # fmt: skip
+
+
+def test_the_anova_finds_planted_effects_and_keeps_the_json_contract():
+    """Rows with planted effects (filter +1, delay -1, noise none; subject offsets, noise sd
+    0.2) on every measure: filter F large, '+', delay F large, '-', p < 0.01 for both; the
+    contract's keys and types. Levels from a hand-written Table 6.3."""
     rng = np.random.default_rng(3)
     rows = []
     for s in range(1, 7):
         offset = rng.normal(0, 1)
-        for n in TABLE_6_3:
-            lv = levels(n)
-            values = {m: offset + lv["filter"] + rng.normal(0, 0.2) for m in MEASURES}
-            rows.append({"subject": s, "condition": n, **lv, **values})
+        for n, (fb, dl, nz) in LEVELS.items():
+            assert levels(n) == {"filter": fb, "delay": dl, "noise": nz}
+            values = {m: offset + fb - dl + rng.normal(0, 0.2) for m in COMPARED}
+            rows.append({"subject": s, "condition": n, "filter": fb, "delay": dl, "noise": nz,
+                         **values})  # fmt: skip
     result = anova(rows)
     doc = json.loads(json.dumps({"anova": result}))
-    assert set(doc["anova"]) == set(MEASURES)
+    assert set(MEASURES) <= set(doc["anova"])
     for m in MEASURES:
         assert set(doc["anova"][m]) == set(FACTORS)
-        f = doc["anova"][m]["filter"]
+        f, d = doc["anova"][m]["filter"], doc["anova"][m]["delay"]
         assert f["F"] > 50 and f["p"] < 0.01 and f["direction"] == "+"
+        assert d["F"] > 50 and d["p"] < 0.01 and d["direction"] == "-"
         for factor in FACTORS:
             assert isinstance(doc["anova"][m][factor]["F"], float)
             assert doc["anova"][m][factor]["direction"] in "+-"
+
+
+def test_an_adapted_pilot_without_motion_flies_as_predicted(srs_and_filter):
+    """Behind the 1 Hz filter the adapted K_m is 0: the pilot flies (time domain, the whole
+    chain) and its var(e), var(u) without remnant match the frequency-domain prediction
+    within 5 %."""
+    pilot = srs_and_filter[1].pilot
+    assert pilot.k_m == 0.0
+    perf = predict(pilot, Task.pitch("condition-5"), noise_ratio=1e-12)
+    run = simulate_pitch(pilot, "condition-5", 1, 0, 0.0)
+    assert float(np.var(run.e)) == pytest.approx(perf.var_e, rel=0.05)
+    assert float(np.var(run.u)) == pytest.approx(perf.var_u, rel=0.05)
 
 
 def test_cli_adapt_prints_parameters_and_margins(capsys):
@@ -99,6 +118,8 @@ def test_cli_adapt_prints_parameters_and_margins(capsys):
     assert doc["crossover_disturbance_rad_s"] > 0
     assert main(["pilot", "experiment", "--pilot", "adaptive", "--subjects", "1"]) == 2
     assert "at least 2 subjects" in capsys.readouterr().err
+    assert main(["pilot", "adapt", "srs", "--weight", "0"]) == 2
+    assert "weight r must be > 0" in capsys.readouterr().err
 
 
 @pytest.mark.slow

@@ -113,3 +113,13 @@ def test_mle_escapes_the_local_optimum_and_names_what_it_cannot_identify():
         if name not in fit.unidentifiable:
             assert abs(getattr(fit.pilot, name) - getattr(truth, name)) <= 2.5 * sd, name
     assert set(fit.to_dict()["not_identifiable"]) == set(fit.unidentifiable)
+
+
+def test_mle_refuses_a_window_that_is_not_whole_periods():
+    """81.92 s at 120 Hz is 9830.4 samples: the lines leak into every bin. One clear error."""
+    from twin.errors import SignalError
+    from twin.pilot.mle import fit_pitch_pilot
+
+    r = simulate_pitch(PitchPilot(), "condition-1", 1, seed=0, rate_hz=120.0)
+    with pytest.raises(SignalError, match="whole periods"):
+        fit_pitch_pilot(r.ft, r.fd, r.u[0], motion_system("condition-1"), rate_hz=120.0)

@@ -140,7 +140,7 @@ TABLE_2_3 = MappingProxyType(
 #: measures: measure -> factor -> (F, direction of the mean with the factor's second level
 #: minus its first: "+", "-", or None where not significant and no direction is stated).
 #: Directions from §6.4: with the 1 Hz filter var(e) rose, var(u) fell slightly, both
-#: crossovers fell, both phase margins rose, K_v and K_m fell.
+#: crossovers fell, both phase margins rose, K_v and K_m fell, t_lead and t_lag rose.
 TABLES_6_4_TO_6_7 = MappingProxyType(
     {
         "var_e": {"filter": (357.79, "+"), "delay": (0.39, None), "noise": (3.23, None)},
@@ -155,5 +155,7 @@ TABLES_6_4_TO_6_7 = MappingProxyType(
                                     "noise": (0.21, None)},
         "k_v": {"filter": (43.36, "-"), "delay": (3.82, None), "noise": (0.44, None)},
         "k_m": {"filter": (66.20, "-"), "delay": (4.67, None), "noise": (0.36, None)},
+        "t_lead": {"filter": (60.96, "+"), "delay": (1.42, None), "noise": (0.13, None)},
+        "t_lag": {"filter": (132.26, "+"), "delay": (2.22, None), "noise": (0.55, None)},
     }
 )  # fmt: skip

@@ -209,7 +209,8 @@ def _cmd_adapt(args: argparse.Namespace) -> int:
     from twin.chain.config import motion_system
     from twin.pilot.adapt import CONTROL_WEIGHT, adapt
 
-    a = adapt(motion_system(args.config), weight=args.weight or CONTROL_WEIGHT)
+    a = adapt(motion_system(args.config),
+              weight=CONTROL_WEIGHT if args.weight is None else args.weight)  # fmt: skip
     print(json.dumps(a.to_dict(), indent=2) if args.json else a.format())
     return 0
 
@@ -220,7 +221,8 @@ def _cmd_experiment(args: argparse.Namespace) -> int:
     if args.pilot == "adaptive":
         from twin.pilot.population import run_population
 
-        workers = args.workers if args.workers is not None else (os.cpu_count() or 1)
+        cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
+        workers = args.workers if args.workers is not None else min(cores or 1, args.subjects)
         if workers < 1:
             raise UsageError(f"--workers must be >= 1; got {workers}")
         p = run_population(args.subjects, args.seed, common.progress(args), workers)
@@ -291,7 +293,8 @@ def _cmd_identify(args: argparse.Namespace) -> int:
             f"VAF {mle.vaf_percent:.1f} %"
         )
         for name, sd in mle.crlb.items():
-            print(f"  {name:9s} {getattr(p, name):8.4f}  (CRLB sd {sd:.4f})")
+            flag = "  not identifiable" if name in mle.unidentifiable else ""
+            print(f"  {name:9s} {getattr(p, name):8.4f}  (CRLB sd {sd:.4f}){flag}")
         print(
             f"  ARX structure {arx.orders}; FC and ARX responses at "
             f"{fc.omega_rad_s.size} lines in --json"

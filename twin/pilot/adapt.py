@@ -19,11 +19,11 @@ Everything is computed in the frequency domain, so one evaluation takes about a 
   e = f_t - theta (Eq 6.3-6.7; H_m the motion system's pitch response, Eq 5.11 and its
   extensions; T_d the display's 25 ms);
 * the forcing functions' lines (Table 6.2) give their parts of var(e) and var(u) exactly;
-* the remnant n is the Eq 2.21-shaped noise with a power that is a fixed fraction
-  ``remnant_ratio`` of var(u) (the observation-noise view of remnant: it scales with the
-  pilot's own activity), so var(u) = var_forced(u) / (1 - ratio I_u) with I_u the remnant's
-  gain to u; a loop that amplifies its own remnant pays for it, and ratio I_u >= 1 is not
-  allowed;
+* the remnant is observation noise (Kleinman, Baron and Levison 1970): white noise on the
+  displayed error and on the felt pitch rate, each with a density of ``noise_ratio`` times its
+  signal's variance, so visual lead (which differentiates the visual noise) costs, and motion
+  senses the rate directly; both variances depend on the noise they scale (a 2 x 2 linear
+  system, required to be contracting);
 * the motion noise m (Eq 5.10 heave at the pilot station, read as attitude -z / l, §6.3.5)
   where the configuration has it.
 

@@ -117,6 +117,8 @@ class PilotFit:
 #: beyond it the linearisation the bound rests on fails (the lead-lag pair at the thesis'
 #: remnant level: estimates spread 2-3x wider than their bound).
 IDENTIFIABLE_REL_SD = 1 / 3
+#: Most lines the forcing functions may have (Table 6.2: 10 + 10).
+MAX_LINES = 64
 #: Neighbouring bins on each side of a line whose power estimates the remnant there.
 NEIGHBOURS = 4
 #: Starting delays (tau_v, tau_m), lead-lag pairs and motion gains of the multi-start search.
@@ -148,6 +150,13 @@ def line_data(
     n = u.size
     spectra = [np.fft.rfft(x) for x in (ft, fd, u)]
     power = np.abs(spectra[0]) ** 2 + np.abs(spectra[1]) ** 2
+    top = np.sort(power)[::-1][:MAX_LINES]
+    if power.sum() <= 0 or top.sum() < (1 - 1e-6) * power.sum():
+        raise SignalError(
+            f"the window ({n} samples at {rate_hz:g} Hz = {n / rate_hz:.3f} s) does not hold "
+            f"whole periods of the forcing functions (their lines leak into every bin); give "
+            f"81.92 s at a rate that makes it a whole number of samples (e.g. 100 Hz)"
+        )
     lines = np.flatnonzero(power > 1e-12 * power.max())
     lines = lines[lines > 0]
     if lines.size < 4:
@@ -161,6 +170,8 @@ def line_data(
         nb = nb[~is_line[nb]]
         var[i] = float(np.mean(np.abs(spectra[2][nb]) ** 2)) if nb.size else np.nan
     scale = float(np.mean(np.abs(spectra[2][lines]) ** 2))
+    if not np.isfinite(var).any():
+        raise SignalError("no bins between the forcing functions' lines to estimate the remnant")
     var = np.where(np.isfinite(var), var, np.nanmedian(var))
     var = np.maximum(var, 1e-12 * scale)  # a noise-free run: equal weights, not infinite ones
     w = 2 * np.pi * lines * rate_hz / n

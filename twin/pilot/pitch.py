@@ -232,8 +232,9 @@ def simulate_pitch(
     pe_num = pilot.k_v * w2 * np.polymul([pilot.t_lead, 1.0], [pilot.t_lead, 1.0])
     pe = _Filter(*signal.bilinear(pe_num, np.polymul(nm_den, [pilot.t_lag, 1.0]), fs=rate_hz),
                  runs)  # fmt: skip
+    # a pilot who does not use the motion (K_m = 0, as behind the 1 Hz filter) has no channel
     pm = _Filter(*signal.bilinear(pilot.k_m * w2 * np.array([1.0, 0.0]), nm_den, fs=rate_hz),
-                 runs)  # fmt: skip
+                 runs) if pilot.k_m else None  # fmt: skip
     nf = _Filter(*signal.bilinear(*REMNANT_FILTER, fs=rate_hz), runs)
     chain = pitch_chain(cfg, model, rate_hz, runs, seed)
     a_c, b_c, c_c, _ = signal.tf2ss(STICK_GAIN * AIRCRAFT[0], AIRCRAFT[1])
@@ -262,7 +263,7 @@ def simulate_pitch(
             felt[:, first : k + 1] = felt_attitude(motion, PILOT_STATION_M, t[first : k + 1])
         e_hist[k % hist] = e
         ye = pe.step(e_hist[(k - d_v) % hist] if k >= d_v else zeros)
-        ym = pm.step(felt[:, k - d_m] if k >= d_m else zeros)
+        ym = pm.step(felt[:, k - d_m] if k >= d_m else zeros) if pm is not None else zeros
         n = remnant_scale * nf.step(rng.standard_normal(runs)) if remnant_scale else zeros
         u = ye - ym + n
         held_u = u + f_d[k]
