@@ -145,30 +145,30 @@ def test_a_quiet_imu_and_a_heave_delay_is_a_delay_not_a_sensor_filter(tmp_path):
     assert dynamic_findings(d) == [d.findings[0].extension.describe()]
 
 
+def _assert_named_with_parameters(exts: list[Extension], tmp_path) -> None:
+    """SRS heave runs with ``exts``: every one named, each parameter within tolerance."""
+    h, runs = _runs(exts, "srs", "heave", 1.0, tmp_path)
+    d = diagnose(runs, seed=5)
+    assert check_all(h, d) == []
+    found = {f.extension.effect: f.extension for f in d.findings}
+    for e in exts:
+        assert _parameter_errors(e, found[e.effect]) == []
+
+
 @pytest.mark.slow
 def test_a_gain_before_a_backlash_leaves_the_play_as_it_is(tmp_path):
     """The chain applies a gain *before* the backlash; fitted in the other order a gain of 1.4
     made a 3 mm play read 2.07 mm. Both within the hidden-effect tolerance (20 %)."""
-    exts = [Extension("gain", {"gain": 1.4}, ("heave",)),
-            Extension("backlash", {"play": 0.003}, ("heave",))]  # fmt: skip
-    h, runs = _runs(exts, "srs", "heave", 1.0, tmp_path)
-    d = diagnose(runs, seed=5)
-    assert check_all(h, d) == []
-    found = {f.extension.effect: f.extension for f in d.findings}
-    for e in exts:
-        assert _parameter_errors(e, found[e.effect]) == []
+    _assert_named_with_parameters(
+        [Extension("gain", {"gain": 1.4}, ("heave",)),
+         Extension("backlash", {"play": 0.003}, ("heave",))], tmp_path)  # fmt: skip
 
 
 def test_gain_and_delay_in_heave_are_both_named(tmp_path):
     """Before: gain 0.9 + 25 ms in heave: neither was found."""
-    exts = [Extension("gain", {"gain": 0.9}, ("heave",)),
-            Extension("delay", {"extra_delay_s": 0.025}, ("heave",))]  # fmt: skip
-    h, runs = _runs(exts, "srs", "heave", 1.0, tmp_path)
-    d = diagnose(runs, seed=5)
-    assert check_all(h, d) == []
-    found = {f.extension.effect: f.extension for f in d.findings}
-    for e in exts:
-        assert _parameter_errors(e, found[e.effect]) == []
+    _assert_named_with_parameters(
+        [Extension("gain", {"gain": 0.9}, ("heave",)),
+         Extension("delay", {"extra_delay_s": 0.025}, ("heave",))], tmp_path)  # fmt: skip
 
 
 @pytest.mark.slow
