@@ -28,3 +28,18 @@ def test_otolith_lead_is_more_fragile_than_the_canals():
     o = analyse_lead(motion_system("srs"), "otoliths")
     assert o.break_hz_threshold > c.break_hz_threshold
     assert o.delay_threshold_s < c.delay_threshold_s
+
+
+def test_the_thesis_literal_criterion_gives_a_higher_break_and_a_shorter_delay():
+    """§7.4 literally: the lead phase must not pass -90 deg (margin 0). The canals' closed
+    forms as above with that criterion (5.0 Hz, 58 ms; the thesis read about 4 Hz and 75 ms
+    off Fig 7.1-7.2); the otoliths' lead channel lags an integrator at 2.8 Hz on its own, so no
+    filter or delay meets it (NaN, reported as "no threshold")."""
+    w = 2 * np.pi * 2.8
+    scc = np.degrees(np.arctan(0.11 * w) - np.arctan(5.9 * w) - np.arctan(0.005 * w))
+    room = scc - (-90.0)
+    a = analyse_lead(motion_system("srs"), "canals", margin_deg=0.0)
+    assert a.break_hz_threshold == pytest.approx(2.8 / np.tan(np.radians(room / 2)), rel=1e-3)
+    assert a.delay_threshold_s == pytest.approx(room / (360 * 2.8), rel=1e-3)
+    o = analyse_lead(motion_system("srs"), "otoliths", margin_deg=0.0)
+    assert np.isnan(o.break_hz_threshold) and np.isnan(o.delay_threshold_s)

@@ -337,16 +337,22 @@ def _cmd_lead(args: argparse.Namespace) -> int:
     cfg = common.configured(args.config, args)
     res = [analyse_lead(cfg, s, args.margin_deg) for s in SENSORS]
     if args.json:
-        print(json.dumps([r.__dict__ for r in res], indent=2))
+        rows = [{k: (None if isinstance(v, float) and not np.isfinite(v) else v)
+                 for k, v in r.__dict__.items()} for r in res]  # fmt: skip
+        print(json.dumps(rows, indent=2))  # no threshold: null (strict JSON has no NaN)
     else:
         print(
             f"lead channel through {cfg.name} (criterion: at most {args.margin_deg:g} deg "
             "behind an integrator over 0.06-2.8 Hz)"
         )
         for r in res:
+            if np.isfinite(r.break_hz_threshold) and np.isfinite(r.delay_threshold_s):
+                limits = (f"thresholds {r.break_hz_threshold:.2f} Hz, "
+                          f"{r.delay_threshold_s * 1e3:.0f} ms")  # fmt: skip
+            else:
+                limits = "no threshold: the sensor alone lags more than the criterion allows"
             print(
-                f"  {r.sensor:8s}: thresholds {r.break_hz_threshold:.2f} Hz, "
-                f"{r.delay_threshold_s * 1e3:.0f} ms; this configuration: worst phase "
+                f"  {r.sensor:8s}: {limits}; this configuration: worst phase "
                 f"{r.config_worst_phase_deg:.1f} deg -> {'meets' if r.config_meets else 'fails'}"
             )
     return 0
