@@ -138,3 +138,16 @@ def test_builtin_signal_names():
     assert builtin_signal("rest-2").duration == pytest.approx(2.0)
     with pytest.raises(SignalError, match="built-in signals are"):
         builtin_signal("multisine1-wobble")
+
+
+def test_the_full_platform_takes_another_integration_step():
+    """For convergence studies (bench/table_5_5_timestep.py): the step and the loop-closure
+    time constant (two steps) follow; out-of-range steps are refused."""
+    from twin.chain.physics import FullPlatform
+
+    p = FullPlatform("mpi", timestep_s=5e-4)
+    assert p.rate_hz == pytest.approx(2000.0)
+    assert np.allclose(p.model.eq_solref[:, 0], 1e-3)
+    for bad in (0.0, float("nan"), 0.01):
+        with pytest.raises(SignalError, match="timestep"):
+            FullPlatform("mpi", timestep_s=bad)

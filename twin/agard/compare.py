@@ -27,6 +27,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from twin.chain.config import MotionSystem, motion_system
+from twin.chain.physics import FullPlatform
 from twin.chain.reduced import ReducedPlatform
 from twin.chain.simulate import Platform, make_platform, simulate
 from twin.errors import SignalError
@@ -203,6 +204,7 @@ def platform_dynamics(
     dofs: Sequence[str] = DOF_NAMES,
     signals: Sequence[int] = (1, 2),
     progress: Progress | None = None,
+    timestep_s: float | None = None,
 ) -> PlatformDynamics:
     """Fit lag plus delay to the full model's describing functions per DOF (§5.5.1).
 
@@ -216,13 +218,15 @@ def platform_dynamics(
         Multi-sine signals (1, 2: Table 5.2; 3: to 10 Hz).
     progress : callable, optional
         Called with a message before each DOF.
+    timestep_s : float, optional
+        Integration step of the full model (its 1 ms by default; for convergence studies).
 
     """
     alone = MotionSystem(
         "platform-alone", platform, None, 0.0, False,
         description="the full model without filter, delay or noise (§5.5.1)",
     )  # fmt: skip
-    plat = make_platform(platform, "full")
+    plat = FullPlatform(platform, timestep_s=timestep_s)
     responses, fits = {}, {}
     for dof in _check_dofs(dofs):
         if progress:

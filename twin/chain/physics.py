@@ -23,6 +23,7 @@ from numpy.typing import NDArray
 from twin.chain.limits import ActuatorLimits, LimiterState
 from twin.chain.response import PlatformResponse
 from twin.chain.stepping import Platform, PlatformState, Reference
+from twin.errors import SignalError
 from twin.frames import euler_from_matrix, matrix_from_quat
 from twin.platform.facts import load_facts, load_model
 from twin.platform.geometry import load_geometry
@@ -41,6 +42,9 @@ class FullPlatform(Platform):
         ``"mpi"`` or ``"srs"``.
     limit_mode : str
         ``"limit"`` (limit and count) or ``"strict"`` (raise on any limit).
+    timestep_s : float, optional
+        Integration step instead of the model's 1 ms (for convergence studies); the
+        loop-closure constraints' time constant follows it (two steps, as the builder sets it).
 
     Attributes
     ----------
@@ -55,9 +59,16 @@ class FullPlatform(Platform):
 
     kind = "full"
 
-    def __init__(self, platform: str, limit_mode: str = "limit") -> None:
+    def __init__(
+        self, platform: str, limit_mode: str = "limit", timestep_s: float | None = None
+    ) -> None:
         self.platform = platform
         self.model = load_model(platform).__copy__()
+        if timestep_s is not None:
+            if not np.isfinite(timestep_s) or not 1e-5 <= timestep_s <= 2e-3:
+                raise SignalError(f"timestep must be between 1e-5 and 2e-3 s; got {timestep_s}")
+            self.model.opt.timestep = timestep_s
+            self.model.eq_solref[:, 0] = 2 * timestep_s
         self.geometry = load_geometry(platform)
         facts = load_facts(platform)
         self.limits = ActuatorLimits.of(self.geometry, facts, limit_mode)
