@@ -419,7 +419,6 @@ def _profile(
 def _refine(profile: Callable[[float], float], lo: float, hi: float, space: Space) -> None:
     """Bounded search of the play in [lo, hi] (log scale) within the effect's bounds."""
     lo, hi = max(lo, space.bounds[0][0]), min(max(hi, lo * 1.0001), space.bounds[0][1])
-    hi = max(hi, lo * 1.0001)
     r = optimize.minimize_scalar(lambda u: profile(float(np.exp(u))),
                                  bounds=(np.log(lo), np.log(hi)), method="bounded",
                                  options={"xatol": 0.03})  # fmt: skip

@@ -41,11 +41,10 @@ from numpy.typing import NDArray
 from scipy import optimize
 
 from twin.chain.config import MotionSystem, motion_system
-from twin.chain.noise import shaping_response
+from twin.chain.noise import HIGHPASS_ORDER, shaping_response
 from twin.errors import SignalError
 from twin.pilot.forcing import ForcingFunction, pitch_task
 from twin.pilot.pitch import (
-    DISPLAY_DELAY_S,
     PILOT_STATION_M,
     OpenLoops,
     PitchPilot,
@@ -116,7 +115,8 @@ def _felt_noise_psd(config: MotionSystem, w: FloatArray) -> FloatArray:
     f = w / (2 * np.pi)
     s_acc = block.scale**2 * np.abs(shaping_response(f)) ** 2 * 2.0 / block.rate_hz  # per Hz
     if block.highpass_hz is not None:
-        s_acc = s_acc / (1 + (block.highpass_hz / np.maximum(f, 1e-9)) ** 8)
+        # |Butterworth high-pass|^2 of the generator's order (twin.chain.noise)
+        s_acc = s_acc / (1 + (block.highpass_hz / np.maximum(f, 1e-9)) ** (2 * HIGHPASS_ORDER))
     s_z = s_acc / np.maximum(w, 1e-9) ** 4
     return s_z / PILOT_STATION_M**2 / (2 * np.pi)
 
@@ -164,7 +164,7 @@ def predict(
     def responses(w: FloatArray) -> tuple[dict, dict, dict]:
         s = 1j * w
         hc, hm = task.plant(w)
-        hpe = pilot.h_pe(w) * np.exp(-s * DISPLAY_DELAY_S)
+        hpe = pilot.h_visual(w)
         hpm = pilot.h_ptheta(w)
         den = 1 + hc * (hpe + hpm * hm)
         # theta per input: target, disturbance, visual noise (on e), platform noise (attitude
@@ -208,7 +208,7 @@ def stable(pilot: PitchPilot, task: Task) -> bool:
     """
     w = STABILITY_GRID_RAD_S
     hc, hm = task.plant(w)
-    hpe = pilot.h_pe(w) * np.exp(-1j * w * DISPLAY_DELAY_S)
+    hpe = pilot.h_visual(w)
     loop = hc * (hpe + pilot.h_ptheta(w) * hm)
     phase = np.unwrap(np.angle(1 + loop))
     return bool(abs(phase[-1] - phase[0] - np.pi / 2) < np.pi / 2)

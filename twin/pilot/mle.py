@@ -25,7 +25,7 @@ from scipy.optimize import least_squares
 
 from twin.chain.config import MotionSystem
 from twin.errors import SignalError
-from twin.pilot.pitch import DISPLAY_DELAY_S, PitchPilot, aircraft, motion_response
+from twin.pilot.pitch import PitchPilot, aircraft, motion_response
 from twin.plotting import finish, pyplot
 
 FloatArray = NDArray[np.float64]
@@ -128,7 +128,7 @@ START_KM = (None, 0.0)
 
 
 def _closed_loop_u(pilot: PitchPilot, w: FloatArray, Ft, Fd, config: MotionSystem):
-    hv = pilot.h_pe(w) * np.exp(-1j * w * DISPLAY_DELAY_S)
+    hv = pilot.h_visual(w)
     hm = pilot.h_ptheta(w) * motion_response(config, w)
     hc = aircraft(w)
     return (hv * Ft - (hv + hm) * hc * Fd) / (1 + (hv + hm) * hc)

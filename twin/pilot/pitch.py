@@ -90,6 +90,10 @@ class PitchPilot:
         lead = (1 + self.t_lead * s) ** 2 / (1 + self.t_lag * s)
         return self.k_v * lead * np.exp(-s * self.tau_v) * self.nm(w)
 
+    def h_visual(self, w: ArrayLike) -> ComplexArray:
+        """Eq 6.5 on the error as displayed: H_pe e^{-s T_d} (the display's 25 ms included)."""
+        return self.h_pe(w) * np.exp(-1j * np.asarray(w, dtype=float) * DISPLAY_DELAY_S)
+
     def h_ptheta(self, w: ArrayLike) -> ComplexArray:
         """Eq 6.7: response to the felt pitch attitude."""
         s = 1j * np.asarray(w, dtype=float)
@@ -137,7 +141,7 @@ def open_loops(pilot: PitchPilot, config: MotionSystem) -> OpenLoops:
     """Crossovers and phase margins of the disturbance and target open loops."""
     w = np.geomspace(0.1, 50.0, 4000)
     hc = aircraft(w)
-    hpe = pilot.h_pe(w) * np.exp(-1j * w * DISPLAY_DELAY_S)
+    hpe = pilot.h_visual(w)
     hm = pilot.h_ptheta(w) * motion_response(config, w)
     loops = {"d": hc * (hpe + hm), "t": hpe * hc / (1 + hm * hc)}
     out = {}
