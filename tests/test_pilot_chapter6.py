@@ -95,6 +95,7 @@ def test_the_full_mujoco_platform_in_the_loop_feels_like_the_reduced_one():
     assert np.var(f.e) == pytest.approx(np.var(r.e), rel=0.03)
 
 
+@pytest.mark.slow
 def test_mle_escapes_the_local_optimum_and_names_what_it_cannot_identify():
     """Before: condition 8, seed 1, 15 % remnant landed in a local optimum (tau_m 0.075 s for
     0.20, t_lead = t_lag = 0.27 with CRLB sd 400+, k_v 1.66 for 1.5 at 5 sd). Now the delays are
