@@ -123,22 +123,27 @@ def test_cli_adapt_prints_parameters_and_margins(capsys):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("seed", [0, 1])
-def test_six_adaptive_subjects_predict_the_filter_effects_of_chapter_6(seed):
-    """Tables 6.4-6.6 with six simulated subjects (two populations): the 1 Hz filter's effects
-    on var(e), the disturbance crossover and phase margin, K_v, K_m, t_lead and t_lag have the
-    thesis' direction with p < 0.05; delay and noise have no significant effect on either
-    crossover frequency.
+def test_nine_adaptive_subjects_predict_the_filter_effects_of_chapter_6():
+    """Tables 6.4-6.6 with the thesis' nine participants (§6.3.4), five repetitions each, over
+    five seeded populations (an ANOVA on simulated subjects is a draw, so its agreement is
+    counted over draws): in at least 4 of 5 the 1 Hz filter's effects on var(e), the
+    disturbance crossover, both phase margins, K_v, K_m, t_lead and t_lag have the thesis'
+    direction with p < 0.05, and delay and noise have no significant effect on the disturbance
+    crossover; on the target crossover they have none in at least 3 of 5.
 
-    Not yet predicted (measured, see README): the filter's effect on the target crossover,
-    the target phase margin and var(u)."""
+    Not predicted (measured, see README): the filter's effects on the target crossover (the
+    twin's mean direction is the thesis', p > 0.05 in most draws) and on var(u)."""
     from twin.pilot.population import run_population
 
-    result = run_population(6, seed, workers=2)
-    agree = result.agreement()
-    for measure in ("var_e", "crossover_disturbance_rad_s", "phase_margin_disturbance_deg",
-                    "k_v", "k_m", "t_lead", "t_lag"):  # fmt: skip
-        assert agree[measure]["filter"], (measure, result.anova[measure]["filter"])
-    for measure in ("crossover_disturbance_rad_s", "crossover_target_rad_s"):
-        for factor in ("delay", "noise"):
-            assert agree[measure][factor], (measure, factor, result.anova[measure][factor])
+    checked = {(m, "filter") for m in ("var_e", "crossover_disturbance_rad_s", "k_v", "k_m",
+                                       "phase_margin_disturbance_deg", "phase_margin_target_deg",
+                                       "t_lead", "t_lag")}  # fmt: skip
+    checked |= {("crossover_disturbance_rad_s", f) for f in ("delay", "noise")}
+    target = {("crossover_target_rad_s", f) for f in ("delay", "noise")}
+    hits = dict.fromkeys(checked | target, 0)
+    for seed in range(5):
+        agree = run_population(9, seed, workers=2).agreement()
+        for measure, factor in hits:
+            hits[measure, factor] += agree[measure][factor]
+    missed = {k: v for k, v in hits.items() if v < (4 if k in checked else 3)}
+    assert not missed, missed

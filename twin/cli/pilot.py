@@ -71,8 +71,8 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
     exp.add_argument(
         "--subjects",
         type=int,
-        default=6,
-        help="simulated subjects with --pilot adaptive (default 6)",
+        default=9,
+        help="simulated subjects with --pilot adaptive (default 9, the thesis' participants)",
     )
     exp.add_argument(
         "--workers",

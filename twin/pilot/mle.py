@@ -40,17 +40,23 @@ def vaf(u: FloatArray, u_hat: FloatArray) -> float:
 
 
 def model_output(
-    pilot: PitchPilot, ft: FloatArray, fd: FloatArray, config: MotionSystem, rate_hz: float
+    pilot: PitchPilot,
+    ft: FloatArray,
+    fd: FloatArray,
+    config: MotionSystem,
+    rate_hz: float,
+    hold: bool = False,
 ) -> FloatArray:
     """Predicted u over one window from the forcing functions, through the closed loop.
 
     U = (H_v F_t - (H_v + H_ptheta H_m) H_c F_d) / (1 + (H_v + H_ptheta H_m) H_c), with
-    H_v = H_pe e^{-s T_display}, H_m the motion system (Eq 5.11) and H_c = K H_theta,de.
+    H_v = H_pe e^{-s T_display}, H_m the motion system (Eq 5.11) and H_c = K H_theta,de
+    (times a zero-order hold of one sample when ``hold``).
     """
     n = ft.size
     w = 2 * np.pi * np.fft.rfftfreq(n, 1.0 / rate_hz)
     w[0] = 1e-9  # the integrator of H_c: the mean is not predicted
-    U = _closed_loop_u(pilot, w, np.fft.rfft(ft), np.fft.rfft(fd), config)
+    U = _closed_loop_u(pilot, w, np.fft.rfft(ft), np.fft.rfft(fd), config, hold / rate_hz)
     U[0] = 0.0
     return np.fft.irfft(U, n)
 
@@ -70,7 +76,8 @@ class PilotFit:
     residual_sd : float
         Standard deviation of the output error.
     unidentifiable : tuple of str
-        Parameters whose Cramer-Rao bound exceeds their value (reported, not hidden).
+        Parameters whose Cramer-Rao bound exceeds ``IDENTIFIABLE_REL_SD`` of their value or
+        that another, equally good minimum puts elsewhere (reported, not hidden).
 
     """
 
@@ -119,18 +126,27 @@ class PilotFit:
 IDENTIFIABLE_REL_SD = 1 / 3
 #: Most lines the forcing functions may have (Table 6.2: 10 + 10).
 MAX_LINES = 64
-#: Neighbouring bins on each side of a line whose power estimates the remnant there.
-NEIGHBOURS = 4
+#: Fewest neighbouring bins on each side of a line whose power estimates the remnant there,
+#: and the band (fraction of the line's frequency) they are taken from when it holds more.
+NEIGHBOURS, NEIGHBOURS_REL = 4, 0.1
 #: Starting delays (tau_v, tau_m), lead-lag pairs and motion gains of the multi-start search.
 START_DELAYS = ((0.30, 0.20), (0.20, 0.15), (0.40, 0.30), (0.25, 0.10))
 START_LEADS = (None, (0.1, 0.1), (0.5, 0.5))
 START_KM = (None, 0.0)
+#: Chi-square margin within which another minimum competes with the best (the 95 % point of
+#: chi-square with one degree of freedom).
+COMPETING_CHI2 = 3.84
 
 
-def _closed_loop_u(pilot: PitchPilot, w: FloatArray, Ft, Fd, config: MotionSystem):
+def _closed_loop_u(
+    pilot: PitchPilot, w: FloatArray, Ft, Fd, config: MotionSystem, hold_s: float = 0.0
+):
     hv = pilot.h_visual(w)
     hm = pilot.h_ptheta(w) * motion_response(config, w)
     hc = aircraft(w)
+    if hold_s:  # zero-order hold of u over hold_s: (1 - e^{-sT}) / (sT)
+        s = 1j * w * hold_s
+        hc = hc * (1 - np.exp(-s)) / s
     return (hv * Ft - (hv + hm) * hc * Fd) / (1 + (hv + hm) * hc)
 
 
@@ -138,17 +154,34 @@ def line_data(
     ft: FloatArray, fd: FloatArray, u: FloatArray, rate_hz: float
 ) -> tuple[FloatArray, NDArray[np.complex128], NDArray[np.complex128], NDArray[np.complex128],
            FloatArray]:  # fmt: skip
-    """Spectra at the forcing functions' lines and the remnant's variance at each.
+    """Spectra at the forcing functions' lines and the variance of u's remnant at each.
+
+    Parameters
+    ----------
+    ft, fd : ndarray, shape (n,)
+        Forcing functions over the window.
+    u : ndarray, shape (n,) or (runs, n)
+        Control signal of one run or of repetitions of the same condition (averaged, as the
+        thesis averages its five repetitions before identification, §2.6 and §6.4).
+    rate_hz : float
+        Sample rate [Hz].
 
     Returns
     -------
     w, Ft, Fd, U, variance
-        Line frequencies [rad/s], the forcing functions' and u's DFT there, and E|U_remnant|^2
-        at each line from the mean power of the ``NEIGHBOURS`` non-line bins on each side.
+        Line frequencies [rad/s], the forcing functions' DFT and the runs' mean DFT of u there,
+        and the variance of that mean's remnant at each line. The variance pools every run's
+        non-line bins within ``NEIGHBOURS_REL`` of the line (at least ``NEIGHBOURS`` each
+        side) and the runs' spread at the line itself; it is scaled by nu / (nu - 2) for its
+        nu degrees of freedom, so that its inverse (the weight) is unbiased: with the few bins
+        of one run, noisy weights made the fit chase the lines they over-weighted and the
+        Cramer-Rao bound computed with them too narrow (omega_nm and t_lead 2x).
 
     """
-    n = u.size
-    spectra = [np.fft.rfft(x) for x in (ft, fd, u)]
+    runs_u = np.atleast_2d(u)
+    n = runs_u.shape[-1]
+    spectra = [np.fft.rfft(x) for x in (ft, fd)]
+    su = np.fft.rfft(runs_u, axis=-1)
     power = np.abs(spectra[0]) ** 2 + np.abs(spectra[1]) ** 2
     top = np.sort(power)[::-1][:MAX_LINES]
     if power.sum() <= 0 or top.sum() < (1 - 1e-6) * power.sum():
@@ -163,19 +196,28 @@ def line_data(
         raise SignalError("the forcing functions excite fewer than 4 lines in the window")
     is_line = np.zeros(power.size, dtype=bool)
     is_line[lines] = True
-    var = np.empty(lines.size)
+    runs = runs_u.shape[0]
+    mean_u = su[:, lines].mean(axis=0)
+    var = np.full(lines.size, np.nan)
+    dof = np.zeros(lines.size)
     for i, k in enumerate(lines):
-        nb = np.arange(k - NEIGHBOURS, k + NEIGHBOURS + 1)
+        half = max(NEIGHBOURS, round(NEIGHBOURS_REL * k))
+        nb = np.arange(k - half, k + half + 1)
         nb = nb[(nb > 0) & (nb < power.size)]
         nb = nb[~is_line[nb]]
-        var[i] = float(np.mean(np.abs(spectra[2][nb]) ** 2)) if nb.size else np.nan
-    scale = float(np.mean(np.abs(spectra[2][lines]) ** 2))
+        spread = np.sum(np.abs(su[:, k] - mean_u[i]) ** 2)  # runs - 1 complex dof
+        cells = runs * nb.size + runs - 1
+        if cells:
+            var[i] = (float(np.sum(np.abs(su[:, nb]) ** 2)) + spread) / cells / runs
+            dof[i] = 2.0 * cells
     if not np.isfinite(var).any():
         raise SignalError("no bins between the forcing functions' lines to estimate the remnant")
+    scale = float(np.mean(np.abs(mean_u) ** 2))
     var = np.where(np.isfinite(var), var, np.nanmedian(var))
+    var = var * np.where(dof > 2, dof / np.maximum(dof - 2, 1), 1.0)
     var = np.maximum(var, 1e-12 * scale)  # a noise-free run: equal weights, not infinite ones
     w = 2 * np.pi * lines * rate_hz / n
-    return w, spectra[0][lines], spectra[1][lines], spectra[2][lines], var
+    return w, spectra[0][lines], spectra[1][lines], mean_u, var
 
 
 def fit_pitch_pilot(
@@ -185,48 +227,88 @@ def fit_pitch_pilot(
     config: MotionSystem,
     rate_hz: float = 100.0,
     start: PitchPilot | None = None,
+    hold: bool = True,
 ) -> PilotFit:
-    """Fit Eq 6.5-6.7 to one measurement window of u, given the forcing functions.
+    """Fit Eq 6.5-6.7 to one measurement window of u (or repetitions of it), given f_t, f_d.
 
     The closed-loop model's output is deterministic at the forcing functions' lines only; off
     them u is remnant. So the likelihood is that of the line residuals U - U_hat, each with the
     remnant's variance there, estimated from the neighbouring non-line bins (as the FC method
-    and AGARD-AR-144 do): a weighted least-squares fit whose inverse Fisher information is an
-    honest Cramer-Rao bound for a coloured remnant (a time-domain fit with one white-noise
-    variance for every sample is not). The cost has local minima in the delays and the
-    lead-lag pair, so a grid of starts (delays, lead-lag, motion gain on or off) is tried and
-    the best kept. Parameters whose bound exceeds ``IDENTIFIABLE_REL_SD`` of their value are
-    listed as not identifiable (often t_lead and t_lag, which trade off with K_v).
+    and AGARD-AR-144 do; :func:`line_data`): a weighted least-squares fit whose inverse Fisher
+    information is the Cramer-Rao bound for a coloured remnant (a time-domain fit with one
+    white-noise variance for every sample is not). The cost has local minima in the delays and
+    the lead-lag pair, so a grid of starts (delays, lead-lag, motion gain on or off) is tried
+    and the best kept. A parameter is reported not identifiable when its bound exceeds
+    ``IDENTIFIABLE_REL_SD`` of its value, or when another minimum explains the data as well
+    (chi-square within ``COMPETING_CHI2`` of the best) with that parameter more than two bounds
+    away: the bound describes one minimum's curvature and says nothing of the other (the
+    lead-lag pair at the thesis' remnant level has a second minimum near t_lead 0.4-0.6 s).
 
     Parameters
     ----------
-    ft, fd, u : ndarray, shape (n,)
-        Target, disturbance and control signal over a window of whole periods [rad].
+    ft, fd : ndarray, shape (n,)
+        Target and disturbance over a window of whole periods [rad].
+    u : ndarray, shape (n,) or (runs, n)
+        Control signal of one run, or of repetitions of the condition with the same forcing
+        functions (averaged at the lines, as the thesis averaged its five repetitions).
     config : MotionSystem
         The motion system the pilot flew with (its Eq 5.11 is part of the loop).
     rate_hz : float
         Sample rate [Hz].
     start : PitchPilot, optional
         Initial guess (added to the grid of starts); the defaults otherwise.
+    hold : bool
+        The loop holds u over each sample (a digital simulator's zero-order hold, a half-sample
+        delay; the twin's pitch task does); False for a continuous loop.
 
     """
     ft, fd, u = (np.asarray(a, dtype=float) for a in (ft, fd, u))
-    if not (ft.shape == fd.shape == u.shape) or u.ndim != 1 or u.size < 256:
-        raise SignalError("f_t, f_d and u must be 1-D windows of equal length (>= 256 samples)")
+    if not (ft.shape == fd.shape == u.shape[-1:]) or ft.ndim != 1 or u.ndim > 2 or ft.size < 256:
+        raise SignalError(
+            "f_t and f_d must be 1-D windows (>= 256 samples) and u one window of the same length "
+            f"or (runs, samples); got f_t {ft.shape}, f_d {fd.shape}, u {u.shape}"
+        )
     if not (np.all(np.isfinite(ft)) and np.all(np.isfinite(fd)) and np.all(np.isfinite(u))):
         raise SignalError("f_t, f_d and u must be finite")
+    if not np.ptp(u, axis=-1).all():
+        raise SignalError("u is constant in a run: it carries no response to identify")
     p0 = start or PitchPilot()
-    u = u - u.mean()
+    u = u - u.mean(axis=-1, keepdims=True)
     w, Ft, Fd, U, var = line_data(ft, fd, u, rate_hz)
     sd = np.sqrt(var / 2)  # real and imaginary parts each carry half the variance
+    hold_s = 1.0 / rate_hz if hold else 0.0
 
     def make(v: FloatArray) -> PitchPilot:
         return dataclasses.replace(p0, **dict(zip(PARAMETERS, map(float, v), strict=True)))
 
     def residual(v: FloatArray) -> FloatArray:
-        r = (U - _closed_loop_u(make(v), w, Ft, Fd, config)) / sd
+        r = (U - _closed_loop_u(make(v), w, Ft, Fd, config, hold_s)) / sd
         return np.concatenate([r.real, r.imag])
 
+    sols = [least_squares(residual, x0, bounds=(LOWER, UPPER), x_scale=np.maximum(x0, 0.05))
+            for x0 in _starts(p0)]  # fmt: skip
+    sols.sort(key=lambda sol: sol.cost)
+    best = sols[0]
+    try:
+        crlb = np.sqrt(np.clip(np.diag(np.linalg.inv(best.jac.T @ best.jac)), 0, None))
+    except np.linalg.LinAlgError:
+        crlb = np.full(best.x.size, np.inf)
+    # least_squares' cost is half the chi-square
+    rivals = [sol.x for sol in sols[1:] if 2 * (sol.cost - best.cost) < COMPETING_CHI2]
+    fitted = make(best.x)
+    mean_u = u if u.ndim == 1 else u.mean(axis=0)
+    u_hat = model_output(fitted, ft, fd, config, rate_hz, hold)
+    bounds = dict(zip(PARAMETERS, map(float, crlb), strict=True))
+    weak = tuple(
+        name for i, name in enumerate(PARAMETERS)
+        if not bounds[name] < IDENTIFIABLE_REL_SD * max(abs(float(best.x[i])), 1e-9)
+        or any(abs(x[i] - best.x[i]) > 2 * crlb[i] for x in rivals)
+    )  # fmt: skip
+    return PilotFit(fitted, bounds, vaf(mean_u, u_hat), float(np.std(mean_u - u_hat)), weak)
+
+
+def _starts(p0: PitchPilot) -> list[FloatArray]:
+    """Return the multi-start grid around ``p0``: delays x lead-lag pairs x motion gain on/off."""
     base = np.clip(np.array([getattr(p0, n) for n in PARAMETERS]), LOWER, UPPER)
     starts = [base]
     for (tv, tm), lead, km in itertools.product(START_DELAYS, START_LEADS, START_KM):
@@ -237,18 +319,4 @@ def fit_pitch_pilot(
         if km is not None:
             x0[4] = km
         starts.append(np.clip(x0, LOWER, UPPER))
-    best = None
-    for x0 in starts:
-        sol = least_squares(residual, x0, bounds=(LOWER, UPPER), x_scale=np.maximum(x0, 0.05))
-        if best is None or sol.cost < best.cost:
-            best = sol
-    try:
-        crlb = np.sqrt(np.clip(np.diag(np.linalg.inv(best.jac.T @ best.jac)), 0, None))
-    except np.linalg.LinAlgError:
-        crlb = np.full(best.x.size, np.inf)
-    fitted = make(best.x)
-    u_hat = model_output(fitted, ft, fd, config, rate_hz)
-    bounds = dict(zip(PARAMETERS, map(float, crlb), strict=True))
-    weak = tuple(n for n, v in zip(PARAMETERS, best.x, strict=True)
-                 if not bounds[n] < IDENTIFIABLE_REL_SD * max(abs(float(v)), 1e-9))  # fmt: skip
-    return PilotFit(fitted, bounds, vaf(u, u_hat), float(np.std(u - u_hat)), weak)
+    return starts

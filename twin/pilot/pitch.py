@@ -50,6 +50,8 @@ AIRCRAFT = (-10.6189 * np.array([1.0, 0.9906]), np.array([1.0, 2.756, 7.612, 0.0
 #: Stick gain K_de,u (§6.3.1), pilot station ahead of the c.g. [m], display latency [s].
 STICK_GAIN, PILOT_STATION_M, DISPLAY_DELAY_S = -0.2865, 3.2, 0.025
 PITCH, HEAVE = DOF_NAMES.index("pitch"), DOF_NAMES.index("heave")
+#: Frequency points (0.1-50 rad/s, log-spaced) of the open loops whose margins are computed.
+MARGIN_POINTS = 500
 
 
 @dataclass(frozen=True)
@@ -139,7 +141,9 @@ class OpenLoops:
 
 def open_loops(pilot: PitchPilot, config: MotionSystem) -> OpenLoops:
     """Crossovers and phase margins of the disturbance and target open loops."""
-    w = np.geomspace(0.1, 50.0, 4000)
+    # python-control interpolates the response between the points for its crossings: 500 give
+    # the margins of 4000 to 1e-7 in an eighth of the time
+    w = np.geomspace(0.1, 50.0, MARGIN_POINTS)
     hc = aircraft(w)
     hpe = pilot.h_visual(w)
     hm = pilot.h_ptheta(w) * motion_response(config, w)
