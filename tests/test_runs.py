@@ -35,13 +35,30 @@ def test_simulated_run_reads_back(run_dir):
 
 
 def test_rrd_holds_entities_and_samples(run_dir):
+    """A simulate recording: the MPI drawn from its MJCF (base plate and cabin frame as
+    cylinders, cockpit box, moved by Transform3D; the commanded pose as a ghost), IMU axes as
+    arrows, per-DOF series in separate translation / rotation groups with names, the IMU
+    decimated to 100 Hz by default."""
+    from twin.record import read_archetypes
+
     counts = read_entities(run_dir[1])
+    kinds = read_archetypes(run_dir[1])
     run = read_run(run_dir[0])
-    assert counts["/imu/az"] == len(run.imu_t)
-    assert counts["/pose/command/pitch"] == counts["/pose/actual/pitch"] == run.commands.n
-    assert counts["/legs/l1"] == run.commands.n
-    assert counts["/world/legs"] > 25 * run.commands.duration
-    assert "/world/base" in counts
+    # block means of round(819.2 / 100) = 8 samples (102.4 Hz), plus the static style row
+    assert counts["/imu/accel/z"] == len(run.imu_t) // 8 + 1
+    assert counts["/translation/heave/command"] >= run.commands.n  # + the static style row
+    assert counts["/rotation/pitch/actual"] == counts["/rotation/pitch/command"]
+    assert counts["/legs/l1"] == run.commands.n + 1
+    assert counts["/world/base/legs"] > 25 * run.commands.duration
+    assert counts["/world/cabin"] == counts["/world/command"] == counts["/world/base/legs"]
+    assert kinds["/world/base"] == {"Transform3D"} and kinds["/world/cabin"] == {"Transform3D"}
+    assert kinds["/world/cabin/cockpit"] == {"Boxes3D"}
+    assert kinds["/world/cabin/upper_frame"] == kinds["/world/base/base_plate"] == {"Cylinders3D"}
+    assert kinds["/world/command/cockpit"] == {"Boxes3D"}
+    assert kinds["/world/cabin/imu"] == {"Arrows3D"}
+    assert kinds["/world/base/legs"] == {"LineStrips3D"}
+    assert kinds["/rotation/pitch/actual"] == {"Scalars", "SeriesLines"}
+    assert not any(p.startswith("/pose") for p in counts)  # m and deg no longer mixed
 
 
 def _copy(run_dir, tmp_path):

@@ -1,15 +1,23 @@
 """Rerun recordings of a run: the only module that imports rerun.
 
-One blueprint: a 3D view of base, legs and cabin moving (z up, MuJoCo's world), next to time
-series of commanded vs actual pose, leg lengths and the IMU channels. Save headless to an
-``.rrd`` file or stream live to a running viewer. Data are sent as whole columns per chunk
-(:func:`rerun.send_columns`), so recording a long run costs no per-sample Python work.
+The platform in 3D as its MJCF draws it (:mod:`twin.platform.visual`): the base and the cabin
+as bodies (boxes and cylinders from their visual geoms) placed by ``Transform3D``s, the legs
+as lines between the gimbals, the IMU's axes as arrows on the cabin, the commanded pose as a
+translucent ghost of the cabin; beside it the pose as time series with names, colours and
+units (translations in m and rotations in deg in separate views), the leg lengths and the IMU
+(decimated to ``imu_rate_hz`` by block means for display; ``imu_rate_hz=None`` logs every
+sample). Save headless to an ``.rrd`` file or stream live to a running viewer. Data are sent as
+whole columns per chunk (:func:`rerun.send_columns`), so recording a long run costs no
+per-sample Python work.
 
 Entity paths
 ------------
-``world/base`` (static outline), ``world/legs`` and ``world/cabin`` (per 3D frame),
-``pose/command/<dof>``, ``pose/actual/<dof>`` (m, deg), ``legs/l1`` ... ``legs/l6`` (m),
-``imu/ax``, ``imu/ay``, ``imu/az`` (m/s^2), ``imu/p``, ``imu/q``, ``imu/r`` (deg/s).
+``world/base`` (static transform: MuJoCo's z-up world from the thesis' z-down base frame),
+``world/base/<geom>`` (static shapes), ``world/base/legs`` (per 3D frame, thesis base frame);
+``world/cabin`` (``Transform3D`` per frame) with ``world/cabin/<geom>`` and ``world/cabin/imu``
+(static, cabin frame); ``world/command`` (``Transform3D`` per frame) with its translucent
+shapes; ``translation/<dof>/command|actual`` [m], ``rotation/<dof>/command|actual`` [deg],
+``legs/l1`` ... ``legs/l6`` [m], ``imu/accel/x|y|z`` [m/s^2], ``imu/gyro/p|q|r`` [deg/s].
 """
 
 from __future__ import annotations
@@ -21,36 +29,43 @@ import numpy as np
 import rerun as rr
 import rerun.blueprint as rrb
 from numpy.typing import NDArray
+from scipy.spatial.transform import Rotation
 
 from twin.chain.imu import ImuRecord
 from twin.chain.response import PlatformResponse
 from twin.frames import DOF_NAMES, MJ_FROM_THESIS, rotation_matrix
+from twin.platform.facts import PLATFORMS
 from twin.platform.geometry import Geometry
+from twin.platform.visual import Shape, imu_site, platform_shapes
 
 FloatArray = NDArray[np.float64]
 TIMELINE = "sim_time"
-IMU_CHANNELS = ("ax", "ay", "az", "p", "q", "r")
+IMU_ACCEL, IMU_GYRO = ("x", "y", "z"), ("p", "q", "r")
+#: Per-DOF colours (surge, sway, heave, roll, pitch, yaw); the command is drawn lighter.
+DOF_COLOURS = ((31, 119, 180), (255, 127, 14), (44, 160, 44),
+               (214, 39, 40), (148, 103, 189), (140, 86, 75))  # fmt: skip
+AXIS_COLOURS = ((220, 40, 40), (40, 180, 40), (40, 80, 220))
+#: Opacity of the commanded pose's ghost.
+GHOST_ALPHA = 0.25
 
 
-def blueprint() -> rrb.Blueprint:
-    """Return the one layout used for every run."""
+def blueprint(kind: str = "simulate") -> rrb.Blueprint:
+    """Return the layout of a platform run's recording (``simulate`` or ``agard``)."""
+    series = [
+        rrb.TimeSeriesView(origin="/translation", name="translation [m]: command vs actual"),
+        rrb.TimeSeriesView(origin="/rotation", name="rotation [deg]: command vs actual"),
+        rrb.TimeSeriesView(origin="/legs", name="leg lengths [m]"),
+        rrb.TimeSeriesView(origin="/imu/accel", name="IMU specific force [m/s^2]"),
+        rrb.TimeSeriesView(origin="/imu/gyro", name="IMU angular rate [deg/s]"),
+    ]
     return rrb.Blueprint(
         rrb.Horizontal(
-            rrb.Spatial3DView(origin="/world", name="platform"),
-            rrb.Vertical(
-                rrb.TimeSeriesView(origin="/pose", name="pose: command vs actual"),
-                rrb.TimeSeriesView(origin="/legs", name="leg lengths"),
-                rrb.TimeSeriesView(origin="/imu", name="IMU"),
-            ),
+            rrb.Spatial3DView(origin="/world", name=f"platform ({kind})"),
+            rrb.Vertical(*series),
             column_shares=[1, 1],
         ),
         collapse_panels=True,
     )
-
-
-def _z_up(points: FloatArray) -> FloatArray:
-    """Thesis base-frame points (z down) to MuJoCo world (z up)."""
-    return points @ MJ_FROM_THESIS.T
 
 
 def _every(t: FloatArray, rate_hz: float, start: float, dt: float) -> NDArray[np.intp]:
@@ -59,13 +74,35 @@ def _every(t: FloatArray, rate_hz: float, start: float, dt: float) -> NDArray[np
     return np.flatnonzero(np.abs(phase - np.round(phase)) < 0.5 * rate_hz * dt + 1e-9)
 
 
+def _rgba(colour: tuple[float, ...], alpha: float | None = None) -> list[int]:
+    rgba = [round(255 * c) for c in colour]
+    if alpha is not None:
+        rgba[3] = round(255 * alpha)
+    return rgba
+
+
+def _shape_archetype(shape: Shape, alpha: float | None = None):
+    """Return the rerun archetype drawing one MJCF geom in its body frame."""
+    style = {"quaternions": [shape.quat_xyzw], "colors": [_rgba(shape.rgba, alpha)],
+             "fill_mode": "solid"}  # fmt: skip
+    if shape.kind == "box":
+        return rr.Boxes3D(half_sizes=[shape.size], centers=[shape.pos], **style)
+    radius, half = shape.size
+    if shape.kind == "cylinder":
+        return rr.Cylinders3D(lengths=[2 * half], radii=[radius], centers=[shape.pos], **style)
+    # a capsule starts at its translation and runs along its z: move the start to one end
+    start = np.asarray(shape.pos) - Rotation.from_quat(shape.quat_xyzw).apply([0, 0, half])
+    return rr.Capsules3D(lengths=[2 * half], radii=[radius], translations=[start], **style)
+
+
 class Recorder:
     """Stream a run to Rerun, chunk by chunk.
 
     Parameters
     ----------
     geometry : Geometry
-        The platform (for the 3D view).
+        The platform (its name, ``mpi`` or ``srs``, selects the MJCF drawn; another
+        geometry is drawn as gimbal outlines).
     name : str
         Recording name shown in the viewer.
     rrd : str or Path, optional
@@ -73,7 +110,15 @@ class Recorder:
     connect : str, optional
         gRPC URL of a running viewer to stream to instead (``""`` for Rerun's default).
     series_rate_hz, frames_rate_hz : float
-        Rates at which pose/leg series and 3D frames are logged (IMU: every sample).
+        Rates at which pose/leg series and 3D frames are logged.
+    imu_rate_hz : float or None
+        IMU display rate: block means of round(IMU rate / ``imu_rate_hz``) raw samples (8 at
+        819.2 Hz: 102.4 Hz shown); None logs every raw sample.
+    kind : str
+        Recording kind shown in the layout (``simulate``, ``agard``).
+    imu_position_m : tuple of float, optional
+        The IMU's mount in the cabin frame [m] (its axes are drawn there); the model's ``imu``
+        site otherwise.
 
     """
 
@@ -85,25 +130,71 @@ class Recorder:
         connect: str | None = None,
         series_rate_hz: float = 100.0,
         frames_rate_hz: float = 30.0,
+        imu_rate_hz: float | None = 100.0,
+        kind: str = "simulate",
+        imu_position_m: tuple[float, float, float] | None = None,
     ) -> None:
+        if imu_rate_hz is not None and not imu_rate_hz > 0:
+            raise ValueError(f"imu_rate_hz must be > 0 or None (raw); got {imu_rate_hz}")
         self.geo = geometry
         self.series_rate_hz, self.frames_rate_hz = series_rate_hz, frames_rate_hz
+        self.imu_rate_hz = imu_rate_hz
         self.rec = rr.RecordingStream(application_id="twin", recording_id=None)
         self.rec.send_recording_name(name)
         self._final: Path | None = None
+        layout = blueprint(kind)
         if rrd is not None:  # written under a temporary name, renamed by close()
             self._final = Path(rrd)
             self._final.parent.mkdir(parents=True, exist_ok=True)
             self._partial = self._final.with_name(f".{self._final.name}.partial")
-            self.rec.save(str(self._partial), default_blueprint=blueprint())
+            self.rec.save(str(self._partial), default_blueprint=layout)
         elif connect is not None:
-            self.rec.connect_grpc(connect or None, default_blueprint=blueprint())
+            self.rec.connect_grpc(connect or None, default_blueprint=layout)
         else:
             raise ValueError("Recorder needs a file (rrd) or a viewer URL (connect)")
         self._t0: float | None = None
         self._dt = 1e-3  # sample interval of the responses, from the first chunk
-        base = _z_up(np.vstack([geometry.base_gimbals, geometry.base_gimbals[:1]]))
-        self.rec.log("world/base", rr.LineStrips3D([base], colors=[[120, 120, 120]]), static=True)
+        self._imu_held: tuple[FloatArray, FloatArray] | None = None  # samples of a part block
+        self._static_scene(imu_position_m)
+
+    def _static_scene(self, imu_position_m: tuple[float, float, float] | None) -> None:
+        log = self.rec.log
+        log("world/base", rr.Transform3D(mat3x3=MJ_FROM_THESIS), static=True)
+        shapes = platform_shapes(self.geo.name) if self.geo.name in PLATFORMS else ()
+        for shape in shapes:
+            log(f"world/{shape.body}/{shape.name}", _shape_archetype(shape), static=True)
+            if shape.body == "cabin":
+                log(f"world/command/{shape.name}", _shape_archetype(shape, GHOST_ALPHA),
+                    static=True)  # fmt: skip
+        if not shapes:  # a geometry without an MJCF: gimbal outlines
+            base = np.vstack([self.geo.base_gimbals, self.geo.base_gimbals[:1]])
+            cabin = np.vstack([self.geo.cabin_gimbals, self.geo.cabin_gimbals[:1]])
+            log("world/base/outline", rr.LineStrips3D([base], colors=[[120, 120, 120]]),
+                static=True)  # fmt: skip
+            log("world/cabin/outline", rr.LineStrips3D([cabin], colors=[[90, 90, 200]]),
+                static=True)  # fmt: skip
+        if imu_position_m is not None:
+            imu = np.asarray(imu_position_m, dtype=float)
+        else:
+            imu = imu_site(self.geo.name) if shapes else np.zeros(3)
+        length = 0.2 * self.geo.neutral_height
+        log("world/cabin/imu", rr.Arrows3D(origins=[imu] * 3, vectors=length * np.eye(3),
+                                           colors=AXIS_COLOURS, labels=["x", "y", "z"]),
+            static=True)  # fmt: skip
+        for k, dof in enumerate(DOF_NAMES):
+            group, unit = ("translation", "m") if k < 3 else ("rotation", "deg")
+            colour = np.array(DOF_COLOURS[k])
+            for what, c in (("actual", colour), ("command", 0.45 * colour + 0.55 * 255)):
+                log(f"{group}/{dof}/{what}", rr.SeriesLines(
+                    colors=[c.astype(int)], names=[f"{dof} {what} [{unit}]"],
+                    widths=[2.0 if what == "actual" else 1.0]), static=True)  # fmt: skip
+        for j in range(6):
+            style = rr.SeriesLines(colors=[DOF_COLOURS[j]], names=[f"leg {j + 1} [m]"])
+            log(f"legs/l{j + 1}", style, static=True)
+        for group, channels, unit in (("accel", IMU_ACCEL, "m/s^2"), ("gyro", IMU_GYRO, "deg/s")):
+            for ch, c in zip(channels, AXIS_COLOURS, strict=True):
+                log(f"imu/{group}/{ch}", rr.SeriesLines(colors=[c], names=[f"{ch} [{unit}]"]),
+                    static=True)  # fmt: skip
 
     def log(
         self, response: PlatformResponse, imu: ImuRecord | None = None, offset_s: float = 0.0
@@ -121,19 +212,36 @@ class Recorder:
         self._series(response, _every(t, self.series_rate_hz, self._t0, self._dt))
         self._frames(response, _every(t, self.frames_rate_hz, self._t0, self._dt))
         if imu is not None and len(imu.t):
-            values = np.hstack([imu.accel, np.degrees(imu.gyro)])
-            times = rr.TimeColumn(TIMELINE, duration=imu.t)
-            for k, ch in enumerate(IMU_CHANNELS):
-                self.rec.send_columns(f"imu/{ch}", indexes=[times],
-                                      columns=rr.Scalars.columns(scalars=values[:, k]))  # fmt: skip
+            self._imu(imu)
+
+    def _imu(self, imu: ImuRecord) -> None:
+        t = np.asarray(imu.t, dtype=float)
+        values = np.hstack([imu.accel, np.degrees(imu.gyro)])
+        if self.imu_rate_hz is not None:
+            if self._imu_held is not None:
+                t = np.concatenate([self._imu_held[0], t])
+                values = np.vstack([self._imu_held[1], values])
+            block = max(1, round(imu.rate_hz / self.imu_rate_hz))
+            whole = t.size // block * block
+            self._imu_held = (t[whole:], values[whole:])
+            t = t[:whole].reshape(-1, block).mean(axis=1)
+            values = values[:whole].reshape(-1, block, 6).mean(axis=1)
+            if not t.size:
+                return
+        times = rr.TimeColumn(TIMELINE, duration=t)
+        for k, path in enumerate([*(f"imu/accel/{c}" for c in IMU_ACCEL),
+                                  *(f"imu/gyro/{c}" for c in IMU_GYRO)]):  # fmt: skip
+            self.rec.send_columns(path, indexes=[times],
+                                  columns=rr.Scalars.columns(scalars=values[:, k]))  # fmt: skip
 
     def _series(self, r: PlatformResponse, idx: NDArray[np.intp]) -> None:
         times = rr.TimeColumn(TIMELINE, duration=r.t[idx])
         scale = np.array([1, 1, 1, *(3 * [180 / np.pi])])
         for kind, values in (("command", r.command[idx]), ("actual", r.pose[idx])):
             for k, dof in enumerate(DOF_NAMES):
+                group = "translation" if k < 3 else "rotation"
                 column = rr.Scalars.columns(scalars=values[:, k] * scale[k])
-                self.rec.send_columns(f"pose/{kind}/{dof}", indexes=[times], columns=column)
+                self.rec.send_columns(f"{group}/{dof}/{kind}", indexes=[times], columns=column)
         for j in range(6):
             self.rec.send_columns(f"legs/l{j + 1}", indexes=[times],
                                   columns=rr.Scalars.columns(scalars=r.legs[idx, j]))  # fmt: skip
@@ -141,22 +249,21 @@ class Recorder:
     def _frames(self, r: PlatformResponse, idx: NDArray[np.intp]) -> None:
         if idx.size == 0:
             return
+        times = rr.TimeColumn(TIMELINE, duration=r.t[idx])
+        for path, pose in (("world/cabin", r.pose[idx]), ("world/command", r.command[idx])):
+            rot = MJ_FROM_THESIS @ rotation_matrix(pose[:, 3:])
+            where = (self.geo.neutral_ugp + pose[:, :3]) @ MJ_FROM_THESIS.T
+            self.rec.send_columns(path, indexes=[times], columns=rr.Transform3D.columns(
+                translation=where, quaternion=Rotation.from_matrix(rot).as_quat()))  # fmt: skip
         pose = r.pose[idx]
         T = rotation_matrix(pose[:, 3:])
         ugp = self.geo.neutral_ugp + pose[:, :3]
         top = ugp[:, None, :] + np.einsum("nij,kj->nki", T, self.geo.cabin_gimbals)
-        top_w = _z_up(top)
-        base_w = _z_up(self.geo.base_gimbals)
-        legs = np.stack([np.broadcast_to(base_w, top_w.shape), top_w], axis=2)  # (n, 6, 2, 3)
-        times = rr.TimeColumn(TIMELINE, duration=r.t[idx])
+        base = np.broadcast_to(self.geo.base_gimbals, top.shape)
+        legs = np.stack([base, top], axis=2)  # (n, 6, 2, 3), thesis base frame
         strips = rr.LineStrips3D.columns(strips=legs.reshape(-1, 2, 3))
-        self.rec.send_columns("world/legs", indexes=[times],
+        self.rec.send_columns("world/base/legs", indexes=[times],
                               columns=strips.partition([6] * len(idx)))  # fmt: skip
-        cabin = np.concatenate([top_w, top_w[:, :1]], axis=1)  # closed outline (n, 7, 3)
-        self.rec.send_columns(
-            "world/cabin", indexes=[times],
-            columns=rr.LineStrips3D.columns(strips=cabin).partition([1] * len(idx)),
-        )  # fmt: skip
 
     def close(self) -> None:
         """Flush and close the recording (the ``.rrd`` appears under its name only now)."""
@@ -180,6 +287,23 @@ def read_entities(path: str | Path) -> dict[str, int]:
     for chunk in RrdReader(str(path)).stream():
         counts[chunk.entity_path] = counts.get(chunk.entity_path, 0) + chunk.num_rows
     return counts
+
+
+def read_archetypes(path: str | Path) -> dict[str, set[str]]:
+    """Return {entity path: names of the archetypes logged there} of an ``.rrd`` file.
+
+    Names are rerun's without the package (``Transform3D``, ``Boxes3D``, ``Scalars``, ...).
+    """
+    from rerun.chunk import RrdReader
+
+    out: dict[str, set[str]] = {}
+    for chunk in RrdReader(str(path)).stream():
+        names = out.setdefault(chunk.entity_path, set())
+        for field in chunk.to_record_batch().schema:
+            archetype = (field.metadata or {}).get(b"rerun:archetype")
+            if archetype:
+                names.add(archetype.decode().rsplit(".", 1)[-1])
+    return out
 
 
 def record_series(

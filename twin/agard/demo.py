@@ -16,9 +16,9 @@ from pathlib import Path
 
 import numpy as np
 
-from twin.agard.df import DfResult, run_df
+from twin.agard.df import DfResult, draw_bode, run_df
 from twin.agard.session import Session
-from twin.measurement.describing_function import phase_deg
+from twin.chain.config import motion_system
 from twin.measurement.measure import Bench, configure
 
 BENCHES = (("mpi", "full"), ("mpi", "reduced"), ("srs", "full"))
@@ -60,31 +60,11 @@ def run_demo(out: Path, progress: Callable[[str], None] | None = None) -> str:
             )
             payload[f"{config}-{model}-{r.dof}"] = r.to_dict()
     for i, dof in enumerate(DOFS):
-        fig, (ax_g, ax_p) = plt.subplots(2, 1, figsize=(6, 5.5), sharex=True)
+        fig, (ax_g, ax_p) = plt.subplots(2, 1, figsize=(6.5, 6), sharex=True)
         for j, ((config, model), rs) in enumerate(results.items()):
-            r = rs[i]
-            ax_g.semilogx(
-                r.frequencies_hz,
-                20 * np.log10(r.gain),
-                "o",
-                color=f"C{j}",
-                label=f"{config} {model}",
-            )
-            ax_p.semilogx(r.frequencies_hz, r.phase_deg, "o", color=f"C{j}")
-            ax_g.semilogx(
-                r.frequencies_hz, 20 * np.log10(np.abs(r.analytic())), "-", color=f"C{j}", lw=0.7
-            )
-            ax_p.semilogx(
-                r.frequencies_hz,
-                phase_deg(r.analytic()),
-                "-",
-                color=f"C{j}",
-                lw=0.7,
-            )
-        ax_g.set_ylabel("gain [dB]")
-        ax_p.set_ylabel("phase [deg]")
-        ax_p.set_xlabel("frequency [Hz]")
-        ax_g.set_title(f"describing functions, {dof} (points: twin; lines: Eq 5.11)")
+            draw_bode(ax_g, ax_p, rs[i], f"C{j}", f"{config} {model}", motion_system(config))
+        ax_g.set_title(f"describing functions, {dof} (points: twin, 95 %; lines: Eq 5.11)",
+                       fontsize=9)  # fmt: skip
         ax_g.legend(fontsize=8)
         fig.tight_layout()
         fig.savefig(out / f"df-{dof}.png", dpi=120)

@@ -101,6 +101,41 @@ class DfResult(ResponseMixin):
         """Return the analytic model (known dynamics times the configured delay) at the lines."""
         return self.model * np.exp(-2j * np.pi * self.frequencies_hz * self.configured_delay_s)
 
+    def analytic_phase_deg(self) -> FloatArray:
+        """Phase of :meth:`analytic` at the lines [deg], unwrapped as the continuous curve is.
+
+        The known dynamics change by less than 180 deg between lines, so they are unwrapped
+        line to line; the delay's -360 f tau is added exactly (unwrapping the product line to
+        line would jump a turn wherever the delay alone turns more than 180 deg between lines).
+        """
+        f = self.frequencies_hz
+        return phase_deg(self.model) - 360.0 * f * self.configured_delay_s
+
+    @property
+    def phase_deg(self) -> FloatArray:
+        """Measured phase [deg] on the branch nearest the analytic curve's at each line.
+
+        Unwrapping the measured lines alone takes a wrong turn where they are sparse or noisy
+        (heave behind the 1 Hz filter: 3.35 Hz at -205 deg, 7.1 Hz at +10 deg); this puts each
+        within 180 deg of the model, as a reader compares them.
+        """
+        ref = self.analytic_phase_deg()
+        return ref + np.degrees(np.angle(self.response * np.exp(-1j * np.radians(ref))))
+
+    def bounds_95(self) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """95 % half-widths from the line noise: gain below and above [dB], phase [deg].
+
+        The response's noise is complex Gaussian with ``noise`` sd per line; 1.96 sd on the
+        gain, and the phase angle that much noise subtends (90 deg where it reaches the gain).
+        The lower gain bound is cut at 20 dB below the point (a line whose noise reaches its
+        gain has no lower bound).
+        """
+        g, half = self.gain, 1.96 * self.noise
+        low = 20 * np.log10(g / np.maximum(g - half, 0.1 * g))
+        high = 20 * np.log10((g + half) / g)
+        phase = np.degrees(np.arcsin(np.clip(half / g, 0.0, 1.0)))
+        return low, high, phase
+
     def to_dict(self) -> dict[str, object]:
         """JSON-ready result (``frequencies_hz``, ``gain``, ``phase_deg``, ``delay_ms``, ...)."""
         a = self.analytic()
@@ -119,7 +154,7 @@ class DfResult(ResponseMixin):
             "snr_db": self.snr_db.tolist(),
             "analytic": {
                 "gain": np.abs(a).tolist(),
-                "phase_deg": phase_deg(a).tolist(),
+                "phase_deg": self.analytic_phase_deg().tolist(),
             },
             "cross": {
                 dof: {
@@ -138,7 +173,7 @@ class DfResult(ResponseMixin):
             f"{'f [Hz]':>7} {'gain dB':>8} {'phase':>7} {'Eq 5.11 dB':>10} {'phase':>7} "
             f"{'SNR dB':>7}",
         ]
-        phase_a = phase_deg(a)
+        phase_a = self.analytic_phase_deg()
         for f, g, p, ga, pa, snr in zip(
             self.frequencies_hz,
             self.gain,
@@ -160,7 +195,7 @@ class DfResult(ResponseMixin):
         return "\n".join(lines)
 
     def plot(self, path: str | None = None, config=None, cross: bool = True):
-        """Bode plot: measured points, the analytic model and the fitted delay.
+        """Bode plot: measured points with 95 % error bars, the analytic model, the fitted delay.
 
         Parameters
         ----------
@@ -173,48 +208,63 @@ class DfResult(ResponseMixin):
 
         """
         plt = pyplot()
-        fig, (ax_g, ax_p) = plt.subplots(2, 1, figsize=(6, 5.5), sharex=True)
-        f = self.frequencies_hz
-        k = dof_index(self.dof)
+        fig, (ax_g, ax_p) = plt.subplots(2, 1, figsize=(6.5, 6), sharex=True)
+        draw_bode(ax_g, ax_p, self, "C0", f"measured {self.dof}", config)
         if config is not None:
-            fa = np.geomspace(min(f.min(), 0.05), max(f.max(), 10.0), 300)
-            ha = config.frequency_response(fa)[:, k]
-            ax_g.semilogx(fa, 20 * np.log10(np.abs(ha)), "k-", lw=0.8, label="Eq 5.11")
-            ax_p.semilogx(fa, phase_deg(ha), "k-", lw=0.8)
-            h0 = config.without_delay().frequency_response(fa)[:, k]
+            fa = _dense(self.frequencies_hz)
+            h0 = config.without_delay().frequency_response(fa)[:, dof_index(self.dof)]
             hf = h0 * np.exp(-2j * np.pi * fa * self.delay_s)
-            ax_p.semilogx(
-                fa,
-                phase_deg(hf),
-                "C1--",
-                lw=0.8,
-                label=f"fitted delay {self.delay_s * 1e3:.1f} ms",
-            )
-        good = self.snr_db >= LOW_SNR_DB
-        for sel, face, what in ((good, "C0", ""), (~good, "none", f" (SNR < {LOW_SNR_DB} dB)")):
-            if sel.any():
-                ax_g.semilogx(
-                    f[sel],
-                    20 * np.log10(self.gain[sel]),
-                    "o",
-                    mfc=face,
-                    mec="C0",
-                    label=f"measured {self.dof}{what}",
-                )
-                ax_p.semilogx(f[sel], self.phase_deg[sel], "o", mfc=face, mec="C0")
+            label = f"fitted delay {self.delay_s * 1e3:.1f} ms"
+            ax_p.semilogx(fa, phase_deg(hf), "C1--", lw=0.8, label=label)
+            ax_p.legend(fontsize=8)
         if cross and self.cross:
             worst = max(self.cross, key=lambda d: np.abs(self.cross[d]).max())
+            f = self.frequencies_hz
             ax_g.semilogx(
                 f, 20 * np.log10(np.abs(self.cross[worst]) + 1e-12), "x", label=f"cross: {worst}"
             )
-        ax_g.set_ylabel("gain [dB]")
-        ax_p.set_ylabel("phase [deg]")
-        ax_p.set_xlabel("frequency [Hz]")
         ax_g.legend(fontsize=8)
-        if config is not None:  # the fitted-delay curve
-            ax_p.legend(fontsize=8)
         ax_g.set_title(f"describing function, {self.dof}: {self.source}", fontsize=9)
         return finish(fig, path)
+
+
+def _dense(f: FloatArray) -> FloatArray:
+    return np.geomspace(min(f.min(), 0.05), max(f.max(), 10.0), 400)
+
+
+def draw_bode(ax_g, ax_p, r: DfResult, colour: str, label: str, config=None) -> None:
+    """Draw one describing function on gain and phase axes, as a paper's Bode plot.
+
+    Measured points with 95 % error bars from the line noise (hollow below ``LOW_SNR_DB``),
+    the phase on the model's branch, the analytic model as a line (smooth through
+    ``config``'s Eq 5.11 when given), log frequency, grids, units.
+    """
+    f, k = r.frequencies_hz, dof_index(r.dof)
+    if config is not None:
+        fa = _dense(f)
+        ha = config.frequency_response(fa)[:, k]
+        ax_g.semilogx(fa, 20 * np.log10(np.abs(ha)), "-", color=colour, lw=0.8, alpha=0.8)
+        ax_p.semilogx(fa, phase_deg(ha), "-", color=colour, lw=0.8, alpha=0.8)
+    else:
+        ax_g.semilogx(f, 20 * np.log10(np.abs(r.analytic())), "-", color=colour, lw=0.8)
+        ax_p.semilogx(f, r.analytic_phase_deg(), "-", color=colour, lw=0.8)
+    low, high, dphase = r.bounds_95()
+    gain_db, phase = 20 * np.log10(r.gain), r.phase_deg
+    good = r.snr_db >= LOW_SNR_DB
+    for sel, face, what in ((good, colour, ""), (~good, "none", f", SNR < {LOW_SNR_DB:g} dB")):
+        if sel.any():
+            ax_g.errorbar(f[sel], gain_db[sel], yerr=[low[sel], high[sel]], fmt="o", mfc=face,
+                          mec=colour, ecolor=colour, capsize=2, ms=5,
+                          label=f"{label} (95 %){what}")  # fmt: skip
+            ax_p.errorbar(f[sel], phase[sel], yerr=dphase[sel], fmt="o", mfc=face, mec=colour,
+                          ecolor=colour, capsize=2, ms=5)  # fmt: skip
+    ax_g.set_xscale("log")
+    ax_g.set_ylabel("gain [dB]")
+    ax_p.set_ylabel("phase [deg]")
+    ax_p.set_xlabel("frequency [Hz]")
+    for ax in (ax_g, ax_p):
+        ax.grid(True, which="major", alpha=0.5)
+        ax.grid(True, which="minor", alpha=0.2)
 
 
 def periodic_design(m: Measurement, k: int) -> tuple[FloatArray, tuple[float, float]]:

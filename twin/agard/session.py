@@ -51,7 +51,14 @@ class Session:
             from twin.platform.geometry import load_geometry
             from twin.record import Recorder
 
-            self.recorder = Recorder(load_geometry(bench.config.platform), bench.name, rrd=rrd)
+            imu = bench.imu.position_m if bench.imu is not None else None
+            self.recorder = Recorder(
+                load_geometry(bench.config.platform),
+                bench.name,
+                rrd=rrd,
+                kind="agard",
+                imu_position_m=imu,
+            )
 
     def measure(self, sig: DescribingSignal | StepSignal, name: str) -> Measurement:
         """Run one signal and return its measurement."""

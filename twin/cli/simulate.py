@@ -86,7 +86,13 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     if args.rrd is not None or args.connect is not None:
         from twin.record import Recorder
 
-        recorder = Recorder(run.platform.geometry, folder.name, rrd=args.rrd, connect=args.connect)
+        recorder = Recorder(
+            run.platform.geometry,
+            folder.name,
+            rrd=args.rrd,
+            connect=args.connect,
+            imu_position_m=run.imu_spec.position_m,
+        )
     start = time.perf_counter()
     try:
         execute(run, meta, folder, args.overwrite, recorder, common.progress(args))
