@@ -218,9 +218,13 @@ class Recorder:
         t = np.asarray(imu.t, dtype=float)
         values = np.hstack([imu.accel, np.degrees(imu.gyro)])
         if self.imu_rate_hz is not None:
-            if self._imu_held is not None:
-                t = np.concatenate([self._imu_held[0], t])
-                values = np.vstack([self._imu_held[1], values])
+            held = self._imu_held
+            if held is not None and held[0].size:
+                if t[0] - held[0][-1] > 1.5 / imu.rate_hz:  # a new run: no block spans the gap
+                    self._send_imu(held[0].mean(keepdims=True), held[1].mean(axis=0)[None])
+                else:
+                    t = np.concatenate([held[0], t])
+                    values = np.vstack([held[1], values])
             block = max(1, round(imu.rate_hz / self.imu_rate_hz))
             whole = t.size // block * block
             self._imu_held = (t[whole:], values[whole:])
@@ -228,6 +232,9 @@ class Recorder:
             values = values[:whole].reshape(-1, block, 6).mean(axis=1)
             if not t.size:
                 return
+        self._send_imu(t, values)
+
+    def _send_imu(self, t: FloatArray, values: FloatArray) -> None:
         times = rr.TimeColumn(TIMELINE, duration=t)
         for k, path in enumerate([*(f"imu/accel/{c}" for c in IMU_ACCEL),
                                   *(f"imu/gyro/{c}" for c in IMU_GYRO)]):  # fmt: skip
@@ -267,6 +274,9 @@ class Recorder:
 
     def close(self) -> None:
         """Flush and close the recording (the ``.rrd`` appears under its name only now)."""
+        held = self._imu_held
+        if held is not None and held[0].size:  # the last, partial block
+            self._send_imu(held[0].mean(keepdims=True), held[1].mean(axis=0)[None])
         self.rec.flush()
         self.rec.disconnect()
         if self._final is not None:

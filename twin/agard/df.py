@@ -117,7 +117,9 @@ class DfResult(ResponseMixin):
 
         Unwrapping the measured lines alone takes a wrong turn where they are sparse or noisy
         (heave behind the 1 Hz filter: 3.35 Hz at -205 deg, 7.1 Hz at +10 deg); this puts each
-        within 180 deg of the model, as a reader compares them.
+        within 180 deg of the model, as a reader compares them. A phase error beyond 180 deg
+        (a delay far longer than configured, at high frequency) cannot show here: the fitted
+        delay (``delay_s``) is where it shows.
         """
         ref = self.analytic_phase_deg()
         return ref + np.degrees(np.angle(self.response * np.exp(-1j * np.radians(ref))))
@@ -125,12 +127,13 @@ class DfResult(ResponseMixin):
     def bounds_95(self) -> tuple[FloatArray, FloatArray, FloatArray]:
         """95 % half-widths from the line noise: gain below and above [dB], phase [deg].
 
-        The response's noise is complex Gaussian with ``noise`` sd per line; 1.96 sd on the
-        gain, and the phase angle that much noise subtends (90 deg where it reaches the gain).
-        The lower gain bound is cut at 20 dB below the point (a line whose noise reaches its
-        gain has no lower bound).
+        ``noise`` is the complex response's total standard deviation (RMS of the neighbouring
+        bins), so its component along the response - the gain's - and across it - the gain
+        times the phase's - each have sd ``noise / sqrt(2)``: 1.96 of those on the gain, and the
+        angle they subtend on the phase (90 deg where they reach the gain). The lower gain
+        bound is cut at 20 dB below the point (a line whose noise reaches its gain has none).
         """
-        g, half = self.gain, 1.96 * self.noise
+        g, half = self.gain, 1.96 * self.noise / np.sqrt(2)
         low = 20 * np.log10(g / np.maximum(g - half, 0.1 * g))
         high = 20 * np.log10((g + half) / g)
         phase = np.degrees(np.arcsin(np.clip(half / g, 0.0, 1.0)))

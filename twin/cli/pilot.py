@@ -101,6 +101,12 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
         default="condition-1",
         help="motion configuration the run was flown with (default condition-1)",
     )
+    ide.add_argument(
+        "--continuous-loop",
+        action="store_true",
+        help="the recorded loop did not hold u over each sample (default: it did, as the "
+        "twin's and a digital simulator's do; the MLE models that zero-order hold)",
+    )
     ide.set_defaults(func=_cmd_identify)
     mc = cmds.add_parser(
         "montecarlo",
@@ -268,7 +274,7 @@ def _cmd_identify(args: argparse.Namespace) -> int:
         *(decimate(s, rate, ARX_RATE_HZ) for s in (w["u"], w["e"], felt)), rate_hz=ARX_RATE_HZ
     )
     h_pe, h_px = arx.responses(fc.omega_rad_s)
-    mle = fit_pitch_pilot(w["ft"], w["fd"], w["u"], cfg, rate)
+    mle = fit_pitch_pilot(w["ft"], w["fd"], w["u"], cfg, rate, hold=not args.continuous_loop)
     out = {
         "omega_rad_s": fc.omega_rad_s.tolist(),
         "fc": {
@@ -288,8 +294,9 @@ def _cmd_identify(args: argparse.Namespace) -> int:
         print(json.dumps(out, indent=2))
     else:
         p = mle.pilot
+        loop = "continuous" if args.continuous_loop else f"held over each {1e3 / rate:g} ms"
         print(
-            f"{args.csv}: MLE fit (Eq 6.5-6.7, closed loop through {cfg.name}), "
+            f"{args.csv}: MLE fit (Eq 6.5-6.7, closed loop through {cfg.name}, u {loop}), "
             f"VAF {mle.vaf_percent:.1f} %"
         )
         for name, sd in mle.crlb.items():

@@ -11,12 +11,13 @@ imperfect adaptation: in each repetition every adapted parameter is off by a log
 loop is unstable or costs more than ``MAX_COST_RATIO`` times the adapted one is a run where
 control was lost and is flown again. The measures per subject and condition follow the
 thesis' procedure: var(e) and var(u) are the repetitions' own (frequency domain,
-:func:`twin.pilot.adapt.predict`), averaged; the pilot model is the one identified on the
-averaged data, i.e. the repetitions' average pilot (geometric mean of each parameter), and
+:func:`twin.pilot.adapt.predict`), averaged; the pilot model identified on the averaged data is
+approximated by the repetitions' average pilot (geometric mean of each parameter), and
 its crossover frequencies and phase margins (:func:`twin.pilot.pitch.open_loops`), K_v, K_m,
 t_lead and t_lag are the measures. (Each repetition flown as its own measure, a single
 near-unstable draw dominated a subject's cell and the 1 Hz filter's effect on var(e) was lost
-in some populations.)
+in some populations.) Both the redraw and its fallback (after ``MAX_REDRAWS`` failed draws
+the adapted pilot itself) narrow the spread within a subject, which can raise the F values.
 
 The statistics are the thesis' (§6.4, Tables 6.4-6.7): a repeated-measures ANOVA per measure
 (statsmodels ``AnovaRM``, within-subject factors filter x delay x noise), F, p and the
