@@ -36,6 +36,7 @@ from twin.chain.response import PlatformResponse
 from twin.frames import DOF_NAMES, MJ_FROM_THESIS, rotation_matrix
 from twin.platform.facts import PLATFORMS
 from twin.platform.geometry import Geometry
+from twin.platform.kinematics import leg_vectors
 from twin.platform.visual import Shape, imu_site, platform_shapes
 
 FloatArray = NDArray[np.float64]
@@ -262,10 +263,7 @@ class Recorder:
             where = (self.geo.neutral_ugp + pose[:, :3]) @ MJ_FROM_THESIS.T
             self.rec.send_columns(path, indexes=[times], columns=rr.Transform3D.columns(
                 translation=where, quaternion=Rotation.from_matrix(rot).as_quat()))  # fmt: skip
-        pose = r.pose[idx]
-        T = rotation_matrix(pose[:, 3:])
-        ugp = self.geo.neutral_ugp + pose[:, :3]
-        top = ugp[:, None, :] + np.einsum("nij,kj->nki", T, self.geo.cabin_gimbals)
+        top = self.geo.base_gimbals + leg_vectors(self.geo, r.pose[idx])  # Eq A.5
         base = np.broadcast_to(self.geo.base_gimbals, top.shape)
         legs = np.stack([base, top], axis=2)  # (n, 6, 2, 3), thesis base frame
         strips = rr.LineStrips3D.columns(strips=legs.reshape(-1, 2, 3))

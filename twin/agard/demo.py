@@ -18,7 +18,6 @@ import numpy as np
 
 from twin.agard.df import DfResult, draw_bode, run_df
 from twin.agard.session import Session
-from twin.chain.config import motion_system
 from twin.measurement.measure import Bench, configure
 
 BENCHES = (("mpi", "full"), ("mpi", "reduced"), ("srs", "full"))
@@ -62,7 +61,7 @@ def run_demo(out: Path, progress: Callable[[str], None] | None = None) -> str:
     for i, dof in enumerate(DOFS):
         fig, (ax_g, ax_p) = plt.subplots(2, 1, figsize=(6.5, 6), sharex=True)
         for j, ((config, model), rs) in enumerate(results.items()):
-            draw_bode(ax_g, ax_p, rs[i], f"C{j}", f"{config} {model}", motion_system(config))
+            draw_bode(ax_g, ax_p, rs[i], f"C{j}", f"{config} {model}", configure(config))
         ax_g.set_title(f"describing functions, {dof} (points: twin, 95 %; lines: Eq 5.11)",
                        fontsize=9)  # fmt: skip
         ax_g.legend(fontsize=8)
