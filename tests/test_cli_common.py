@@ -91,15 +91,33 @@ def test_progress_prints_only_on_a_terminal_and_not_when_quiet():
     assert common.progress(argparse.Namespace(quiet=True)).quiet
 
 
+def test_counted_progress_draws_one_bar_with_an_eta_and_steps_beside_it():
+    tty, pipe = _Tty(), io.StringIO()
+    for stream in (tty, pipe):
+        p = common.Progress(stream=stream)
+        p("runs", 0, 4)
+        for k in range(1, 5):
+            p(f"run {k}")  # a step of the counted job: beside the bar, not a new line
+            p("runs", k, 4)
+        p("done")
+    text = tty.getvalue()
+    frames = text.replace("\r", "\n").splitlines()
+    assert any("runs:" in f and "4/4" in f and "<" in f for f in frames)  # elapsed<remaining
+    assert any("run 3" in f and "runs:" in f for f in frames)
+    assert text.rstrip().endswith("done") and text.count("\n  done") == 1
+    assert pipe.getvalue() == ""  # not a terminal: nothing
+
+
 def test_execute_reports_progress_at_most_ten_times(tmp_path):
     from twin.chain.simulate import prepare
     from twin.run_folder import execute, run_meta
     from twin.signals import builtin_signal
 
     run = prepare("srs", builtin_signal("rest-2", 100.0), "reduced", 0)
-    messages: list[str] = []
-    sim = execute(run, run_meta(run, "test"), tmp_path / "r", progress=messages.append)
-    assert 1 <= len(messages) <= 10 and messages[-1].startswith("simulated 2.0 / 2.0 s")
+    steps: list[tuple] = []
+    sim = execute(run, run_meta(run, "test"), tmp_path / "r",
+                  progress=lambda *a: steps.append(a))  # fmt: skip
+    assert 1 <= len(steps) <= 10 and steps[-1] == ("simulated [s]", 2.0, 2.0)
     assert sim.imu.t.size > 0
     meta = json.loads((tmp_path / "r" / "meta.json").read_text())
     assert meta["notes"] == "test" and "limits" in meta

@@ -9,13 +9,13 @@ writes a simulated run goes through here; none of it depends on the command line
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from contextlib import nullcontext
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
 
+from twin.progress import ProgressFn
 from twin.runs import RunWriter
 from twin.signals import DescribingSignal, StepSignal
 
@@ -113,7 +113,7 @@ def execute(
     folder: Path | None = None,
     overwrite: bool = False,
     recorder: Recorder | None = None,
-    progress: Callable[[str], None] | None = None,
+    progress: ProgressFn | None = None,
     offset_s: float = 0.0,
 ) -> Simulation:
     """Run all chunks, streaming them into a run folder and a recorder if given.
@@ -170,7 +170,7 @@ def execute(
             done = response.t[-1] - commands.t0
             if progress is not None and done >= reported + step:
                 reported = done
-                progress(f"simulated {done:.1f} / {commands.duration:.1f} s")
+                progress("simulated [s]", round(done, 3), round(commands.duration, 3))
         if w is not None:
             w.meta["limits"] = run.limits.to_dict()
             w.meta["run_notes"] = run.notes

@@ -20,7 +20,7 @@ Examples
 from __future__ import annotations
 
 import json
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -39,12 +39,12 @@ from twin.measurement.describing_function import (
     phase_deg,
 )
 from twin.plotting import finish, pyplot
+from twin.progress import ProgressFn
 from twin.signals import describing_signal
 from twin.thesis import TABLE_5_5
 
 FloatArray = NDArray[np.float64]
 ComplexArray = NDArray[np.complex128]
-Progress = Callable[[str], None]
 
 
 def _check_dofs(dofs: Sequence[str]) -> tuple[str, ...]:
@@ -203,7 +203,7 @@ def platform_dynamics(
     platform: str = "mpi",
     dofs: Sequence[str] = DOF_NAMES,
     signals: Sequence[int] = (1, 2),
-    progress: Progress | None = None,
+    progress: ProgressFn | None = None,
     timestep_s: float | None = None,
 ) -> PlatformDynamics:
     """Fit lag plus delay to the full model's describing functions per DOF (§5.5.1).
@@ -228,11 +228,12 @@ def platform_dynamics(
     )  # fmt: skip
     plat = FullPlatform(platform, timestep_s=timestep_s)
     responses, fits = {}, {}
-    for dof in _check_dofs(dofs):
-        if progress:
-            progress(f"{platform} full model alone: {dof}")
+    checked = _check_dofs(dofs)
+    for dof in checked:
         f, h, _ = _drive(alone, plat, dof, signals)
         responses[dof] = DofResponse(dof, f, h, None)
+        if progress:
+            progress(f"{platform} full model alone [DOFs]", len(responses), len(checked))
         fits[dof] = fit_lag_delay(f, h)
     return PlatformDynamics(platform, responses, fits)
 
@@ -341,7 +342,7 @@ def compare(
     config: MotionSystem | str,
     dofs: Sequence[str] = DOF_NAMES,
     signals: Sequence[int] = (1, 2, 3),
-    progress: Progress | None = None,
+    progress: ProgressFn | None = None,
 ) -> Comparison:
     """Drive full and reduced model of a configuration with the same multi-sines.
 
@@ -362,9 +363,8 @@ def compare(
     full = make_platform(ms.platform, "full")
     reduced = ReducedPlatform(ms.platform, rate_hz=full.rate_hz)  # same grid, sample by sample
     out, analytic = {}, {}
-    for dof in _check_dofs(dofs):
-        if progress:
-            progress(f"{ms.name}: {dof}, full and reduced")
+    checked = _check_dofs(dofs)
+    for dof in checked:
         f, h_full, w_full = _drive(ms_quiet, full, dof, signals)
         _, h_red, w_red = _drive(ms_quiet, reduced, dof, signals)
         diff = np.concatenate([a[2] - b[2] for a, b in zip(w_full, w_red, strict=True)])
@@ -372,5 +372,7 @@ def compare(
         rms = float(np.sqrt(np.mean(diff**2)) / np.sqrt(np.mean(cmd**2)))
         out[dof] = DofResponse(dof, f, h_full, h_red, rms)
         analytic[dof] = ms_quiet.frequency_response(f)[:, dof_index(dof)]
+        if progress:
+            progress(f"{ms.name}: full and reduced [DOFs]", len(out), len(checked))
     notes = [] if not ms.noise else ["the configuration's noise was off for these runs"]
     return Comparison(ms_quiet, out, analytic, notes)

@@ -10,7 +10,7 @@ output folder.
 from __future__ import annotations
 
 import json
-from collections.abc import Callable
+import threading
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
@@ -19,6 +19,7 @@ import numpy as np
 from twin.agard.df import DfResult, draw_bode, run_df
 from twin.agard.session import Session
 from twin.measurement.measure import Bench, configure
+from twin.progress import ProgressFn
 
 BENCHES = (("mpi", "full"), ("mpi", "reduced"), ("srs", "full"))
 DOFS = ("pitch", "heave")
@@ -26,19 +27,31 @@ DOFS = ("pitch", "heave")
 GOOD_SNR_DB = 20.0
 
 
-def _sweep(config: str, model: str, out: Path, progress) -> list[DfResult]:
+def _sweep(config: str, model: str, out: Path, done) -> list[DfResult]:
     bench = Bench(configure(config), model)
-    with Session(bench, rrd=str(out / f"{config}-{model}.rrd"), progress=progress) as s:
-        return [run_df(s, dof) for dof in DOFS]
+    with Session(bench, rrd=str(out / f"{config}-{model}.rrd")) as s:
+        results = []
+        for dof in DOFS:
+            results.append(run_df(s, dof))
+            done()
+        return results
 
 
-def run_demo(out: Path, progress: Callable[[str], None] | None = None) -> str:
+def run_demo(out: Path, progress: ProgressFn | None = None) -> str:
     """Run the sweep into ``out``; return the printed table."""
     import matplotlib.pyplot as plt
 
     out.mkdir(parents=True, exist_ok=True)
+    lock, count = threading.Lock(), [0]
+
+    def done() -> None:  # one DOF's sweep finished (called from the workers)
+        with lock:
+            count[0] += 1
+            if progress:
+                progress("describing-function sweeps", count[0], len(BENCHES) * len(DOFS))
+
     with ThreadPoolExecutor(2) as pool:  # MuJoCo releases the GIL: both cores
-        jobs = {(c, m): pool.submit(_sweep, c, m, out, progress) for c, m in BENCHES}
+        jobs = {(c, m): pool.submit(_sweep, c, m, out, done) for c, m in BENCHES}
         results = {key: job.result() for key, job in jobs.items()}
     lines = [
         "Table 5.2 describing-function sweep (signals 1 + 2, IMU post-processed as App. C)",

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import json
 import shutil
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from pathlib import Path
 
 import matplotlib.pyplot as plt
@@ -20,6 +20,7 @@ from twin.agard import df, noise_level, omct, snr, threshold
 from twin.agard.session import Session
 from twin.frames import dof_index
 from twin.measurement.measure import Bench
+from twin.progress import ProgressFn
 
 
 def threshold_defaults(dof: str) -> tuple[float, float]:
@@ -32,7 +33,7 @@ def write_report(
     dofs: Sequence[str],
     out: Path,
     rrd: str | None = None,
-    progress: Callable[[str], None] | None = None,
+    progress: ProgressFn | None = None,
     bounds_path: str | Path | None = None,
 ) -> dict[str, object]:
     """Run the suite and write the report folder ``out``; return the report as a dict."""
@@ -72,25 +73,37 @@ def _run(bench, dofs, tmp, rrd, progress, bounds):
         + "".join(f" Extension {e.describe()}." for e in cfg.extensions),
         "",
     ]
+    tests = 5 * len(dofs)
+
+    def tested(k: int) -> None:
+        if progress:
+            progress(f"AGARD tests on {bench.name}", k, tests)
+
     with Session(bench, tmp, rrd, progress) as s:
-        for dof in dofs:
+        tested(0)
+        for i, dof in enumerate(dofs):
             entry: dict[str, object] = {}
             d = df.run_df(s, dof)
             entry["df"] = d.to_dict()
             fig_df = _figure(d.plot(config=cfg), tmp / f"df-{dof}.png")
+            tested(5 * i + 1)
             n = noise_level.run_noise(s, dof)
             entry["noise"] = n.to_dict()
             fig_n = _figure(n.plot(), tmp / f"noise-{dof}.png")
+            tested(5 * i + 2)
             amp, step = threshold_defaults(dof)
             th = threshold.run_threshold(s, dof, amp, step)
             entry["threshold"] = th.to_dict()
             fig_t = _figure(th.plot(), tmp / f"threshold-{dof}.png")
+            tested(5 * i + 3)
             o = omct.run_omct(s, dof)
             entry["omct"] = o.to_dict(bounds)
             fig_o = _figure(omct.plot_omct([o], bounds), tmp / f"omct-{dof}.png")
+            tested(5 * i + 4)
             g = snr.run_snr(s, dof)
             entry["snr"] = g.to_dict()
             fig_s = _figure(g.plot(), tmp / f"snr-{dof}.png")
+            tested(5 * i + 5)
             report["dofs"][dof] = entry  # type: ignore[index]
             md += [
                 f"## {dof}",

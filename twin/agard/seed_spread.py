@@ -13,7 +13,7 @@ and the 5-95 % range:
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable
+from collections.abc import Iterable
 from dataclasses import dataclass
 
 import numpy as np
@@ -23,6 +23,7 @@ from twin.agard.session import Session
 from twin.agard.threshold import run_threshold
 from twin.errors import UsageError
 from twin.measurement.measure import Bench, configure
+from twin.progress import ProgressFn
 
 #: Seed of repetition ``i`` (far apart, so neighbouring repetitions share no stream).
 SEED_STRIDE = 1000
@@ -80,7 +81,7 @@ def _seeds(seeds: int) -> range:
 
 
 def table_5_6_delays(
-    seeds: int = 20, model: str = "reduced", progress: Callable[[int, int], None] | None = None
+    seeds: int = 20, model: str = "reduced", progress: ProgressFn | None = None
 ) -> list[Spread]:
     """Table 5.6's fitted delays behind the 1 Hz filter (SRS, 25 ms) over ``seeds`` seeds [ms].
 
@@ -100,7 +101,7 @@ def table_5_6_delays(
             rows.setdefault((dof, "equal weights"), []).append(r[dof].delay_equal_weights_s * 1e3)
             rows.setdefault((dof, "SNR-weighted"), []).append(r[dof].delay_s * 1e3)
         if progress:
-            progress(i + 1, seeds)
+            progress("seeds", i + 1, seeds)
     return [
         Spread(f"{dof} delay, {kind} [ms]", tuple(v),
                TABLE_5_6_MPI_IMU[dof][1.0][0] if kind == "equal weights" else None)
@@ -109,7 +110,7 @@ def table_5_6_delays(
 
 
 def threshold_taus(
-    seeds: int = 20, model: str = "reduced", progress: Callable[[int, int], None] | None = None
+    seeds: int = 20, model: str = "reduced", progress: ProgressFn | None = None
 ) -> Spread:
     """§3.4.4's dynamic threshold tau over ``seeds`` seeds [ms] (MPI 2008, surge)."""
     from twin.thesis import CHAPTER_3_4
@@ -119,7 +120,7 @@ def threshold_taus(
         with Session(Bench(configure("mpi-2008"), model, seed=SEED_STRIDE * i)) as s:
             taus.append(run_threshold(s, "surge", 0.1, 1.0, fixed_delay_s=0.1).fit.tau_s * 1e3)
         if progress:
-            progress(i + 1, seeds)
+            progress("seeds", i + 1, seeds)
     return Spread("threshold tau, 1 Hz filter [ms]", tuple(taus), CHAPTER_3_4["threshold_tau_ms"])
 
 

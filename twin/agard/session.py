@@ -9,11 +9,11 @@ measurement session.
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from pathlib import Path
 
 from twin.errors import SignalLimitError
 from twin.measurement.measure import Bench, Measurement
+from twin.progress import ProgressFn
 from twin.run_folder import execute, run_meta
 from twin.signals import DescribingSignal, StepSignal, single_sine
 
@@ -39,7 +39,7 @@ class Session:
         bench: Bench,
         out: str | Path | None = None,
         rrd: str | None = None,
-        progress: Callable[[str], None] | None = None,
+        progress: ProgressFn | None = None,
     ) -> None:
         self.bench = bench
         self.out = Path(out) if out is not None else None

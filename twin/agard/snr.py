@@ -15,7 +15,7 @@ Points beyond the system limits are not run.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from functools import cache
 
@@ -26,6 +26,7 @@ from twin.agard.noise_level import NoiseLevelPoint, analyse_noise
 from twin.agard.session import Session
 from twin.frames import acceleration_unit, dof_index
 from twin.plotting import finish, pyplot
+from twin.progress import ProgressFn
 
 FloatArray = NDArray[np.float64]
 
@@ -149,12 +150,12 @@ def run_snr(
     frequencies_hz: Sequence[float] = DEFAULT_FREQUENCIES_HZ,
     fractions: Sequence[float] = DEFAULT_FRACTIONS,
     window_s: float = 10.0,
-    progress: Callable[[str], None] | None = None,
+    progress: ProgressFn | None = None,
 ) -> SnrResult:
     """Run the grid: at each frequency, sines of ``fractions`` of the system limit."""
     platform = session.bench.config.platform
     points, skipped = [], []
-    for f in frequencies_hz:
+    for i, f in enumerate(frequencies_hz, 1):
         limit = float(system_limit(platform, dof, f))
         for frac in fractions:
             amp = frac * limit
@@ -164,5 +165,5 @@ def run_snr(
             else:
                 points.append(analyse_noise(m, dof))
         if progress:
-            progress(f"signal-to-noise {dof}: {f:g} Hz done")
+            progress(f"signal-to-noise {dof} [frequencies]", i, len(frequencies_hz))
     return SnrResult(dof, platform, points, skipped, session.bench.name)

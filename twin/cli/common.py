@@ -14,17 +14,17 @@ type and help everywhere:
                               configuration overrides (:meth:`MotionSystem.override`)
 ``--ideal-imu``               IMU without noise and bias (commands that use an IMU)
 
-Progress goes through one helper, :func:`progress`: a callable ``progress(message)`` that
-library functions take as their ``progress=`` argument; it prints on stderr only when
-stderr is a terminal and ``--quiet`` is not given.
+Progress goes through one helper, :func:`progress`: a :class:`twin.progress.Progress` that
+library functions take as their ``progress=`` argument (a tqdm bar with ETA for counted work);
+it prints on stderr only when stderr is a terminal and ``--quiet`` is not given.
 """
 
 from __future__ import annotations
 
 import argparse
-import sys
-from collections.abc import Callable
-from typing import TYPE_CHECKING, TextIO
+from typing import TYPE_CHECKING
+
+from twin.progress import Progress
 
 if TYPE_CHECKING:
     from twin.chain.config import MotionSystem
@@ -174,35 +174,7 @@ def imu_of(config: MotionSystem, args: argparse.Namespace):
     return default_imu(config.platform).ideal()
 
 
-class Progress:
-    """Progress messages on stderr: ``progress(message)``.
-
-    Parameters
-    ----------
-    quiet : bool
-        Print nothing.
-    stream : file, optional
-        Where to print (default ``sys.stderr``); nothing is printed unless it is a terminal.
-
-    """
-
-    def __init__(self, quiet: bool = False, stream: TextIO | None = None) -> None:
-        self.stream = stream
-        self.quiet = quiet
-
-    @property
-    def enabled(self) -> bool:
-        """Whether messages are printed (not quiet, and stderr is a terminal)."""
-        stream = self.stream or sys.stderr
-        return not self.quiet and bool(getattr(stream, "isatty", lambda: False)())
-
-    def __call__(self, message: str) -> None:
-        """Print one progress message."""
-        if self.enabled:
-            print(f"  {message}", file=self.stream or sys.stderr, flush=True)
-
-
-def progress(args: argparse.Namespace | bool = False) -> Callable[[str], None]:
+def progress(args: argparse.Namespace | bool = False) -> Progress:
     """Return the progress callback of a command (silent with ``--quiet``).
 
     Parameters

@@ -37,6 +37,7 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
             common.out_parent("write the first run as a twin-pilot/1 CSV here", "CSV"),
             common.rrd_parent("save e, u, theta, forcing functions and felt motion (.rrd)"),
             common.json_parent(),
+            common.quiet_parent(),
         ],
         help="fly the pitch task (§6.3) through a motion configuration",
     )
@@ -93,7 +94,9 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
     )
     ada.set_defaults(func=_cmd_adapt)
     ide = cmds.add_parser(
-        "identify", parents=[common.json_parent()], help="FC, ARX and MLE on a twin-pilot/1 CSV"
+        "identify",
+        parents=[common.json_parent(), common.quiet_parent()],
+        help="FC, ARX and MLE on a twin-pilot/1 CSV",
     )
     ide.add_argument("csv", metavar="RUN_CSV", help="t,ft,fd,e,u,theta[,theta_felt] (rad)")
     ide.add_argument(
@@ -155,7 +158,9 @@ def _cmd_run(args: argparse.Namespace) -> int:
     cfg = common.configured(args.config, args)
     pilot = PitchPilot()
     scale = pitch_remnant_scale(pilot, args.remnant, args.seed) if args.remnant else 0.0
-    r = simulate_pitch(pilot, cfg, args.runs, args.seed, scale, model=args.model)
+    r = simulate_pitch(
+        pilot, cfg, args.runs, args.seed, scale, model=args.model, progress=common.progress(args)
+    )
     fd, ft = pitch_task()
     ol = open_loops(pilot, cfg)
     out = {
@@ -274,7 +279,15 @@ def _cmd_identify(args: argparse.Namespace) -> int:
         *(decimate(s, rate, ARX_RATE_HZ) for s in (w["u"], w["e"], felt)), rate_hz=ARX_RATE_HZ
     )
     h_pe, h_px = arx.responses(fc.omega_rad_s)
-    mle = fit_pitch_pilot(w["ft"], w["fd"], w["u"], cfg, rate, hold=not args.continuous_loop)
+    mle = fit_pitch_pilot(
+        w["ft"],
+        w["fd"],
+        w["u"],
+        cfg,
+        rate,
+        hold=not args.continuous_loop,
+        progress=common.progress(args),
+    )
     out = {
         "omega_rad_s": fc.omega_rad_s.tolist(),
         "fc": {

@@ -14,7 +14,7 @@ of the run, with no model of the post-processing needed.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -28,6 +28,7 @@ from twin.chain.simulate import MODELS, default_imu, prepare
 from twin.errors import RunFormatError, SignalError
 from twin.frames import DOF_NAMES, dof_index
 from twin.measurement.measure import Measurement, from_imu, from_run
+from twin.progress import ProgressFn
 from twin.runs import read_run
 from twin.trajectory import Trajectory
 
@@ -260,7 +261,7 @@ def load_case(
     seed: int = 0,
     dofs: Sequence[str] | None = None,
     realisations: int = NOISE_REALISATIONS,
-    progress: Callable[[str], None] | None = None,
+    progress: ProgressFn | None = None,
 ) -> Case:
     """Read runs, simulate the nominal twin on their commands and its noise.
 

@@ -12,7 +12,7 @@ Examples
 from __future__ import annotations
 
 import json
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -38,6 +38,7 @@ from twin.diagnose.residuals import (
 from twin.diagnose.select import BIC_MARGIN, Finding, Selection, name_causes
 from twin.errors import SignalError, UsageError
 from twin.plotting import finish, pyplot
+from twin.progress import ProgressFn
 
 
 @dataclass(eq=False)
@@ -275,7 +276,7 @@ def diagnose(
     seed: int = 0,
     dofs: Sequence[str] | None = None,
     realisations: int = NOISE_REALISATIONS,
-    progress: Callable[[str], None] | None = None,
+    progress: ProgressFn | None = None,
     imu_noise: float | None = None,
 ) -> Diagnosis:
     """Diagnose recorded runs against the nominal twin.
@@ -317,7 +318,9 @@ def diagnose(
     if validate:
         val = load_case(validate, case.config, model, seed + 1, None, realisations, progress)
     reports = {}
-    for dof in case.dofs:
+    for i, dof in enumerate(case.dofs):
+        if progress:
+            progress("diagnosis [DOFs]", i, len(case.dofs))
         channels = case.of(dof)
         base = Model(case, dof)
         effects = tuple(e for e in DYNAMIC if e not in case.unidentifiable)
@@ -350,6 +353,8 @@ def diagnose(
             findings,
             fitted,
         )
+        if progress:
+            progress("diagnosis [DOFs]", i + 1, len(case.dofs))
     return Diagnosis(case, reports, [str(r) for r in runs], [str(v) for v in validate], max_hz)
 
 

@@ -32,7 +32,7 @@ jointly fitted parameters are reported, so trade-offs (delay vs lead vs filter) 
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from itertools import combinations
 
@@ -43,6 +43,7 @@ from twin.chain.extensions import Extension
 from twin.diagnose.candidates import DYNAMIC, Model, SetFit, fit_set, numeric_names
 from twin.diagnose.data import Case
 from twin.diagnose.evidence import Lines, lines, measured_line_sd
+from twin.progress import ProgressFn
 
 FloatArray = NDArray[np.float64]
 #: Evidence needed to name a cause [BIC units].
@@ -122,7 +123,7 @@ def select(
     model: Model,
     evidence: Sequence[Lines],
     effects: Sequence[str] = DYNAMIC,
-    progress: Callable[[str], None] | None = None,
+    progress: ProgressFn | None = None,
 ) -> Selection:
     """Forward-backward selection over all single effects and pairs (see module docstring)."""
     n = 2 * sum(x.size for x in evidence)
@@ -314,7 +315,7 @@ def name_causes(
     base: Model,
     validation: Case | None = None,
     effects: Sequence[str] = DYNAMIC,
-    progress: Callable[[str], None] | None = None,
+    progress: ProgressFn | None = None,
     max_hz: float = np.inf,
 ) -> tuple[list[Finding], Model, Selection]:
     """Select, gate on held-out data, and return the findings of one DOF with the model."""

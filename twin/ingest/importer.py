@@ -26,7 +26,7 @@ under ``import``, and every assumption is stated):
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -49,6 +49,7 @@ from twin.ingest.columns import (
     recognise,
 )
 from twin.ingest.timebase import Regular, check_stamps, decimate, regularise
+from twin.progress import ProgressFn
 from twin.runs import RunWriter
 from twin.signals import check_signal
 from twin.trajectory import Trajectory
@@ -542,7 +543,7 @@ def import_run(
     imu_position_m: Sequence[float] | None = None,
     imu_axes: str = "auto",
     overwrite: bool = False,
-    progress: Callable[[str], None] | None = None,
+    progress: ProgressFn | None = None,
 ) -> ImportReport:
     """Turn measured CSV logs into a ``twin-run/1`` folder (see module docstring).
 

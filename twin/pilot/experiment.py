@@ -11,7 +11,7 @@ a 2x2x2 factorial design.
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -22,6 +22,7 @@ from twin.pilot.forcing import pitch_task
 from twin.pilot.mle import fit_pitch_pilot
 from twin.pilot.pitch import PitchPilot, open_loops, simulate_pitch, variance_decomposition
 from twin.plotting import finish, pyplot
+from twin.progress import ProgressFn
 from twin.thesis import TABLE_6_3
 
 FACTORS = ("filter", "delay", "noise")
@@ -139,7 +140,7 @@ def run_experiment(
     seed: int = 0,
     remnant_ratio: float = 0.15,
     conditions: Sequence[int] = tuple(TABLE_6_3),
-    progress: Callable[[str], None] | None = None,
+    progress: ProgressFn | None = None,
     fit: bool = False,
 ) -> ExperimentResult:
     """Fly every condition ``runs`` times and compute the measures and factor effects.
@@ -174,7 +175,7 @@ def run_experiment(
             out[n]["estimated"] = dataclasses.asdict(est.pilot)
             out[n]["vaf_percent"] = est.vaf_percent
         if progress:
-            progress(f"condition {n} done")
+            progress("conditions", len(out), len(conditions))
     effects = {}
     for i, f in enumerate(FACTORS):
         with_f = [n for n in out if bool(_levels(n)[i])]

@@ -27,6 +27,7 @@ from twin.chain.config import MotionSystem
 from twin.errors import SignalError
 from twin.pilot.pitch import PitchPilot, aircraft, motion_response
 from twin.plotting import finish, pyplot
+from twin.progress import ProgressFn
 
 FloatArray = NDArray[np.float64]
 PARAMETERS = ("k_v", "t_lead", "t_lag", "tau_v", "k_m", "tau_m", "omega_nm", "zeta_nm")
@@ -228,6 +229,7 @@ def fit_pitch_pilot(
     rate_hz: float = 100.0,
     start: PitchPilot | None = None,
     hold: bool = True,
+    progress: ProgressFn | None = None,
 ) -> PilotFit:
     """Fit Eq 6.5-6.7 to one measurement window of u (or repetitions of it), given f_t, f_d.
 
@@ -260,6 +262,8 @@ def fit_pitch_pilot(
     hold : bool
         The loop holds u over each sample (a digital simulator's zero-order hold, a half-sample
         delay; the twin's pitch task does); False for a continuous loop.
+    progress : callable, optional
+        Called after each start of the grid (:mod:`twin.progress`).
 
     """
     ft, fd, u = (np.asarray(a, dtype=float) for a in (ft, fd, u))
@@ -285,8 +289,13 @@ def fit_pitch_pilot(
         r = (U - _closed_loop_u(make(v), w, Ft, Fd, config, hold_s)) / sd
         return np.concatenate([r.real, r.imag])
 
-    sols = [least_squares(residual, x0, bounds=(LOWER, UPPER), x_scale=np.maximum(x0, 0.05))
-            for x0 in _starts(p0)]  # fmt: skip
+    starts = _starts(p0)
+    sols = []
+    for x0 in starts:
+        sols.append(least_squares(residual, x0, bounds=(LOWER, UPPER),
+                                  x_scale=np.maximum(x0, 0.05)))  # fmt: skip
+        if progress:
+            progress("MLE starts", len(sols), len(starts))
     sols.sort(key=lambda sol: sol.cost)
     best = sols[0]
     try:

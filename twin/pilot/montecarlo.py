@@ -10,7 +10,6 @@ Runs are simulated in batches, vectorised, on two threads.
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
@@ -25,6 +24,7 @@ from twin.pilot.forcing import roll_task
 from twin.pilot.loop import remnant_scale_for, simulate_loop
 from twin.pilot.model import RollPilot
 from twin.plotting import finish, pyplot
+from twin.progress import ProgressFn
 
 FloatArray = NDArray[np.float64]
 ComplexArray = NDArray[np.complex128]
@@ -162,7 +162,7 @@ def monte_carlo(
     batch: int = 500,
     fit_runs: int = 0,
     workers: int = 2,
-    progress: Callable[[str], None] | None = None,
+    progress: ProgressFn | None = None,
 ) -> MonteCarloResult:
     """Run the Chapter 2 Monte-Carlo study.
 
@@ -202,7 +202,7 @@ def monte_carlo(
         out = _batch(p, fd, ft, sizes[b], seed + b, scale, orders, fit_runs)
         done.append(b)
         if progress:
-            progress(f"Monte-Carlo: {sum(sizes[i] for i in done)} / {runs} runs")
+            progress("Monte-Carlo runs", sum(sizes[i] for i in done), runs)
         return out
 
     with ThreadPoolExecutor(max(1, workers)) as pool:

@@ -41,6 +41,7 @@ from twin.frames import DOF_NAMES
 from twin.pilot.forcing import MEASUREMENT_S, RATE_HZ, RUN_IN_S, ForcingFunction, pitch_task
 from twin.pilot.loop import _Filter
 from twin.pilot.model import REMNANT_FILTER, neuromuscular
+from twin.progress import ProgressFn
 
 FloatArray = NDArray[np.float64]
 ComplexArray = NDArray[np.complex128]
@@ -196,6 +197,7 @@ def simulate_pitch(
     remnant_scale: float = 0.0,
     rate_hz: float = RATE_HZ,
     model: str = "reduced",
+    progress: ProgressFn | None = None,
 ) -> PitchRuns:
     """Fly the pitch task through a motion configuration (run-in 8.08 s, window 81.92 s).
 
@@ -216,6 +218,8 @@ def simulate_pitch(
     model : str
         ``"reduced"`` (Eq 5.11) or ``"full"`` (the MuJoCo platform in the loop), behind the
         configuration's whole chain (:class:`twin.chain.stream.ChainStream`, as open loop).
+    progress : callable, optional
+        Called with the flown time about every 2 % of the run (:mod:`twin.progress`).
 
     """
     cfg = motion_system(config) if isinstance(config, str) else config
@@ -259,6 +263,7 @@ def simulate_pitch(
     e_hist, felt = np.zeros((hist, runs)), np.zeros((runs, t.size))
     zeros = np.zeros(runs)
     out = {k: np.empty((runs, n_keep)) for k in ("e", "u", "theta", "n")}
+    every = max(1, t.size // 50)
     for k in range(t.size):
         theta_jet = (jet_x @ state).T + held_u[:, None] * jet_u  # (runs, 3)
         theta = theta_jet[:, 0]
@@ -280,6 +285,8 @@ def simulate_pitch(
             j = k - start
             for name, v in (("e", e), ("u", u), ("theta", theta), ("n", n)):
                 out[name][:, j] = v
+        if progress and ((k + 1) % every == 0 or k == t.size - 1):
+            progress("pilot in the loop [s]", round((k + 1) * dt, 2), round(t.size * dt, 2))
     out["theta_felt"] = felt[:, start:]
     window = slice(start, start + n_keep)
     return PitchRuns(t[window] - t[start], out["e"], out["u"], out["theta"], out["theta_felt"],

@@ -38,7 +38,6 @@ run-to-run variation hides it (with K_m = 0 the target and disturbance loops coi
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -58,6 +57,7 @@ from twin.pilot.adapt import (
     stable,
 )
 from twin.pilot.pitch import PitchPilot, open_loops
+from twin.progress import ProgressFn
 from twin.thesis import TABLE_6_3, TABLES_6_4_TO_6_7
 
 #: Factors of Table 6.3 and their levels (first, second).
@@ -325,7 +325,7 @@ class PopulationResult:
 def run_population(
     n_subjects: int = 6,
     seed: int = 0,
-    progress: Callable[[str], None] | None = None,
+    progress: ProgressFn | None = None,
     workers: int = 1,
 ) -> PopulationResult:
     """Fly the eight conditions with ``n_subjects`` adaptive subjects and run the ANOVA.
@@ -339,13 +339,13 @@ def run_population(
         from concurrent.futures import ProcessPoolExecutor
 
         with ProcessPoolExecutor(workers) as pool:
-            for s, r in zip(subs, pool.map(fly_subject, subs, [seed] * len(subs)), strict=True):
+            for k, r in enumerate(pool.map(fly_subject, subs, [seed] * len(subs)), 1):
                 rows += r
                 if progress:
-                    progress(f"subject {s.number} of {len(subs)} done")
+                    progress("subjects", k, len(subs))
     else:
-        for s in subs:
+        for k, s in enumerate(subs, 1):
             rows += fly_subject(s, seed)
             if progress:
-                progress(f"subject {s.number} of {len(subs)} done")
+                progress("subjects", k, len(subs))
     return PopulationResult(rows, anova(rows), seed)
