@@ -114,7 +114,10 @@ def test_report_writes_a_complete_folder(capsys, tmp_path):
 
 
 def test_rrd_records_every_run_of_a_test(capsys, tmp_path):
-    from twin.record import read_entities
+    """An agard recording: every run on the platform, and the describing function against
+    frequency (measured points with 95 % bounds, the configuration's Eq 5.11 as a line) with
+    its figure."""
+    from twin.record import read_archetypes, read_entities, read_timelines
 
     rrd = tmp_path / "df.rrd"
     assert main(["agard", "df", "srs", "--dof", "heave", "--model", "reduced", "--rrd",
@@ -126,3 +129,11 @@ def test_rrd_records_every_run_of_a_test(capsys, tmp_path):
     # round(819.2 / 100) = 8 samples
     assert counts["/imu/gyro/q"] == pytest.approx(819.2 * 100 / 8, rel=0.01)
     assert counts["/legs/l1"] > 0 and counts["/world/cabin"] > 0
+    kinds, timelines = read_archetypes(rrd), read_timelines(rrd)
+    assert kinds["/df/heave/figure"] == {"EncodedImage"}
+    for part in ("gain", "phase"):
+        assert kinds[f"/df/heave/{part}/measured"] == {"Scalars", "SeriesPoints"}
+        assert kinds[f"/df/heave/{part}/eq_5_11"] == {"Scalars", "SeriesLines"}
+        assert timelines[f"/df/heave/{part}/measured_hi95"] == {"frequency_mHz"}
+    assert timelines["/legs/l1"] == {"sim_time"}
+    assert counts["/df/heave/gain/measured"] > 10  # the Table 5.2 lines (+ the style row)

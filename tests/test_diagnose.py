@@ -162,6 +162,17 @@ def test_cli_json_report_config_and_validation(delay_runs, tmp_path, capsys):
         "diagnosis.rrd",
     ):
         assert (tmp_path / "rep" / name).is_file(), name
+    # the recording overlays measured, nominal and extended responses, in time and frequency
+    from twin.record import read_archetypes, read_timelines
+
+    kinds = read_archetypes(tmp_path / "rep" / "diagnosis.rrd")
+    timelines = read_timelines(tmp_path / "rep" / "diagnosis.rrd")
+    for name in ("measured", "nominal", "extended"):
+        assert kinds[f"/heave/response/{name}"] == {"Scalars", "SeriesLines"}
+    assert timelines["/heave/residual/nominal"] == {"sim_time"}
+    assert kinds["/heave/ratio/gain/measured_over_nominal"] == {"Scalars", "SeriesPoints"}
+    assert timelines["/heave/ratio/phase/extended_over_nominal"] == {"frequency_mHz"}
+    assert kinds["/heave/ratio/figure"] == kinds["/heave/residual_figure"] == {"EncodedImage"}
     # the extended configuration is a configuration the twin reads
     ext = motion_system(str(cfg))
     assert ext.of("delay")[0].value("extra_delay_s") == pytest.approx(0.03, abs=0.005)

@@ -8,7 +8,9 @@ from twin.cli.main import main
 
 
 def test_run_writes_a_csv_that_identify_reads(capsys, tmp_path):
-    from twin.record import read_entities
+    """A pilot recording holds the loop's signals [deg] and the open loops against frequency
+    with their figure; the CSV is read back by identify."""
+    from twin.record import read_archetypes, read_entities, read_timelines
 
     csv, rrd = tmp_path / "run.csv", tmp_path / "run.rrd"
     assert main(["pilot", "run", "condition-1", "--out", str(csv), "--rrd", str(rrd),
@@ -17,7 +19,12 @@ def test_run_writes_a_csv_that_identify_reads(capsys, tmp_path):
     assert run["open_loops"]["crossover_d"] > run["open_loops"]["crossover_t"]
     assert csv.read_text().splitlines()[0] == "t,ft,fd,e,u,theta,theta_felt"
     counts = read_entities(rrd)
-    assert counts["/task/e"] == 8192 and counts["/motion/theta_felt"] == 8192
+    assert counts["/tracking/e"] == counts["/motion/theta_felt"] == 8192 + 1  # + style row
+    kinds, timelines = read_archetypes(rrd), read_timelines(rrd)
+    assert kinds["/control/u"] == {"Scalars", "SeriesLines"}
+    assert kinds["/open_loop/figure"] == {"EncodedImage"}
+    assert timelines["/open_loop/gain/disturbance"] == {"frequency_mHz"}
+    assert timelines["/tracking/ft"] == {"sim_time"}
     assert main(["pilot", "identify", str(csv), "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
     assert len(out["omega_rad_s"]) == 20  # Table 6.2: 10 + 10 lines

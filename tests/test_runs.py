@@ -60,6 +60,7 @@ def test_rrd_holds_entities_and_samples(run_dir):
     assert kinds["/world/base/legs"] == {"LineStrips3D"}
     assert kinds["/rotation/pitch/actual"] == {"Scalars", "SeriesLines"}
     assert not any(p.startswith("/pose") for p in counts)  # m and deg no longer mixed
+    assert kinds["/legs/shortest"] == kinds["/legs/longest"] == {"Scalars", "SeriesLines"}
 
 
 def _copy(run_dir, tmp_path):

@@ -214,7 +214,7 @@ class DfResult(ResponseMixin):
         fig, (ax_g, ax_p) = plt.subplots(2, 1, figsize=(6.5, 6), sharex=True)
         draw_bode(ax_g, ax_p, self, "C0", f"measured {self.dof}", config)
         if config is not None:
-            fa = _dense(self.frequencies_hz)
+            fa = dense_frequencies(self.frequencies_hz)
             h0 = config.without_delay().frequency_response(fa)[:, dof_index(self.dof)]
             hf = h0 * np.exp(-2j * np.pi * fa * self.delay_s)
             label = f"fitted delay {self.delay_s * 1e3:.1f} ms"
@@ -231,7 +231,8 @@ class DfResult(ResponseMixin):
         return finish(fig, path)
 
 
-def _dense(f: FloatArray) -> FloatArray:
+def dense_frequencies(f: FloatArray) -> FloatArray:
+    """Return 400 log-spaced frequencies over the lines, at least 0.05-10 Hz (model curves)."""
     return np.geomspace(min(f.min(), 0.05), max(f.max(), 10.0), 400)
 
 
@@ -244,8 +245,8 @@ def draw_bode(ax_g, ax_p, r: DfResult, colour: str, label: str, config=None) -> 
     """
     f, k = r.frequencies_hz, dof_index(r.dof)
     if config is not None:
-        fa = _dense(f)
-        ha = config.frequency_response(fa)[:, k]
+        fa = dense_frequencies(f)
+        ha = config.transfer_function(k).frequency_response(fa)  # python-control
         ax_g.semilogx(fa, 20 * np.log10(np.abs(ha)), "-", color=colour, lw=0.8, alpha=0.8)
         ax_p.semilogx(fa, phase_deg(ha), "-", color=colour, lw=0.8, alpha=0.8)
     else:
@@ -378,7 +379,10 @@ def run_df(session: Session, dof: str, signals: Sequence[int] = (1, 2)) -> DfRes
         sig = describing_signal(number, dof, settle_s=None)
         m = session.measure(sig, f"multisine{number}-{dof}")
         results.append(analyse_df(m, dof))
-    return combine(results)
+    result = combine(results)
+    if session.recorder is not None:
+        session.recorder.log_describing_function(result, session.bench.config)
+    return result
 
 
 def sweep(

@@ -61,6 +61,12 @@ class Block(ABC):
         """Continuous response at ``f`` [Hz], shape (len(f), 6) (linear blocks only)."""
         raise SignalError(f"{self.name} is not linear; it has no frequency response")
 
+    def transfer_function(self, dof: int) -> Any:
+        """Return the DOF's response as a python-control transfer function (rational blocks)."""
+        raise SignalError(
+            f"{self.name} is not a rational linear block; it has no transfer function"
+        )
+
 
 def dof_mask(dofs: tuple[str, ...] | None) -> NDArray[np.bool_]:
     """Mask over the six DOFs for a tuple of names (all six for None or empty)."""
@@ -97,6 +103,12 @@ class Gain(Block):
         h = np.ones((np.size(f), 6), dtype=complex)
         h[:, np.array(self.mask)] = self.gain
         return h
+
+    def transfer_function(self, dof: int) -> Any:
+        """``gain`` (or 1) as a python-control transfer function."""
+        import control
+
+        return control.tf([self.gain if self.mask[dof] else 1.0], [1.0])
 
 
 @dataclass(frozen=True)
@@ -149,6 +161,13 @@ class Lead(Block):
         """1 + T s per DOF."""
         s = 2j * np.pi * np.asarray(f, dtype=float)
         return 1.0 + np.outer(s, self.time_constants)
+
+    def transfer_function(self, dof: int) -> Any:
+        """1 + T s as a python-control transfer function."""
+        import control
+
+        t = float(self.time_constants[dof])
+        return control.tf([t, 1.0], [1.0]) if t else control.tf([1.0], [1.0])
 
 
 def backlash(x: ArrayLike, play: float) -> FloatArray:

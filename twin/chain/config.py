@@ -40,6 +40,7 @@ from twin.chain.block import Backlash, Block
 from twin.chain.delay import Delay
 from twin.chain.extensions import Extension
 from twin.chain.filter import PlatformFilter
+from twin.chain.lti import LinearModel
 from twin.chain.noise import MotionNoise
 from twin.chain.resonance import Resonance
 from twin.errors import ConfigError, SignalError, UnknownPlatformError
@@ -240,6 +241,28 @@ class MotionSystem:
             mask = _sensed(ext)
             h[:, mask] = h[:, mask] * ext.response(f)[:, None]
         return h
+
+    def transfer_function(self, dof: int | str) -> LinearModel:
+        """Return one DOF's reduced model as a python-control transfer function and a delay.
+
+        The same model as :meth:`frequency_response` (the blocks' own transfer functions
+        multiplied, a ``sensor_filter`` on the DOF's IMU channel included; backlash has none).
+        """
+        import control
+
+        from twin.frames import dof_index
+
+        k = dof_index(dof) if isinstance(dof, str) else int(dof)
+        tf, delay = control.tf([1.0], [1.0]), 0.0
+        for block in self.blocks():
+            if isinstance(block, Delay):
+                delay += float(block.per_dof[k])
+            elif not isinstance(block, Backlash):
+                tf = tf * block.transfer_function(k)
+        for ext in self.of("sensor_filter"):
+            if _sensed(ext)[k]:
+                tf = tf * control.tf([1.0], [1.0 / (2 * np.pi * ext.value("cutoff_hz")), 1.0])
+        return LinearModel(tf, delay)
 
     def to_meta(self) -> dict[str, object]:
         """Return the ``platform_config`` entry of a run's ``meta.json``."""

@@ -217,3 +217,35 @@ class LtiBlock(Block):
         if sys is None:
             return control.tf([1.0], [1.0])
         return control.tf(list(sys[0]), list(sys[1]))  # type: ignore[index]
+
+
+@dataclass(frozen=True)
+class LinearModel:
+    """One DOF of a configuration's linear chain: a rational part and a pure delay.
+
+    ``rational`` is a python-control transfer function (the product of the blocks' own,
+    :meth:`twin.chain.block.Block.transfer_function`), so everything python-control does with
+    an LTI system (Bode, margins, poles, step response, ``c2d``) applies; the delay
+    e^{-s T} is kept exact beside it (python-control has none; a Pade approximation is one
+    call away: ``control.pade(delay_s, n)``).
+
+    Examples
+    --------
+    >>> from twin.chain.config import motion_system
+    >>> m = motion_system("mpi").transfer_function(4)      # pitch: 1 Hz filter, 35 ms
+    >>> m.rational.poles().real.round(3).tolist(), round(m.delay_s, 3)
+    ([-6.283, -6.283], 0.035)
+    >>> round(abs(complex(m.frequency_response([1.0])[0])), 3)   # -6 dB at the break
+    0.5
+
+    """
+
+    rational: Any
+    delay_s: float
+
+    def frequency_response(self, f: ArrayLike) -> NDArray[np.complex128]:
+        """Return the response at ``f`` [Hz] (python-control's evaluation times the delay)."""
+        s = 2j * np.pi * np.asarray(f, dtype=float)
+        return np.asarray(self.rational(s), dtype=complex).reshape(s.shape) * np.exp(
+            -s * self.delay_s
+        )

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+from pathlib import Path
 
 import numpy as np
 
@@ -61,7 +62,13 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
         "experiment's factors: no overrides)",
     )
     exp.add_argument("--runs", type=int, default=5, help="runs per condition (default 5)")
-    exp.add_argument("--plot", help="save a figure of the measures per condition (PNG)")
+    exp.add_argument(
+        "--plot",
+        metavar="PNG",
+        help="save the measures per condition as Fig 6.5-6.9 (fixed pilot); with --pilot "
+        "adaptive, the ANOVA's effects beside the thesis' here and the measures per condition "
+        "over subjects in PNG's name + '-conditions.png'",
+    )
     exp.add_argument(
         "--pilot",
         choices=("fixed", "adaptive"),
@@ -186,21 +193,9 @@ def _cmd_run(args: argparse.Namespace) -> int:
             },
         )
     if args.rrd:
-        from twin.record import record_series
+        from twin.record.pilot import record_pilot
 
-        record_series(
-            args.rrd,
-            f"pilot {cfg.name}",
-            r.t,
-            {
-                "task/e": r.e[0],
-                "task/u": r.u[0],
-                "task/theta": r.theta[0],
-                "forcing/ft": r.ft,
-                "forcing/fd": r.fd,
-                "motion/theta_felt": r.theta_felt[0],
-            },
-        )
+        record_pilot(args.rrd, r, pilot)
     if args.json:
         print(json.dumps(out, indent=2))
     else:
@@ -240,6 +235,8 @@ def _cmd_experiment(args: argparse.Namespace) -> int:
         if args.plot:
             plt = pyplot()
             plt.close(p.plot(args.plot))
+            plot = Path(args.plot)
+            plt.close(p.plot_conditions(str(plot.with_name(f"{plot.stem}-conditions.png"))))
         print(json.dumps(p.to_dict(), indent=2) if args.json else p.format_table())
         return 0
     _check_runs(args.runs)

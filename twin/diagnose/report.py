@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from twin.diagnose.diagnosis import Diagnosis, DofReport
-from twin.diagnose.residuals import segment
+from twin.diagnose.residual_figure import plot_residual
 from twin.plotting import pyplot
 
 HALVES = "the other half of the measurement window (two-fold)"
@@ -136,44 +136,15 @@ def _dof_section(dof: str, r: DofReport) -> list[str]:
 
 def _figures(d: Diagnosis, folder: Path) -> None:
     plt = pyplot()
-
     for dof, r in d.dofs.items():
         plt.close(r.plot(str(folder / f"df_{dof}.png"), d.max_hz))
-
-        fig, ax = plt.subplots(figsize=(7, 4))
-        ch = d.case.of(dof)[0]
-        seg = segment(ch, max_hz=d.max_hz)
-        k = np.ones(9) / 9
-        cases = (("measured - nominal", ch.nominal, "C0-"),
-                 ("measured - extended", r.model.predict(ch), "C1-"))  # fmt: skip
-        for label, pred, style in cases:
-            p = np.abs(seg.measured - seg.spectrum(pred)) ** 2
-            ax.loglog(seg.f, np.convolve(p, k, "same"), style, lw=1, label=label)
-        ax.loglog(seg.f, seg.noise_psd, "k--", lw=1, label="nominal noise model")
-        ax.loglog(seg.f, seg.scaled(r.noise.fit.scales).noise_psd, "k:", lw=1,
-                  label="noise model scaled to the measurement")  # fmt: skip
-        ax.set_xlabel("frequency [Hz]")
-        ax.set_ylabel("periodogram (9-bin mean)")
-        ax.set_title(f"{dof}: residual spectrum, run 1")
-        ax.legend(fontsize=8)
-        fig.tight_layout()
-        fig.savefig(folder / f"residual_{dof}.png", dpi=110)
-        plt.close(fig)
+        plt.close(plot_residual(d, dof, str(folder / f"residual_{dof}.png")))
 
 
 def _recording(d: Diagnosis, path: Path) -> None:
-    from twin.record import record_series
+    from twin.record.diagnosis import record_diagnosis
 
-    series = {}
-    t = None
-    for dof, r in d.dofs.items():
-        ch = d.case.of(dof)[0]
-        t = ch.t
-        series[f"{dof}/measured"] = ch.measured
-        series[f"{dof}/nominal"] = ch.nominal
-        series[f"{dof}/extended"] = r.model.predict(ch)
-    if t is not None:
-        record_series(path, "twin diagnose", t, series)
+    record_diagnosis(d, path)
 
 
 def write_report(d: Diagnosis, out: str | Path, figures: bool = True, rrd: bool = True) -> Path:

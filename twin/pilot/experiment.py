@@ -18,10 +18,10 @@ import numpy as np
 
 from twin.chain.config import motion_system
 from twin.errors import SignalError
+from twin.pilot.condition_figure import Panel, plot_conditions
 from twin.pilot.forcing import pitch_task
 from twin.pilot.mle import fit_pitch_pilot
 from twin.pilot.pitch import PitchPilot, open_loops, simulate_pitch, variance_decomposition
-from twin.plotting import finish, pyplot
 from twin.progress import ProgressFn
 from twin.thesis import TABLE_6_3
 
@@ -78,40 +78,35 @@ class ExperimentResult:
         matplotlib.figure.Figure
 
         """
-        plt = pyplot()
-        conds = list(self.conditions)
+        c = self.conditions
         panels = [
-            ("var_e", "var(e) [deg^2] (Fig 6.5a)"),
-            ("var_u", "var(u) [deg^2] (Fig 6.5b)"),
-            ("vaf_percent", "VAF [%] (Fig 6.6)"),
-            ("crossover_d", "crossover d [rad/s] (Fig 6.7)"),
-            ("phase_margin_d", "phase margin d [deg] (Fig 6.7)"),
-            ("crossover_t", "crossover t [rad/s] (Fig 6.7)"),
-        ]
-        params = ("k_v", "t_lead", "t_lag", "k_m", "tau_v", "tau_m", "omega_nm", "zeta_nm")
-        fig, axes = plt.subplots(2, 7, figsize=(20, 5.5))
-        for ax, (m, label) in zip(axes[0], panels, strict=False):
-            ax.bar(
-                [str(c) for c in conds], [self.conditions[c].get(m, float("nan")) for c in conds]
-            )
-            ax.set_title(label, fontsize=8)
-        for ax, name in zip([*axes[0][len(panels) :], *axes[1]], params, strict=False):
-            ax.bar(
-                [str(c) for c in conds],
-                [self.conditions[c].get("estimated", {}).get(name, float("nan")) for c in conds],
-            )
-            ax.set_title(f"{name} (Fig 6.8-6.9)", fontsize=8)
-        for ax in axes.flat:
-            ax.tick_params(labelsize=7)
-            ax.set_xlabel("condition", fontsize=7)
-        axes[0][0].set_ylabel("measure (panel titles)", fontsize=8)
-        axes[1][0].set_ylabel("estimated parameter", fontsize=8)
-        fig.suptitle(
-            "Table 6.3 conditions (x axis), pilot model fixed; estimated parameters from "
-            "each condition's first run",
-            fontsize=9,
+            Panel(f"var({x}) (Fig 6.5{'abc'[i]})", f"var({x}) [deg^2]",
+                  {n: c[n]["runs_deg2"][x] for n in c},
+                  {n: c[n]["parts_deg2"][x] for n in c})
+            for i, x in enumerate(("e", "u", "theta"))
+        ]  # fmt: skip
+        panels.append(Panel("pilot model VAF, run 1 (Fig 6.6)", "VAF [%]",
+                            {n: [c[n].get("vaf_percent", np.nan)] for n in c}))  # fmt: skip
+        for key, label, unit in (("crossover_d", "disturbance crossover", "rad/s"),
+                                 ("phase_margin_d", "disturbance phase margin", "deg"),
+                                 ("crossover_t", "target crossover", "rad/s"),
+                                 ("phase_margin_t", "target phase margin", "deg")):  # fmt: skip
+            panels.append(Panel(f"{label} (Fig 6.7)", f"{label} [{unit}]",
+                                {n: [c[n][key]] for n in c}))  # fmt: skip
+        for name, unit in (("k_v", "-"), ("k_m", "-"), ("t_lead", "s"), ("t_lag", "s"),
+                           ("tau_v", "s"), ("tau_m", "s"), ("omega_nm", "rad/s"),
+                           ("zeta_nm", "-")):  # fmt: skip
+            est = {n: [c[n].get("estimated", {}).get(name, np.nan)] for n in c}
+            panels.append(Panel(f"estimated {name}, run 1 (Fig 6.8-6.9)", f"{name} [{unit}]",
+                                est))  # fmt: skip
+        runs = len(next(iter(c.values()))["runs_deg2"]["e"])
+        return plot_conditions(
+            panels,
+            f"Table 6.3 conditions, one fixed pilot: variances mean and 95 % CI over {runs} runs "
+            "(bars: target / disturbance / remnant parts);\nopen loops of the pilot model; "
+            "parameters estimated from each condition's first run",
+            path,
         )
-        return finish(fig, path, dpi=110)
 
     def format_table(self) -> str:
         """Plain-text table of the conditions and the effects."""
@@ -163,6 +158,9 @@ def run_experiment(
             "var_e": float(np.var(r.e, axis=1).mean() * deg2),
             "var_u": float(np.var(r.u, axis=1).mean() * deg2),
             "var_theta": float(np.var(r.theta, axis=1).mean() * deg2),
+            "runs_deg2": {
+                k: (np.var(getattr(r, k), axis=1) * deg2).tolist() for k in ("e", "u", "theta")
+            },
             "parts_deg2": {k: {c: v * deg2 for c, v in d.items()} for k, d in parts.items()},
             "crossover_d": ol.crossover_d,
             "phase_margin_d": ol.phase_margin_d,

@@ -140,15 +140,22 @@ class OpenLoops:
     motion_lead_phase_deg: float
 
 
+def open_loop_responses(
+    pilot: PitchPilot, config: MotionSystem, w: ArrayLike
+) -> dict[str, ComplexArray]:
+    """Return the disturbance (``d``) and target (``t``) open loops at ``w`` [rad/s]."""
+    hc = aircraft(w)
+    hpe = pilot.h_visual(w)
+    hm = pilot.h_ptheta(w) * motion_response(config, w)
+    return {"d": hc * (hpe + hm), "t": hpe * hc / (1 + hm * hc)}
+
+
 def open_loops(pilot: PitchPilot, config: MotionSystem) -> OpenLoops:
     """Crossovers and phase margins of the disturbance and target open loops."""
     # python-control interpolates the response between the points for its crossings: 500 give
     # the margins of 4000 to 1e-7 in an eighth of the time
     w = np.geomspace(0.1, 50.0, MARGIN_POINTS)
-    hc = aircraft(w)
-    hpe = pilot.h_visual(w)
-    hm = pilot.h_ptheta(w) * motion_response(config, w)
-    loops = {"d": hc * (hpe + hm), "t": hpe * hc / (1 + hm * hc)}
+    loops = open_loop_responses(pilot, config, w)
     out = {}
     for name, h in loops.items():
         # the gain crossing with the smallest phase margin (python-control's choice): with

@@ -321,6 +321,30 @@ class PopulationResult:
                      fontsize=9)  # fmt: skip
         return finish(fig, path, dpi=110)
 
+    def plot_conditions(self, path: str | None = None):
+        """Plot the measures per condition as Fig 6.5-6.9: mean and 95 % CI over subjects."""
+        from twin.pilot.condition_figure import Panel, plot_conditions, samples_by_condition
+
+        measures = (
+            ("var_e", "var(e) (Fig 6.5a)", "deg^2"), ("var_u", "var(u) (Fig 6.5b)", "deg^2"),
+            ("crossover_disturbance_rad_s", "disturbance crossover (Fig 6.7)", "rad/s"),
+            ("phase_margin_disturbance_deg", "disturbance phase margin (Fig 6.7)", "deg"),
+            ("crossover_target_rad_s", "target crossover (Fig 6.7)", "rad/s"),
+            ("phase_margin_target_deg", "target phase margin (Fig 6.7)", "deg"),
+            ("k_v", "K_v (Fig 6.8)", "-"), ("k_m", "K_m (Fig 6.9)", "-"),
+            ("t_lead", "T_lead (Fig 6.8)", "s"), ("t_lag", "T_lag (Fig 6.8)", "s"),
+        )  # fmt: skip
+        panels = [Panel(title, f"{title.split(' (')[0]} [{unit}]",
+                        samples_by_condition(self.rows, key))
+                  for key, title, unit in measures]  # fmt: skip
+        n = len({r["subject"] for r in self.rows})
+        return plot_conditions(
+            panels,
+            f"Table 6.3 conditions flown by {n} adaptive simulated subjects (seed {self.seed}): "
+            "mean and 95 % CI over subjects, as Fig 6.5-6.9",
+            path,
+        )
+
 
 def run_population(
     n_subjects: int = 6,

@@ -1,4 +1,4 @@
-"""Rerun recordings of a run: the only module that imports rerun.
+"""Rerun recordings of platform runs (``twin simulate``, ``twin agard``).
 
 The platform in 3D as its MJCF draws it (:mod:`twin.platform.visual`): the base and the cabin
 as bodies (boxes and cylinders from their visual geoms) placed by ``Transform3D``s, the legs
@@ -17,7 +17,9 @@ Entity paths
 ``world/cabin`` (``Transform3D`` per frame) with ``world/cabin/<geom>`` and ``world/cabin/imu``
 (static, cabin frame); ``world/command`` (``Transform3D`` per frame) with its translucent
 shapes; ``translation/<dof>/command|actual`` [m], ``rotation/<dof>/command|actual`` [deg],
-``legs/l1`` ... ``legs/l6`` [m], ``imu/accel/x|y|z`` [m/s^2], ``imu/gyro/p|q|r`` [deg/s].
+``legs/l1`` ... ``legs/l6`` [m] with the stroke's ends ``legs/shortest`` and ``legs/longest``,
+``imu/accel/x|y|z`` [m/s^2], ``imu/gyro/p|q|r`` [deg/s]; an AGARD session adds each
+describing function under ``df/<dof>`` (:meth:`Recorder.log_describing_function`).
 """
 
 from __future__ import annotations
@@ -38,9 +40,10 @@ from twin.platform.facts import PLATFORMS
 from twin.platform.geometry import Geometry
 from twin.platform.kinematics import leg_vectors
 from twin.platform.visual import Shape, imu_site, platform_shapes
+from twin.record.spectra import Curve, bode_curve, log_curves, log_figure, response_views
+from twin.record.stream import TIMELINE, Recording
 
 FloatArray = NDArray[np.float64]
-TIMELINE = "sim_time"
 IMU_ACCEL, IMU_GYRO = ("x", "y", "z"), ("p", "q", "r")
 #: Per-DOF colours (surge, sway, heave, roll, pitch, yaw); the command is drawn lighter.
 DOF_COLOURS = ((31, 119, 180), (255, 127, 14), (44, 160, 44),
@@ -50,8 +53,12 @@ AXIS_COLOURS = ((220, 40, 40), (40, 180, 40), (40, 80, 220))
 GHOST_ALPHA = 0.25
 
 
-def blueprint(kind: str = "simulate") -> rrb.Blueprint:
-    """Return the layout of a platform run's recording (``simulate`` or ``agard``)."""
+def blueprint(kind: str = "simulate", df_dofs: tuple[str, ...] = ()) -> rrb.Blueprint:
+    """Return the layout of a platform run's recording (``simulate`` or ``agard``).
+
+    The platform and its series in one tab; with ``df_dofs``, one more tab per describing
+    function logged (figure, gain and phase against frequency).
+    """
     series = [
         rrb.TimeSeriesView(origin="/translation", name="translation [m]: command vs actual"),
         rrb.TimeSeriesView(origin="/rotation", name="rotation [deg]: command vs actual"),
@@ -59,14 +66,16 @@ def blueprint(kind: str = "simulate") -> rrb.Blueprint:
         rrb.TimeSeriesView(origin="/imu/accel", name="IMU specific force [m/s^2]"),
         rrb.TimeSeriesView(origin="/imu/gyro", name="IMU angular rate [deg/s]"),
     ]
-    return rrb.Blueprint(
-        rrb.Horizontal(
-            rrb.Spatial3DView(origin="/world", name=f"platform ({kind})"),
-            rrb.Vertical(*series),
-            column_shares=[1, 1],
-        ),
-        collapse_panels=True,
+    platform = rrb.Horizontal(
+        rrb.Spatial3DView(origin="/world", name=f"platform ({kind})"),
+        rrb.Vertical(*series),
+        column_shares=[1, 1],
+        name=f"platform ({kind})",
     )
+    if not df_dofs:
+        return rrb.Blueprint(platform, collapse_panels=True)
+    tabs = [response_views(f"/df/{dof}", f"describing function, {dof}") for dof in df_dofs]
+    return rrb.Blueprint(rrb.Tabs(platform, *tabs), collapse_panels=True)
 
 
 def _every(t: FloatArray, rate_hz: float, start: float, dt: float) -> NDArray[np.intp]:
@@ -140,19 +149,10 @@ class Recorder:
         self.geo = geometry
         self.series_rate_hz, self.frames_rate_hz = series_rate_hz, frames_rate_hz
         self.imu_rate_hz = imu_rate_hz
-        self.rec = rr.RecordingStream(application_id="twin", recording_id=None)
-        self.rec.send_recording_name(name)
-        self._final: Path | None = None
-        layout = blueprint(kind)
-        if rrd is not None:  # written under a temporary name, renamed by close()
-            self._final = Path(rrd)
-            self._final.parent.mkdir(parents=True, exist_ok=True)
-            self._partial = self._final.with_name(f".{self._final.name}.partial")
-            self.rec.save(str(self._partial), default_blueprint=layout)
-        elif connect is not None:
-            self.rec.connect_grpc(connect or None, default_blueprint=layout)
-        else:
-            raise ValueError("Recorder needs a file (rrd) or a viewer URL (connect)")
+        self.kind = kind
+        self.recording = Recording(name, blueprint(kind), rrd, connect)
+        self.rec = self.recording.rec
+        self.df_dofs: list[str] = []
         self._t0: float | None = None
         self._dt = 1e-3  # sample interval of the responses, from the first chunk
         self._imu_held: tuple[FloatArray, FloatArray] | None = None  # samples of a part block
@@ -192,6 +192,9 @@ class Recorder:
         for j in range(6):
             style = rr.SeriesLines(colors=[DOF_COLOURS[j]], names=[f"leg {j + 1} [m]"])
             log(f"legs/l{j + 1}", style, static=True)
+        for end in ("shortest", "longest"):
+            log(f"legs/{end}", rr.SeriesLines(colors=[[0, 0, 0]], names=[f"{end} leg [m]"],
+                                              widths=[0.75]), static=True)  # fmt: skip
         for group, channels, unit in (("accel", IMU_ACCEL, "m/s^2"), ("gyro", IMU_GYRO, "deg/s")):
             for ch, c in zip(channels, AXIS_COLOURS, strict=True):
                 log(f"imu/{group}/{ch}", rr.SeriesLines(colors=[c], names=[f"{ch} [{unit}]"]),
@@ -253,6 +256,12 @@ class Recorder:
         for j in range(6):
             self.rec.send_columns(f"legs/l{j + 1}", indexes=[times],
                                   columns=rr.Scalars.columns(scalars=r.legs[idx, j]))  # fmt: skip
+        if idx.size:  # the stroke's ends, at the chunk's first and last logged sample
+            ends = rr.TimeColumn(TIMELINE, duration=r.t[idx[[0, -1]]])
+            for end, value in (("shortest", self.geo.leg_min.max()),
+                               ("longest", self.geo.leg_max.min())):  # fmt: skip
+                column = rr.Scalars.columns(scalars=[value, value])
+                self.rec.send_columns(f"legs/{end}", indexes=[ends], columns=column)
 
     def _frames(self, r: PlatformResponse, idx: NDArray[np.intp]) -> None:
         if idx.size == 0:
@@ -270,77 +279,41 @@ class Recorder:
         self.rec.send_columns("world/base/legs", indexes=[times],
                               columns=strips.partition([6] * len(idx)))  # fmt: skip
 
+    def log_describing_function(self, result, config=None) -> None:
+        """Log a describing function (a :class:`twin.agard.df.DfResult`) under ``df/<dof>``.
+
+        The measured points with their 95 % bounds, the configuration's reduced model (Eq 5.11
+        and any extension; ``config``, the result's own analytic model otherwise) as a line,
+        and the paper figure of both (:func:`twin.agard.df.DfResult.plot`).
+        """
+        from twin.agard.df import dense_frequencies
+        from twin.frames import dof_index
+
+        dof, f = result.dof, result.frequencies_hz
+        low, high, dphase = result.bounds_95()
+        curves = [Curve("measured", f, 20 * np.log10(result.gain), result.phase_deg,
+                        DOF_COLOURS[dof_index(dof)], (low, high, dphase))]  # fmt: skip
+        if config is not None:
+            fa = dense_frequencies(f)
+            h = config.transfer_function(dof).frequency_response(fa)  # python-control
+            name = "eq_5_11" if not config.extensions else "model_with_extensions"
+            curves.append(bode_curve(name, fa, h, (60, 60, 60)))
+        else:
+            curves.append(bode_curve("eq_5_11", f, result.analytic(), (60, 60, 60)))
+        log_curves(self.rec, f"df/{dof}", curves)
+        log_figure(self.rec, f"df/{dof}/figure", lambda: result.plot(config=config))
+        if dof not in self.df_dofs:
+            self.df_dofs.append(dof)
+
     def close(self) -> None:
         """Flush and close the recording (the ``.rrd`` appears under its name only now)."""
         held = self._imu_held
         if held is not None and held[0].size:  # the last, partial block
             self._send_imu(held[0].mean(keepdims=True), held[1].mean(axis=0)[None])
-        self.rec.flush()
-        self.rec.disconnect()
-        if self._final is not None:
-            self._partial.replace(self._final)
+        if self.df_dofs:  # the layout with a tab per describing function
+            self.rec.send_blueprint(blueprint(self.kind, tuple(self.df_dofs)))
+        self.recording.close()
 
     def abort(self) -> None:
         """Close and delete a partly written ``.rrd``."""
-        self.rec.disconnect()
-        if self._final is not None:
-            self._partial.unlink(missing_ok=True)
-
-
-def read_entities(path: str | Path) -> dict[str, int]:
-    """Return {entity path: number of logged rows} of an ``.rrd`` file (for checks and tests)."""
-    from rerun.chunk import RrdReader
-
-    counts: dict[str, int] = {}
-    for chunk in RrdReader(str(path)).stream():
-        counts[chunk.entity_path] = counts.get(chunk.entity_path, 0) + chunk.num_rows
-    return counts
-
-
-def read_archetypes(path: str | Path) -> dict[str, set[str]]:
-    """Return {entity path: names of the archetypes logged there} of an ``.rrd`` file.
-
-    Names are rerun's without the package (``Transform3D``, ``Boxes3D``, ``Scalars``, ...).
-    """
-    from rerun.chunk import RrdReader
-
-    out: dict[str, set[str]] = {}
-    for chunk in RrdReader(str(path)).stream():
-        names = out.setdefault(chunk.entity_path, set())
-        for field in chunk.to_record_batch().schema:
-            archetype = (field.metadata or {}).get(b"rerun:archetype")
-            if archetype:
-                names.add(archetype.decode().rsplit(".", 1)[-1])
-    return out
-
-
-def record_series(
-    path: str | Path, name: str, t: FloatArray, series: dict[str, FloatArray]
-) -> Path:
-    """Save scalar time series (entity path -> samples at ``t``) to an ``.rrd`` file.
-
-    Written to a partial name and renamed; used for pilot-in-the-loop runs (e, u, theta, the
-    forcing functions and the felt motion), each its own time series under one timeline.
-    """
-    final = Path(path)
-    final.parent.mkdir(parents=True, exist_ok=True)
-    partial = final.with_name(f".{final.name}.partial")
-    rec = rr.RecordingStream(application_id="twin", recording_id=None)
-    rec.send_recording_name(name)
-    rec.save(str(partial), default_blueprint=rrb.Blueprint(rrb.TimeSeriesView(origin="/")))
-    times = rr.TimeColumn(TIMELINE, duration=np.asarray(t, dtype=float))
-    try:
-        for entity, values in series.items():
-            rec.send_columns(
-                entity,
-                indexes=[times],
-                columns=rr.Scalars.columns(scalars=np.asarray(values, float)),
-            )
-        rec.flush()
-    except BaseException:
-        rec.disconnect()
-        partial.unlink(missing_ok=True)
-        raise
-    rec.disconnect()
-    partial.replace(final)
-    return final
+        self.recording.abort()

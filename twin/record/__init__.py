@@ -1,0 +1,20 @@
+"""Rerun recordings: the only package that imports rerun.
+
+One module per recording kind, each with its layout (blueprint):
+
+- :mod:`twin.record.platform`: platform runs (``twin simulate --rrd``, ``twin agard``), the
+  platform in 3D from its MJCF, the pose, legs and IMU as series, describing functions;
+- :mod:`twin.record.pilot`: pilot-in-the-loop runs (``twin pilot run --rrd``);
+- :mod:`twin.record.diagnosis`: a diagnosis (``twin diagnose``: measured, nominal and extended
+  responses overlaid);
+
+and what they share: :mod:`twin.record.stream` (a recording's file written under a partial
+name and renamed when complete; series styles), :mod:`twin.record.spectra` (frequency
+responses on the ``frequency_mHz`` timeline and figures as images), :mod:`twin.record.read`
+(reading an ``.rrd`` back, for checks and tests).
+"""
+
+from twin.record.platform import Recorder, blueprint
+from twin.record.read import read_archetypes, read_entities, read_timelines
+
+__all__ = ["Recorder", "blueprint", "read_archetypes", "read_entities", "read_timelines"]

@@ -1,0 +1,75 @@
+"""The Rerun recording of a diagnosis (``twin diagnose``: ``OUT/diagnosis.rrd``).
+
+Per DOF (tab), run 1: the measured response overlaid with the nominal twin's and the
+extended model's (``<dof>/response/measured|nominal|extended`` against ``sim_time``, in the
+measurement's unit), the residuals of both models (``<dof>/residual/nominal|extended``),
+the describing-function ratios measured / nominal and measured / extended at the excited
+lines with their 95 % bounds and the extended model's own ratio to the nominal as a line
+(``<dof>/ratio/gain|phase/...`` against ``frequency_mHz``), and the report's two figures as
+images (``<dof>/ratio/figure``, ``<dof>/residual_figure``).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import rerun as rr
+import rerun.blueprint as rrb
+
+from twin.record.spectra import Curve, bode_curve, log_curves, log_figure, response_views
+from twin.record.stream import TIMELINE, Recording, send_series, series_style
+
+#: Colours of the measured, nominal and extended responses.
+COLOURS = {"measured": (30, 30, 30), "nominal": (31, 119, 180), "extended": (255, 127, 14)}
+
+
+def diagnosis_blueprint(dofs: tuple[str, ...]) -> rrb.Blueprint:
+    """Return the layout: per DOF, the overlaid responses and residuals, the ratios, figures."""
+    tabs = []
+    for dof in dofs:
+        time = rrb.Vertical(
+            rrb.TimeSeriesView(origin=f"/{dof}/response",
+                               name=f"{dof}: measured vs nominal vs extended"),
+            rrb.TimeSeriesView(origin=f"/{dof}/residual", name=f"{dof}: residuals"),
+            rrb.Spatial2DView(origin=f"/{dof}/residual_figure", name=f"{dof}: residual spectra"),
+            name=f"{dof}: time",
+        )  # fmt: skip
+        tabs += [time, response_views(f"/{dof}/ratio", f"{dof}: measured / model")]
+    return rrb.Blueprint(rrb.Tabs(*tabs), collapse_panels=True)
+
+
+def record_diagnosis(d, path: str | Path) -> Path:
+    """Save a :class:`~twin.diagnose.diagnosis.Diagnosis` to ``path`` (see module docstring)."""
+    from twin.diagnose.residual_figure import plot_residual, unit_of
+
+    dofs = tuple(d.dofs)
+    with Recording("twin diagnose", diagnosis_blueprint(dofs), rrd=path) as recording:
+        rec = recording.rec
+        for dof, r in d.dofs.items():
+            ch = d.case.of(dof)[0]
+            unit = unit_of(dof)
+            times = rr.TimeColumn(TIMELINE, duration=np.asarray(ch.t, dtype=float))
+            signals = {"measured": ch.measured, "nominal": ch.nominal,
+                       "extended": r.model.predict(ch)}  # fmt: skip
+            for name, values in signals.items():
+                entity = f"{dof}/response/{name}"
+                series_style(rec, entity, f"{name} [{unit}]", COLOURS[name],
+                             2.0 if name == "measured" else 1.25)  # fmt: skip
+                send_series(rec, entity, times, values)
+                if name != "measured":
+                    entity = f"{dof}/residual/{name}"
+                    series_style(rec, entity, f"measured - {name} [{unit}]", COLOURS[name])
+                    send_series(rec, entity, times, ch.measured - values)
+            curves = []
+            for name, lines in (("nominal", r.lines), ("extended", r.extended_lines)):
+                lo, hi = lines.ci_db()
+                curves.append(Curve(f"measured_over_{name}", lines.f, lines.db, lines.deg,
+                                    COLOURS[name], (lines.db - lo, hi - lines.db,
+                                                    lines.ci_deg())))  # fmt: skip
+            f = np.geomspace(r.lines.f.min() / 2, d.max_hz, 300)
+            curves.append(bode_curve("extended_over_nominal", f, r.model.response(f), (0, 0, 0)))
+            log_curves(rec, f"{dof}/ratio", curves)
+            log_figure(rec, f"{dof}/ratio/figure", lambda r=r: r.plot(max_hz=d.max_hz))
+            log_figure(rec, f"{dof}/residual_figure", lambda dof=dof: plot_residual(d, dof))
+    return Path(path)

@@ -1,0 +1,93 @@
+"""One Rerun recording's life: saved to an ``.rrd`` under a partial name, or streamed live.
+
+A recording saved to a file is written as ``.NAME.partial`` beside it and renamed by
+:meth:`Recording.close`; :meth:`Recording.abort` (or leaving a ``with`` block by an exception)
+deletes it, so a failed run never leaves a half-written ``.rrd`` behind.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import rerun as rr
+import rerun.blueprint as rrb
+
+#: The time axis of every run.
+TIMELINE = "sim_time"
+
+
+class Recording:
+    """A Rerun recording stream with its sink (see the module docstring).
+
+    Parameters
+    ----------
+    name : str
+        Recording name shown in the viewer.
+    layout : rerun.blueprint.Blueprint
+        Its default layout.
+    rrd : str or Path, optional
+        Save to this file (headless).
+    connect : str, optional
+        gRPC URL of a running viewer to stream to instead (``""`` for Rerun's default).
+
+    """
+
+    def __init__(
+        self,
+        name: str,
+        layout: rrb.Blueprint,
+        rrd: str | Path | None = None,
+        connect: str | None = None,
+    ) -> None:
+        self.rec = rr.RecordingStream(application_id="twin", recording_id=None)
+        self.rec.send_recording_name(name)
+        self.final: Path | None = None
+        if rrd is not None:
+            self.final = Path(rrd)
+            self.final.parent.mkdir(parents=True, exist_ok=True)
+            self._partial = self.final.with_name(f".{self.final.name}.partial")
+            self.rec.save(str(self._partial), default_blueprint=layout)
+        elif connect is not None:
+            self.rec.connect_grpc(connect or None, default_blueprint=layout)
+        else:
+            raise ValueError("a recording needs a file (rrd) or a viewer URL (connect)")
+
+    def close(self) -> None:
+        """Flush and close (the ``.rrd`` appears under its name only now)."""
+        self.rec.flush()
+        self.rec.disconnect()
+        if self.final is not None:
+            self._partial.replace(self.final)
+
+    def abort(self) -> None:
+        """Close and delete a partly written ``.rrd``."""
+        self.rec.disconnect()
+        if self.final is not None:
+            self._partial.unlink(missing_ok=True)
+
+    def __enter__(self) -> Recording:
+        """Enter the context."""
+        return self
+
+    def __exit__(self, kind: object, exc: object, tb: object) -> None:
+        """Close, or abort on an exception."""
+        if kind is None:
+            self.close()
+        else:
+            self.abort()
+
+
+def series_style(
+    rec: rr.RecordingStream, path: str, name: str, colour, width: float = 1.5, points: bool = False
+) -> None:
+    """Log the static style of one scalar series: its name (with unit), colour and width."""
+    if points:
+        style = rr.SeriesPoints(colors=[colour], names=[name], marker_sizes=[3.0])
+    else:
+        style = rr.SeriesLines(colors=[colour], names=[name], widths=[width])
+    rec.log(path, style, static=True)
+
+
+def send_series(rec: rr.RecordingStream, path: str, times: rr.TimeColumn, values) -> None:
+    """Send one scalar series as a whole column against ``times``."""
+    rec.send_columns(path, indexes=[times], columns=rr.Scalars.columns(scalars=values))
