@@ -22,9 +22,12 @@ demo: $(STAMP)
 	# a "measured" SRS (its IMU filters the gyros) diagnosed against the nominal SRS
 	for n in 1 2; do $(BIN)/twin simulate notebooks/data/srs-imu-filtered.json --quiet \
 	  --signal multisine$$n-pitch --model reduced --seed $$n --overwrite \
-	  --out out/demo/recorded-pitch-$$n || exit 1; done
+	  --out out/demo/recorded-pitch-$$n --rrd out/demo/recorded-pitch-$$n.rrd || exit 1; done
 	$(BIN)/twin diagnose out/demo/recorded-pitch-1 out/demo/recorded-pitch-2 --config srs \
 	  --out out/demo/diagnosis --save-config out/demo/srs-measured.json
+	# a pilot flying the pitch task behind the MPI's 1 Hz filter and 100 ms (Table 6.3, 8)
+	$(BIN)/twin pilot run condition-8 --quiet --rrd out/demo/pilot-condition-8.rrd \
+	  --out out/demo/pilot-condition-8.csv > /dev/null
 
 test: $(STAMP)
 	$(BIN)/python -m pytest -q

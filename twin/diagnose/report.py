@@ -152,6 +152,7 @@ def write_report(d: Diagnosis, out: str | Path, figures: bool = True, rrd: bool 
     out = Path(out)
     out.parent.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.", dir=out.parent))
+    tmp.chmod(0o755)  # mkdtemp's 0700 would stay on the renamed report folder
     try:
         (tmp / "summary.md").write_text(summary(d))
         (tmp / "diagnosis.json").write_text(json.dumps(d.to_dict(), indent=2) + "\n")
