@@ -146,3 +146,24 @@ def test_mle_refuses_a_window_that_is_not_whole_periods():
     r = simulate_pitch(PitchPilot(), "condition-1", 1, seed=0, rate_hz=120.0)
     with pytest.raises(SignalError, match="whole periods"):
         fit_pitch_pilot(r.ft, r.fd, r.u[0], motion_system("condition-1"), rate_hz=120.0)
+
+
+def test_conditions_are_grouped_as_the_thesis_figures_with_confidence_intervals():
+    """Fig 6.5-6.7 layout: four noise x delay groups, filter off left and on right in each;
+    the bar is the 95 % CI of the mean (t quantile), none for a single value."""
+    from scipy import stats
+
+    from twin.pilot.condition_figure import OFFSET, group_labels, mean_ci, position
+    from twin.thesis import TABLE_6_3
+
+    groups = {}
+    for n, (fb, delay, noise) in TABLE_6_3.items():
+        groups.setdefault((delay, noise), []).append((fb is not None, position(n)))
+    assert len(groups) == 4 and len(group_labels()) == 4
+    for members in groups.values():
+        (off, x_off), (on, x_on) = sorted(members)
+        assert not off and on and x_on - x_off == pytest.approx(2 * OFFSET)
+    x = np.array([0.2, 0.25, 0.31, 0.22, 0.27])
+    m, h = mean_ci(x)
+    assert h == pytest.approx(stats.t.ppf(0.975, 4) * x.std(ddof=1) / np.sqrt(5))
+    assert mean_ci([0.3]) == (0.3, 0.0)

@@ -100,6 +100,7 @@ def draw_panel(ax, panel: Panel) -> None:
                     label=None)  # fmt: skip
     ax.set_xticks(range(4), group_labels(), fontsize=7)
     ax.set_xlim(-0.6, 3.6)
+    ax.set_xlabel("platform noise, total delay", fontsize=7)
     ax.set_title(panel.title, fontsize=8)
     ax.set_ylabel(panel.ylabel, fontsize=8)
     ax.tick_params(labelsize=7)

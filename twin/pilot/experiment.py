@@ -79,31 +79,32 @@ class ExperimentResult:
 
         """
         c = self.conditions
-        panels = [
-            Panel(f"var({x}) (Fig 6.5{'abc'[i]})", f"var({x}) [deg^2]",
-                  {n: c[n]["runs_deg2"][x] for n in c},
-                  {n: c[n]["parts_deg2"][x] for n in c})
-            for i, x in enumerate(("e", "u", "theta"))
-        ]  # fmt: skip
-        panels.append(Panel("pilot model VAF, run 1 (Fig 6.6)", "VAF [%]",
-                            {n: [c[n].get("vaf_percent", np.nan)] for n in c}))  # fmt: skip
-        for key, label, unit in (("crossover_d", "disturbance crossover", "rad/s"),
-                                 ("phase_margin_d", "disturbance phase margin", "deg"),
-                                 ("crossover_t", "target crossover", "rad/s"),
-                                 ("phase_margin_t", "target phase margin", "deg")):  # fmt: skip
-            panels.append(Panel(f"{label} (Fig 6.7)", f"{label} [{unit}]",
-                                {n: [c[n][key]] for n in c}))  # fmt: skip
+        panels = []
+        for i, x in enumerate(("e", "u", "theta")):
+            runs = {n: c[n].get("runs_deg2", {}).get(x, [c[n].get(f"var_{x}", np.nan)])
+                    for n in c}  # fmt: skip
+            parts = {n: c[n]["parts_deg2"][x] for n in c if "parts_deg2" in c[n]}
+            panels.append(Panel(f"var({x}) (Fig 6.5{'abc'[i]})", f"var({x}) [deg^2]", runs,
+                                parts or None))  # fmt: skip
+        one = (("vaf_percent", "pilot model VAF, run 1 (Fig 6.6)", "VAF [%]"),
+               ("crossover_d", "disturbance crossover (Fig 6.7)", "[rad/s]"),
+               ("phase_margin_d", "disturbance phase margin (Fig 6.7)", "[deg]"),
+               ("crossover_t", "target crossover (Fig 6.7)", "[rad/s]"),
+               ("phase_margin_t", "target phase margin (Fig 6.7)", "[deg]"))  # fmt: skip
+        for key, title, unit in one:
+            label = unit if key == "vaf_percent" else f"{title.split(' (')[0]} {unit}"
+            panels.append(Panel(title, label, {n: [c[n].get(key, np.nan)] for n in c}))
         for name, unit in (("k_v", "-"), ("k_m", "-"), ("t_lead", "s"), ("t_lag", "s"),
                            ("tau_v", "s"), ("tau_m", "s"), ("omega_nm", "rad/s"),
                            ("zeta_nm", "-")):  # fmt: skip
             est = {n: [c[n].get("estimated", {}).get(name, np.nan)] for n in c}
             panels.append(Panel(f"estimated {name}, run 1 (Fig 6.8-6.9)", f"{name} [{unit}]",
                                 est))  # fmt: skip
-        runs = len(next(iter(c.values()))["runs_deg2"]["e"])
+        runs_n = max(len(p.samples[n]) for p in panels[:1] for n in p.samples)
         return plot_conditions(
             panels,
-            f"Table 6.3 conditions, one fixed pilot: variances mean and 95 % CI over {runs} runs "
-            "(bars: target / disturbance / remnant parts);\nopen loops of the pilot model; "
+            f"Table 6.3 conditions, one fixed pilot: variances mean and 95 % CI over {runs_n} "
+            "runs (bars: target / disturbance / remnant parts);\nopen loops of the pilot model; "
             "parameters estimated from each condition's first run",
             path,
         )
