@@ -164,6 +164,6 @@ def test_conditions_are_grouped_as_the_thesis_figures_with_confidence_intervals(
         (off, x_off), (on, x_on) = sorted(members)
         assert not off and on and x_on - x_off == pytest.approx(2 * OFFSET)
     x = np.array([0.2, 0.25, 0.31, 0.22, 0.27])
-    m, h = mean_ci(x)
+    _, h = mean_ci(x)
     assert h == pytest.approx(stats.t.ppf(0.975, 4) * x.std(ddof=1) / np.sqrt(5))
     assert mean_ci([0.3]) == (0.3, 0.0)

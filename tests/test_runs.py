@@ -146,3 +146,11 @@ def test_strict_rejection_leaves_nothing_written(tmp_path, capsys):
     assert code == 2
     assert "actuator limit" in capsys.readouterr().err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["commands.csv"]
+
+
+def test_raw_imu_records_every_sample(tmp_path):
+    """``--raw-imu``: every 819.2 Hz IMU sample in the recording, not ~100 Hz block means."""
+    out, rrd = tmp_path / "run", tmp_path / "run.rrd"
+    assert main(["simulate", "srs", "--signal", "rest-2", "--model", "reduced", "--out",
+                 str(out), "--rrd", str(rrd), "--raw-imu", "--quiet"]) == 0  # fmt: skip
+    assert read_entities(rrd)["/imu/gyro/q"] == len(read_run(out).imu_t) + 1  # + style row

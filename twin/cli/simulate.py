@@ -64,6 +64,11 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         help="stream live to a running Rerun viewer (default URL if omitted)",
     )
     p.add_argument(
+        "--raw-imu",
+        action="store_true",
+        help="record every IMU sample (819.2 Hz) instead of ~100 Hz block means for display",
+    )
+    p.add_argument(
         "--strict",
         action="store_true",
         help="reject commands beyond an actuator limit instead of limiting them",
@@ -92,6 +97,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
             rrd=args.rrd,
             connect=args.connect,
             imu_position_m=run.imu_spec.position_m,
+            imu_rate_hz=None if args.raw_imu else 100.0,
         )
     start = time.perf_counter()
     try:
