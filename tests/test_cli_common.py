@@ -121,3 +121,25 @@ def test_execute_reports_progress_at_most_ten_times(tmp_path):
     assert sim.imu.t.size > 0
     meta = json.loads((tmp_path / "r" / "meta.json").read_text())
     assert meta["notes"] == "test" and "limits" in meta
+
+
+def test_an_agard_test_counts_its_runs_including_skipped_ones():
+    """A session announces a test's runs, so progress counts them (a run refused by the
+    platform limits still counts) and ends at total/total."""
+    from twin.agard.noise_level import run_noise
+    from twin.agard.omct import run_omct
+    from twin.agard.session import Session
+    from twin.measurement.measure import Bench, configure
+
+    counted: list[tuple] = []
+
+    def progress(message, done=None, total=None):
+        if done is not None:
+            counted.append((done, total))
+
+    with Session(Bench(configure("srs"), "reduced"), progress=progress) as s:
+        r = run_omct(s, "heave", fraction=0.1, w_rad_s=(1.0, 3.0), window_s=4.0)
+        # a 100 m/s^2 sine breaks the heave limits: refused, but counted
+        n = run_noise(s, "heave", amplitudes=(0.05, 100.0), window_s=4.0)
+    assert len(r.w_rad_s) == 2 and list(n.skipped) == [100.0]
+    assert counted == [(0, 2), (1, 2), (2, 2), (0, 2), (1, 2), (2, 2)]

@@ -375,6 +375,7 @@ def combine(results: Sequence[DfResult]) -> DfResult:
 def run_df(session: Session, dof: str, signals: Sequence[int] = (1, 2)) -> DfResult:
     """Run the Table 5.2 multi-sines in ``dof`` on a session's bench and analyse them."""
     results = []
+    session.expect(len(signals), f"describing function {dof}")
     for number in signals:
         sig = describing_signal(number, dof, settle_s=None)
         m = session.measure(sig, f"multisine{number}-{dof}")

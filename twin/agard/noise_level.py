@@ -281,6 +281,7 @@ def run_noise(
     Amplitudes whose signal would break a platform limit are skipped and reported.
     """
     points, skipped = [], {}
+    session.expect(len(amplitudes), f"noise level {dof}")
     for a in sorted(amplitudes):
         m = session.measure_sine(
             dof, frequency_hz, a, window_s, f"sine-{dof}-{frequency_hz:g}Hz-{a:g}"

@@ -286,6 +286,7 @@ def run_omct(
     """Run one single sine per OMCT frequency in ``dof`` and collect the describing function."""
     cfg = session.bench.config
     ws, hs, skipped = [], [], {}
+    session.expect(len(w_rad_s), f"OMCT {dof}")
     for w in w_rad_s:
         amp = default_amplitude(dof, w, cfg.platform, fraction)
         m = session.measure_sine(dof, w / (2 * np.pi), amp, window_s, f"omct-{dof}-{w:.3g}rad_s")

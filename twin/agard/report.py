@@ -79,7 +79,11 @@ def _run(bench, dofs, tmp, rrd, progress, bounds):
         if progress:
             progress(f"AGARD tests on {bench.name}", k, tests)
 
-    with Session(bench, tmp, rrd, progress) as s:
+    def beside(message: str, done: float | None = None, total: float | None = None) -> None:
+        if progress:  # a test's own runs, shown beside the report's bar
+            progress(message if done is None else f"{message} {done:g}/{total:g}")
+
+    with Session(bench, tmp, rrd, beside) as s:
         tested(0)
         for i, dof in enumerate(dofs):
             entry: dict[str, object] = {}

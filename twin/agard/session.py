@@ -45,6 +45,7 @@ class Session:
         self.out = Path(out) if out is not None else None
         self.progress = progress
         self.count = 0
+        self._job: tuple[str, int, int] | None = None  # what, first run, runs
         self._offset = 0.0
         self.recorder = None
         if rrd is not None:
@@ -59,6 +60,22 @@ class Session:
                 kind="agard",
                 imu_position_m=imu,
             )
+
+    def expect(self, runs: int, what: str) -> None:
+        """Announce the next ``runs`` runs as one job (progress counts them, with an ETA)."""
+        self._job = (f"{what} on {self.bench.name} [runs]", self.count, runs)
+        if self.progress:
+            self.progress(self._job[0], 0, runs)
+
+    def _counted(self) -> None:
+        """Report the end of a run of the announced job."""
+        if self._job is None:
+            return
+        what, first, runs = self._job
+        if self.progress:
+            self.progress(what, min(self.count - first, runs), runs)
+        if self.count - first >= runs:
+            self._job = None
 
     def measure(self, sig: DescribingSignal | StepSignal, name: str) -> Measurement:
         """Run one signal and return its measurement."""
@@ -77,6 +94,7 @@ class Session:
             self.abort()
             raise
         self._offset += sig.commands.duration + 1.0
+        self._counted()
         return self.bench.measure(sim, {"signal": meta["signal"]})
 
     def measure_sine(
@@ -87,6 +105,7 @@ class Session:
         try:
             return self.measure(sig, name)
         except SignalLimitError as e:
+            self._counted()  # a skipped run still counts in the job
             return str(e)
 
     def close(self) -> None:

@@ -26,7 +26,6 @@ from twin.agard.noise_level import NoiseLevelPoint, analyse_noise
 from twin.agard.session import Session
 from twin.frames import acceleration_unit, dof_index
 from twin.plotting import finish, pyplot
-from twin.progress import ProgressFn
 
 FloatArray = NDArray[np.float64]
 
@@ -150,12 +149,15 @@ def run_snr(
     frequencies_hz: Sequence[float] = DEFAULT_FREQUENCIES_HZ,
     fractions: Sequence[float] = DEFAULT_FRACTIONS,
     window_s: float = 10.0,
-    progress: ProgressFn | None = None,
 ) -> SnrResult:
-    """Run the grid: at each frequency, sines of ``fractions`` of the system limit."""
+    """Run the grid: at each frequency, sines of ``fractions`` of the system limit.
+
+    The session's progress counts the grid's runs.
+    """
     platform = session.bench.config.platform
     points, skipped = [], []
-    for i, f in enumerate(frequencies_hz, 1):
+    session.expect(len(frequencies_hz) * len(fractions), f"signal-to-noise {dof}")
+    for f in frequencies_hz:
         limit = float(system_limit(platform, dof, f))
         for frac in fractions:
             amp = frac * limit
@@ -164,6 +166,4 @@ def run_snr(
                 skipped.append((float(f), float(amp), m))
             else:
                 points.append(analyse_noise(m, dof))
-        if progress:
-            progress(f"signal-to-noise {dof} [frequencies]", i, len(frequencies_hz))
     return SnrResult(dof, platform, points, skipped, session.bench.name)
