@@ -12,13 +12,14 @@ from __future__ import annotations
 from pathlib import Path
 
 from twin.errors import SignalLimitError
+from twin.lifecycle import CloseOrAbort
 from twin.measurement.measure import Bench, Measurement
 from twin.progress import ProgressFn
 from twin.run_folder import execute, run_meta
 from twin.signals import DescribingSignal, StepSignal, single_sine
 
 
-class Session:
+class Session(CloseOrAbort):
     """Runs test signals on a bench.
 
     Parameters
@@ -119,14 +120,3 @@ class Session:
         if self.recorder is not None:
             self.recorder.abort()
             self.recorder = None
-
-    def __enter__(self) -> Session:
-        """Enter the context."""
-        return self
-
-    def __exit__(self, kind: object, exc: object, tb: object) -> None:
-        """Close, or abort on an exception."""
-        if kind is None:
-            self.close()
-        else:
-            self.abort()

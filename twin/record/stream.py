@@ -12,11 +12,13 @@ from pathlib import Path
 import rerun as rr
 import rerun.blueprint as rrb
 
+from twin.lifecycle import CloseOrAbort
+
 #: The time axis of every run.
 TIMELINE = "sim_time"
 
 
-class Recording:
+class Recording(CloseOrAbort):
     """A Rerun recording stream with its sink (see the module docstring).
 
     Parameters
@@ -64,17 +66,6 @@ class Recording:
         self.rec.disconnect()
         if self.final is not None:
             self._partial.unlink(missing_ok=True)
-
-    def __enter__(self) -> Recording:
-        """Enter the context."""
-        return self
-
-    def __exit__(self, kind: object, exc: object, tb: object) -> None:
-        """Close, or abort on an exception."""
-        if kind is None:
-            self.close()
-        else:
-            self.abort()
 
 
 def series_style(
