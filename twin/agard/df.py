@@ -212,7 +212,8 @@ class DfResult(ResponseMixin):
         """
         plt = pyplot()
         fig, (ax_g, ax_p) = plt.subplots(2, 1, figsize=(6.5, 6), sharex=True)
-        draw_bode(ax_g, ax_p, self, "C0", f"measured {self.dof}", config)
+        model = "Eq 5.11 of the configuration" if config is not None else "Eq 5.11"
+        draw_bode(ax_g, ax_p, self, "C0", f"measured {self.dof}", config, model)
         if config is not None:
             fa = dense_frequencies(self.frequencies_hz)
             h0 = config.without_delay().frequency_response(fa)[:, dof_index(self.dof)]
@@ -236,21 +237,26 @@ def dense_frequencies(f: FloatArray) -> FloatArray:
     return np.geomspace(min(f.min(), 0.05), max(f.max(), 10.0), 400)
 
 
-def draw_bode(ax_g, ax_p, r: DfResult, colour: str, label: str, config=None) -> None:
+def draw_bode(
+    ax_g, ax_p, r: DfResult, colour: str, label: str, config=None, model_label: str | None = None
+) -> None:
     """Draw one describing function on gain and phase axes, as a paper's Bode plot.
 
     Measured points with 95 % error bars from the line noise (hollow below ``LOW_SNR_DB``),
     the phase on the model's branch, the analytic model as a line (smooth through
-    ``config``'s Eq 5.11 when given), log frequency, grids, units.
+    ``config``'s Eq 5.11 when given, through its python-control transfer function; in the
+    legend as ``model_label``), log frequency, grids, units.
     """
     f, k = r.frequencies_hz, dof_index(r.dof)
     if config is not None:
         fa = dense_frequencies(f)
         ha = config.transfer_function(k).frequency_response(fa)  # python-control
-        ax_g.semilogx(fa, 20 * np.log10(np.abs(ha)), "-", color=colour, lw=0.8, alpha=0.8)
+        ax_g.semilogx(fa, 20 * np.log10(np.abs(ha)), "-", color=colour, lw=0.8, alpha=0.8,
+                      label=model_label)  # fmt: skip
         ax_p.semilogx(fa, phase_deg(ha), "-", color=colour, lw=0.8, alpha=0.8)
     else:
-        ax_g.semilogx(f, 20 * np.log10(np.abs(r.analytic())), "-", color=colour, lw=0.8)
+        ax_g.semilogx(f, 20 * np.log10(np.abs(r.analytic())), "-", color=colour, lw=0.8,
+                      label=model_label)  # fmt: skip
         ax_p.semilogx(f, r.analytic_phase_deg(), "-", color=colour, lw=0.8)
     low, high, dphase = r.bounds_95()
     gain_db, phase = 20 * np.log10(r.gain), r.phase_deg
