@@ -25,7 +25,7 @@ demo: $(STAMP)
 	  --out out/demo/recorded-pitch-$$n --rrd out/demo/recorded-pitch-$$n.rrd || exit 1; done
 	$(BIN)/twin diagnose out/demo/recorded-pitch-1 out/demo/recorded-pitch-2 --config srs \
 	  --out out/demo/diagnosis --save-config out/demo/srs-measured.json
-	# a pilot flying the pitch task behind the MPI's 1 Hz filter and 100 ms (Table 6.3, 8)
+	# a pilot flying the pitch task behind the MPI's 1 Hz filter, 35 ms and noise (Table 6.3, 8)
 	$(BIN)/twin pilot run condition-8 --quiet --rrd out/demo/pilot-condition-8.rrd \
 	  --out out/demo/pilot-condition-8.csv > /dev/null
 

@@ -106,6 +106,15 @@ def test_counted_progress_draws_one_bar_with_an_eta_and_steps_beside_it():
     assert any("run 3" in f and "runs:" in f for f in frames)
     assert text.rstrip().endswith("done") and text.count("\n  done") == 1
     assert pipe.getvalue() == ""  # not a terminal: nothing
+    # late reports from worker threads, also after the bar finished, draw no second bar
+    late = _Tty()
+    p = common.Progress(stream=late)
+    for done in (1, 2, 2, 1):
+        p("batches", done, 2)
+    frames = late.getvalue().replace("\r", "\n").splitlines()
+    assert sum("batches:" in f and "2/2" in f for f in frames) >= 1
+    assert not any("batches:" in f and "1/2" in f for f in frames[-2:])
+    assert late.getvalue().count("\n") == 1  # one finished bar, one line
 
 
 def test_execute_reports_progress_at_most_ten_times(tmp_path):

@@ -8,6 +8,7 @@ test_diagnose_hidden.py (one file per xdist worker: the two halves run side by s
 from __future__ import annotations
 
 import json
+import os
 
 import pytest
 
@@ -162,6 +163,9 @@ def test_cli_json_report_config_and_validation(delay_runs, tmp_path, capsys):
         "diagnosis.rrd",
     ):
         assert (tmp_path / "rep" / name).is_file(), name
+    umask = os.umask(0)
+    os.umask(umask)
+    assert (tmp_path / "rep").stat().st_mode & 0o777 == 0o777 & ~umask  # as mkdir would
     # the recording overlays measured, nominal and extended responses, in time and frequency
     from twin.record import read_archetypes, read_timelines
 
@@ -170,7 +174,9 @@ def test_cli_json_report_config_and_validation(delay_runs, tmp_path, capsys):
     for name in ("measured", "nominal", "extended"):
         assert kinds[f"/heave/response/{name}"] == {"Scalars", "SeriesLines"}
     assert timelines["/heave/residual/nominal"] == {"sim_time"}
-    assert kinds["/heave/ratio/gain/measured_over_nominal"] == {"Scalars", "SeriesPoints"}
+    for run in (1, 2):  # one curve per run (runs may share lines)
+        assert kinds[f"/heave/ratio/gain/measured_over_nominal_run{run}"] == {
+            "Scalars", "SeriesPoints"}  # fmt: skip
     assert timelines["/heave/ratio/phase/extended_over_nominal"] == {"frequency_mHz"}
     assert kinds["/heave/ratio/figure"] == kinds["/heave/residual_figure"] == {"EncodedImage"}
     # the extended configuration is a configuration the twin reads

@@ -26,6 +26,7 @@ False
 
 from __future__ import annotations
 
+import shutil
 import sys
 import threading
 from typing import Protocol, TextIO
@@ -61,6 +62,7 @@ class Progress:
         self.quiet = quiet
         self._bar = None  # the open tqdm bar, if any
         self._what: str | None = None
+        self._finished: tuple[str, float] | None = None  # the last job whose bar was completed
         self._lock = threading.Lock()  # jobs may report from worker threads
 
     @property
@@ -89,15 +91,18 @@ class Progress:
         bar = self._bar
         if bar is not None and self._what == message and bar.total == total and done < bar.n:
             return  # a late report from another worker thread
+        if bar is None and self._finished == (message, total):
+            return  # a late report after the job's bar was finished
         if bar is None or self._what != message or bar.total != total:
             self.close()
-            bar = self._bar = tqdm(
-                total=total, file=stream, bar_format=BAR_FORMAT, leave=True, dynamic_ncols=True
-            )
-            bar.set_description_str(message, refresh=False)
+            width = shutil.get_terminal_size().columns  # a terminal may report 0: 80 then
+            bar = self._bar = tqdm(total=total, desc=message, file=stream, bar_format=BAR_FORMAT,
+                                   leave=True, ncols=width if width > 0 else 80)  # fmt: skip
             self._what = message
+            self._finished = None
         bar.update(done - bar.n)
         if done >= total:
+            self._finished = (message, total)
             self.close()
 
     def close(self) -> None:

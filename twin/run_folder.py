@@ -168,9 +168,11 @@ def execute(
             if recorder is not None:
                 recorder.log(response, imu, offset_s)
             done = response.t[-1] - commands.t0
-            if progress is not None and done >= reported + step:
+            if progress is not None and reported + step <= done < commands.duration - 1e-6:
                 reported = done
                 progress("simulated [s]", round(done, 3), round(commands.duration, 3))
+        if progress is not None:  # the last samples may end a step short of the duration
+            progress("simulated [s]", round(commands.duration, 3), round(commands.duration, 3))
         if w is not None:
             w.meta["limits"] = run.limits.to_dict()
             w.meta["run_notes"] = run.notes

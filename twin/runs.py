@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import json
 import shutil
-import tempfile
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -31,6 +30,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from twin.errors import RunFormatError, SignalError
+from twin.lifecycle import staging_dir
 from twin.platform.facts import PLATFORMS
 from twin.trajectory import Trajectory, uniform_rate
 
@@ -223,9 +223,7 @@ class RunWriter:
             raise RunFormatError(f"{self.folder}: already exists (choose another --out)")
         self.meta = dict(meta, format=FORMAT)
         _check_meta(self.meta, self.folder)
-        self.folder.parent.mkdir(parents=True, exist_ok=True)
-        self.tmp = Path(tempfile.mkdtemp(prefix=f".{self.folder.name}.", dir=self.folder.parent))
-        self.tmp.chmod(0o755)
+        self.tmp = staging_dir(self.folder)
         self._files = {}
         for name in files:
             fh = (self.tmp / name).open("w")

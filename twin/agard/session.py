@@ -31,7 +31,8 @@ class Session(CloseOrAbort):
     rrd : str, optional
         Rerun recording of every run, one after the other.
     progress : callable, optional
-        Called with a message before each run.
+        Called with a message before each run, and with the count of a test's runs when the
+        test announced them (:meth:`expect`).
 
     """
 

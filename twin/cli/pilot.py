@@ -164,10 +164,12 @@ def _cmd_run(args: argparse.Namespace) -> int:
         raise SignalError(f"--remnant must be in [0, 1); got {args.remnant}")
     cfg = common.configured(args.config, args)
     pilot = PitchPilot()
+    progress = common.progress(args)
+    if args.remnant:
+        progress(f"scaling the remnant to {args.remnant:g} of the control power")
     scale = pitch_remnant_scale(pilot, args.remnant, args.seed) if args.remnant else 0.0
-    r = simulate_pitch(
-        pilot, cfg, args.runs, args.seed, scale, model=args.model, progress=common.progress(args)
-    )
+    r = simulate_pitch(pilot, cfg, args.runs, args.seed, scale, model=args.model,
+                       progress=progress)  # fmt: skip
     fd, ft = pitch_task()
     ol = open_loops(pilot, cfg)
     out = {
@@ -195,6 +197,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
     if args.rrd:
         from twin.record.pilot import record_pilot
 
+        progress(f"recording {args.rrd}")
         record_pilot(args.rrd, r, pilot)
     if args.json:
         print(json.dumps(out, indent=2))

@@ -7,13 +7,13 @@ from __future__ import annotations
 
 import json
 import shutil
-import tempfile
 from pathlib import Path
 
 import numpy as np
 
 from twin.diagnose.diagnosis import Diagnosis, DofReport
 from twin.diagnose.residual_figure import plot_residual
+from twin.lifecycle import staging_dir
 from twin.plotting import pyplot
 
 HALVES = "the other half of the measurement window (two-fold)"
@@ -151,8 +151,7 @@ def write_report(d: Diagnosis, out: str | Path, figures: bool = True, rrd: bool 
     """Write ``summary.md``, ``diagnosis.json``, figures and ``diagnosis.rrd`` to ``out``."""
     out = Path(out)
     out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.", dir=out.parent))
-    tmp.chmod(0o755)  # mkdtemp's 0700 would stay on the renamed report folder
+    tmp = staging_dir(out)
     try:
         (tmp / "summary.md").write_text(summary(d))
         (tmp / "diagnosis.json").write_text(json.dumps(d.to_dict(), indent=2) + "\n")

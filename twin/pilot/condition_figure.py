@@ -24,6 +24,8 @@ FloatArray = NDArray[np.float64]
 PART_COLOURS = {"target": "0.8", "disturbance": "0.35", "remnant": "white"}
 #: Half the distance between filter off and on in a group.
 OFFSET = 0.18
+#: A panel's y axis spans at least this fraction of its values' size.
+MIN_RELATIVE_SPAN = 0.1
 
 
 @dataclass(frozen=True)
@@ -98,6 +100,10 @@ def draw_panel(ax, panel: Panel) -> None:
         ax.errorbar(x, m, yerr=h if h > 0 else None, fmt="o", color="k",
                     mfc="k" if filt else "white", capsize=3, ms=5, zorder=3,
                     label=None)  # fmt: skip
+    lo, hi = ax.get_ylim()  # a measure that barely changes is not stretched into an effect
+    mid, span = 0.5 * (lo + hi), MIN_RELATIVE_SPAN * max(abs(0.5 * (lo + hi)), 1e-12)
+    if hi - lo < span:
+        ax.set_ylim(mid - span / 2, mid + span / 2)
     ax.set_xticks(range(4), group_labels(), fontsize=7)
     ax.set_xlim(-0.6, 3.6)
     ax.set_xlabel("platform noise, total delay", fontsize=7)

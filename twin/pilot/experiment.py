@@ -100,11 +100,12 @@ class ExperimentResult:
             est = {n: [c[n].get("estimated", {}).get(name, np.nan)] for n in c}
             panels.append(Panel(f"estimated {name}, run 1 (Fig 6.8-6.9)", f"{name} [{unit}]",
                                 est))  # fmt: skip
-        runs_n = max(len(p.samples[n]) for p in panels[:1] for n in p.samples)
+        runs_n = max((len(v) for v in panels[0].samples.values()), default=0)
+        over = f"mean and 95 % CI over {runs_n} runs" if runs_n > 1 else "one run"
         return plot_conditions(
             panels,
-            f"Table 6.3 conditions, one fixed pilot: variances mean and 95 % CI over {runs_n} "
-            "runs (bars: target / disturbance / remnant parts);\nopen loops of the pilot model; "
+            f"Table 6.3 conditions, one fixed pilot: variances, {over} "
+            "(bars: target / disturbance / remnant parts);\nopen loops of the pilot model; "
             "parameters estimated from each condition's first run",
             path,
         )
@@ -149,6 +150,8 @@ def run_experiment(
     scale = pitch_remnant_scale(p, remnant_ratio, seed)
     deg2 = (180 / np.pi) ** 2
     out: dict[int, dict[str, object]] = {}
+    if progress:
+        progress("conditions", 0, len(conditions))
     for n in conditions:
         cfg = motion_system(f"condition-{n}")
         r = simulate_pitch(p, cfg, runs, seed + n, scale)

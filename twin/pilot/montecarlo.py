@@ -10,6 +10,7 @@ Runs are simulated in batches, vectorised, on two threads.
 
 from __future__ import annotations
 
+import threading
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
@@ -196,13 +197,16 @@ def monte_carlo(
         *(decimate(s[0], first.rate_hz) for s in (first.u, first.e, first.x))
     ).orders
     sizes = [min(batch, runs - b0) for b0 in range(0, runs, batch)]
-    done = []
+    done, lock = [0], threading.Lock()
+    if progress:
+        progress("Monte-Carlo runs", 0, runs)
 
     def job(b: int):
         out = _batch(p, fd, ft, sizes[b], seed + b, scale, orders, fit_runs)
-        done.append(b)
-        if progress:
-            progress("Monte-Carlo runs", sum(sizes[i] for i in done), runs)
+        with lock:  # runs finished, counted and reported in order
+            done[0] += sizes[b]
+            if progress:
+                progress("Monte-Carlo runs", done[0], runs)
         return out
 
     with ThreadPoolExecutor(max(1, workers)) as pool:

@@ -359,6 +359,8 @@ def run_population(
     """
     subs = subjects(n_subjects, seed)
     rows: list[dict[str, float]] = []
+    if progress:
+        progress("subjects", 0, len(subs))
     if workers > 1:
         from concurrent.futures import ProcessPoolExecutor
 

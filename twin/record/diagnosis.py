@@ -2,11 +2,12 @@
 
 Per DOF (tab), run 1: the measured response overlaid with the nominal twin's and the
 extended model's (``<dof>/response/measured|nominal|extended`` against ``sim_time``, in the
-measurement's unit), the residuals of both models (``<dof>/residual/nominal|extended``),
-the describing-function ratios measured / nominal and measured / extended at the excited
-lines with their 95 % bounds and the extended model's own ratio to the nominal as a line
-(``<dof>/ratio/gain|phase/...`` against ``frequency_mHz``), and the report's two figures as
-images (``<dof>/ratio/figure``, ``<dof>/residual_figure``).
+measurement's unit), the residuals of both models (``<dof>/residual/nominal|extended``).
+Every run: the describing-function ratios measured / nominal and measured / extended at the
+excited lines with their 95 % bounds (``<dof>/ratio/gain|phase/measured_over_nominal`` ...,
+suffixed ``_run<k>`` when there are several runs), and the extended model's own ratio to the
+nominal as a line, against ``frequency_mHz``; the report's two figures as images
+(``<dof>/ratio/figure``, ``<dof>/residual_figure``).
 """
 
 from __future__ import annotations
@@ -42,6 +43,7 @@ def diagnosis_blueprint(dofs: tuple[str, ...]) -> rrb.Blueprint:
 def record_diagnosis(d, path: str | Path) -> Path:
     """Save a :class:`~twin.diagnose.diagnosis.Diagnosis` to ``path`` (see module docstring)."""
     from twin.diagnose.residual_figure import plot_residual, unit_of
+    from twin.diagnose.residuals import line_ratios
 
     dofs = tuple(d.dofs)
     with Recording("twin diagnose", diagnosis_blueprint(dofs), rrd=path) as recording:
@@ -62,11 +64,16 @@ def record_diagnosis(d, path: str | Path) -> Path:
                     series_style(rec, entity, f"measured - {name} [{unit}]", COLOURS[name])
                     send_series(rec, entity, times, ch.measured - values)
             curves = []
-            for name, lines in (("nominal", r.lines), ("extended", r.extended_lines)):
-                lo, hi = lines.ci_db()
-                curves.append(Curve(f"measured_over_{name}", lines.f, lines.db, lines.deg,
-                                    COLOURS[name], (lines.db - lo, hi - lines.db,
-                                                    lines.ci_deg())))  # fmt: skip
+            channels = d.case.of(dof)
+            predictions = [r.model.predict(c) for c in channels]
+            for i, ch_i in enumerate(channels):  # one curve per run: runs may share lines
+                run = f"_run{i + 1}" if len(channels) > 1 else ""
+                for name, pred in (("nominal", None), ("extended", [predictions[i]])):
+                    lines = line_ratios([ch_i], pred)
+                    lo, hi = lines.ci_db()
+                    bounds = (lines.db - lo, hi - lines.db, lines.ci_deg())
+                    curves.append(Curve(f"measured_over_{name}{run}", lines.f, lines.db,
+                                        lines.deg, COLOURS[name], bounds))  # fmt: skip
             f = np.geomspace(r.lines.f.min() / 2, d.max_hz, 300)
             curves.append(bode_curve("extended_over_nominal", f, r.model.response(f), (0, 0, 0)))
             log_curves(rec, f"{dof}/ratio", curves)

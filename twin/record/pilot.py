@@ -2,10 +2,11 @@
 
 Entity paths (angles in deg, against ``sim_time`` from the measurement window's start):
 ``tracking/ft|theta|e`` (target, pitch attitude, error), ``control/u|fd`` (stick and the
-disturbance added to it), ``motion/theta|theta_felt`` (the aircraft's attitude and what the
-pilot feels through the motion system), ``remnant/n``; the two open loops against
-``frequency_mHz`` under ``open_loop/gain|phase/disturbance|target`` with their figure at
-``open_loop/figure`` (crossovers and phase margins marked).
+disturbance added to it), ``motion/theta|theta_felt`` (the aircraft's attitude again, beside
+what the pilot feels through the motion system), ``remnant/n``; the two open loops (in Hz on
+``frequency_mHz``; their figure in rad/s, as pilot models are plotted) under
+``open_loop/gain|phase/disturbance|target``, the figure at ``open_loop/figure`` (crossovers
+and phase margins marked).
 """
 
 from __future__ import annotations
@@ -88,6 +89,8 @@ def _open_loop_figure(pilot, cfg, w, loops):
         ax_p.plot([wc], [pm - 180.0], "o", color=ax_g.lines[-1].get_color())
     ax_g.axhline(0.0, color="k", lw=0.6)
     ax_p.axhline(-180.0, color="k", lw=0.6)
+    # the delays' phase runs away at high frequency: keep the crossover region readable
+    ax_p.set_ylim(max(ax_p.get_ylim()[0], -540.0), ax_p.get_ylim()[1])
     ax_g.set_ylabel("gain [dB]")
     ax_p.set_ylabel("phase [deg]")
     ax_p.set_xlabel("frequency [rad/s]")

@@ -44,8 +44,10 @@ class Curve:
     colour : tuple of int
         RGB.
     bounds : tuple of ndarray, optional
-        (gain low, gain high, phase half-width) of the 95 % interval [dB, dB, deg]: measured
-        points are drawn as points with their bounds; curves without bounds as lines.
+        Half-widths of the 95 % interval: below and above the gain [dB], and either side of
+        the phase [deg]. Curves with bounds are measured points (one per frequency; drawn as
+        points with their bounds); curves without are model lines, thinned to one point per
+        millihertz of the timeline.
 
     """
 
@@ -61,9 +63,12 @@ def log_curves(rec: rr.RecordingStream, path: str, curves: list[Curve]) -> None:
     """Log ``curves`` under ``path/gain/<name>`` [dB] and ``path/phase/<name>`` [deg]."""
     for c in curves:
         f = np.asarray(c.f_hz, dtype=float)
-        order = np.argsort(f)
+        order = np.argsort(f, kind="stable")
         mhz = np.round(f[order] * 1e3).astype(np.int64)
         keep = np.concatenate([[True], np.diff(mhz) > 0])  # one value per millihertz
+        if c.bounds is not None and not keep.all():
+            raise ValueError(f"{path}/{c.name}: measured points share a frequency; log one "
+                             "curve per run")  # fmt: skip
         times = rr.TimeColumn(FREQUENCY_TIMELINE, sequence=mhz[keep])
         sel = order[keep]
         points = c.bounds is not None
@@ -123,7 +128,7 @@ def bode_curve(
 ) -> Curve:
     """Return a model's :class:`Curve`: gain in dB, phase unwrapped from the lowest frequency."""
     f = np.asarray(f_hz, dtype=float)
-    order = np.argsort(f)
+    order = np.argsort(f, kind="stable")
     phase = np.empty(f.size)
     phase[order] = phase_deg(np.asarray(h)[order])
     return Curve(name, f, 20 * np.log10(np.abs(h)), phase, colour)
