@@ -39,3 +39,26 @@ def _layout():
     import rerun.blueprint as rrb
 
     return rrb.Blueprint(rrb.TimeSeriesView(origin="/"))
+
+
+@pytest.mark.parametrize("command", ["pilot", "simulate"])
+def test_a_recording_path_that_cannot_be_a_file_is_one_line_and_nothing_is_written(
+    command, tmp_path, capsys
+):
+    from twin.cli.main import main
+
+    folder, afile = tmp_path / "folder", tmp_path / "afile"
+    folder.mkdir()
+    afile.write_text("x")
+    out = tmp_path / "out"
+    for rrd, message in ((folder, "is a folder"), (afile / "x.rrd", "is a file, not a folder")):
+        if command == "pilot":
+            argv = ["pilot", "run", "condition-1", "--out", str(out), "--rrd", str(rrd)]
+        else:
+            argv = ["simulate", "srs", "--signal", "rest-2", "--model", "reduced", "--out",
+                    str(out), "--rrd", str(rrd), "--quiet"]  # fmt: skip
+        assert main(argv) == 2
+        err = capsys.readouterr().err
+        assert message in err and err.count("\n") == 1
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["afile", "folder"]  # nothing else
+    assert not list(folder.iterdir())

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import os
 import tempfile
+from abc import ABC, abstractmethod
 from pathlib import Path
 from typing import Self
 
@@ -28,16 +29,16 @@ def staging_dir(final: Path) -> Path:
     return tmp
 
 
-class CloseOrAbort:
-    """Mixin: ``with obj:`` calls ``obj.close()``, or ``obj.abort()`` on an exception."""
+class CloseOrAbort(ABC):
+    """Base: ``with obj:`` calls ``obj.close()``, or ``obj.abort()`` on an exception."""
 
+    @abstractmethod
     def close(self) -> None:
-        """Finish the output (subclass)."""
-        raise NotImplementedError
+        """Finish the output."""
 
+    @abstractmethod
     def abort(self) -> None:
-        """Remove the partial output (subclass)."""
-        raise NotImplementedError
+        """Remove the partial output."""
 
     def __enter__(self) -> Self:
         """Enter the context."""

@@ -160,6 +160,10 @@ def _cmd_run(args: argparse.Namespace) -> int:
     from twin.pilot.records import write_pilot_csv
 
     _check_runs(args.runs)
+    if args.rrd:  # refused before the run, not after it
+        from twin.record.stream import check_recording_path
+
+        check_recording_path(args.rrd)
     if not 0 <= args.remnant < 1:
         raise SignalError(f"--remnant must be in [0, 1); got {args.remnant}")
     cfg = common.configured(args.config, args)

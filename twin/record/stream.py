@@ -12,10 +12,29 @@ from pathlib import Path
 import rerun as rr
 import rerun.blueprint as rrb
 
+from twin.errors import UsageError
 from twin.lifecycle import CloseOrAbort
 
 #: The time axis of every run.
 TIMELINE = "sim_time"
+
+
+def check_recording_path(rrd: str | Path) -> Path:
+    """Return ``rrd`` as a path a recording can be written to; refuse a folder or a file parent.
+
+    Raises
+    ------
+    UsageError
+        ``rrd`` is an existing folder, or one of its parents is a file.
+
+    """
+    final = Path(rrd)
+    if final.is_dir():
+        raise UsageError(f"{final}: is a folder; a recording needs a file name (e.g. run.rrd)")
+    blocking = next((p for p in final.parents if p.exists()), None)
+    if blocking is not None and not blocking.is_dir():
+        raise UsageError(f"{final}: {blocking} is a file, not a folder")
+    return final
 
 
 class Recording(CloseOrAbort):
@@ -45,7 +64,7 @@ class Recording(CloseOrAbort):
         self.rec.send_recording_name(name)
         self.final: Path | None = None
         if rrd is not None:
-            self.final = Path(rrd)
+            self.final = check_recording_path(rrd)
             self.final.parent.mkdir(parents=True, exist_ok=True)
             self._partial = self.final.with_name(f".{self.final.name}.partial")
             self.rec.save(str(self._partial), default_blueprint=layout)
@@ -59,7 +78,11 @@ class Recording(CloseOrAbort):
         self.rec.flush()
         self.rec.disconnect()
         if self.final is not None:
-            self._partial.replace(self.final)
+            try:
+                self._partial.replace(self.final)
+            except BaseException:
+                self._partial.unlink(missing_ok=True)
+                raise
 
     def abort(self) -> None:
         """Close and delete a partly written ``.rrd``."""
