@@ -47,6 +47,7 @@ bench: $(STAMP)
 	$(BIN)/python bench/twin_throughput.py
 	$(BIN)/python bench/agard_sweep.py
 	$(BIN)/python bench/pilot_montecarlo.py
+	$(BIN)/python bench/distributed_montecarlo.py
 	$(BIN)/python bench/diagnose_run.py
 
 clean:

@@ -30,12 +30,12 @@ REPETITIONS, POPULATIONS = 5, 5
 
 def main(runs: int = 50) -> None:
     t0 = time.perf_counter()
-    run_population(6, 0, workers=2)
+    run_population(6, 0, scheduler="local:2")
     wall = time.perf_counter() - t0
     print(f"adaptive experiment, 6 subjects, 2 workers: {wall:.1f} s (goal <= 60 s)")
     hits: dict[str, int] = {}
     for seed in range(POPULATIONS):
-        for measure, by in run_population(9, seed, workers=2).agreement().items():
+        for measure, by in run_population(9, seed, scheduler="local:2").agreement().items():
             for factor, ok in by.items():
                 hits[f"{measure}/{factor}"] = hits.get(f"{measure}/{factor}", 0) + ok
     full = sum(v == POPULATIONS for v in hits.values())

@@ -142,7 +142,7 @@ def test_nine_adaptive_subjects_predict_the_filter_effects_of_chapter_6():
     target = {("crossover_target_rad_s", f) for f in ("delay", "noise")}
     hits = dict.fromkeys(checked | target, 0)
     for seed in range(5):
-        agree = run_population(9, seed, workers=2).agreement()
+        agree = run_population(9, seed, scheduler="local:2").agreement()
         for measure, factor in hits:
             hits[measure, factor] += agree[measure][factor]
     missed = {k: v for k, v in hits.items() if v < (4 if k in checked else 3)}

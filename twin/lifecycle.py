@@ -3,14 +3,18 @@
 :class:`CloseOrAbort` gives a class with ``close()`` (finish: rename the output into place)
 and ``abort()`` (remove the partial output) its context-manager methods, so that leaving the
 block by an exception leaves nothing half-written; :func:`staging_dir` is the hidden folder
-such an output is written into before it is renamed into place.
+such an output is written into before it is renamed into place, and :func:`replacing_dir`
+the ``with`` block that writes a report folder that way.
 """
 
 from __future__ import annotations
 
 import os
+import shutil
 import tempfile
 from abc import ABC, abstractmethod
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Self
 
@@ -27,6 +31,25 @@ def staging_dir(final: Path) -> Path:
     os.umask(mask)
     tmp.chmod(0o777 & ~mask)
     return tmp
+
+
+@contextmanager
+def replacing_dir(final: str | Path) -> Iterator[Path]:
+    """Yield a staging folder that replaces ``final`` when the block ends without an error.
+
+    An existing ``final`` is removed only then; on an error the staging folder is removed and
+    ``final`` is left as it was.
+    """
+    final = Path(final)
+    tmp = staging_dir(final)
+    try:
+        yield tmp
+        if final.exists():
+            shutil.rmtree(final)
+        tmp.replace(final)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
 
 
 class CloseOrAbort(ABC):

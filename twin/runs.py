@@ -141,8 +141,8 @@ def _check_meta(meta: object, path: Path) -> dict:
     return meta
 
 
-def read_run(folder: str | Path) -> RecordedRun:
-    """Read and validate a ``twin-run/1`` folder.
+def read_run(folder: str | Path | RecordedRun) -> RecordedRun:
+    """Read and validate a ``twin-run/1`` folder (a run already read is returned as it is).
 
     Raises
     ------
@@ -152,6 +152,8 @@ def read_run(folder: str | Path) -> RecordedRun:
         match ``meta.json``.
 
     """
+    if isinstance(folder, RecordedRun):
+        return folder
     path = Path(folder)
     if not path.is_dir():
         raise RunFormatError(f"{path}: not a run folder (expected a directory)")

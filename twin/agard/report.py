@@ -9,9 +9,11 @@ name and renamed when complete, so a failed report leaves nothing behind.
 
 from __future__ import annotations
 
+import dataclasses
 import json
-import shutil
+import tempfile
 from collections.abc import Sequence
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import matplotlib.pyplot as plt
@@ -19,13 +21,20 @@ import matplotlib.pyplot as plt
 from twin.agard import df, noise_level, omct, snr, threshold
 from twin.agard.session import Session
 from twin.frames import dof_index
+from twin.lifecycle import replacing_dir
 from twin.measurement.measure import Bench
 from twin.progress import ProgressFn
+from twin.tasks.engine import Engine, using
 
 
 def threshold_defaults(dof: str) -> tuple[float, float]:
     """Step amplitude and length of §3.3.4: 0.1 m/s^2 or 0.075 rad/s^2, 1 s."""
     return (0.075 if dof_index(dof) >= 3 else 0.1), 1.0
+
+
+#: Run numbers (and seeds: ``bench.seed + k``) of the i-th DOF's runs start at ``i`` times this,
+#: so a DOF's runs are the same whether the DOFs run one after another or as parallel tasks.
+RUNS_PER_DOF = 1000
 
 
 def write_report(
@@ -35,23 +44,80 @@ def write_report(
     rrd: str | None = None,
     progress: ProgressFn | None = None,
     bounds_path: str | Path | None = None,
+    scheduler: Engine | str | None = None,
 ) -> dict[str, object]:
-    """Run the suite and write the report folder ``out``; return the report as a dict."""
+    """Run the suite and write the report folder ``out``; return the report as a dict.
+
+    Each DOF's suite is a task (:mod:`twin.tasks`) run in a folder of its own and sent back
+    as files, so DOFs run side by side on a ``scheduler`` (default this process) with the
+    same results. A recording (``rrd``) is one stream of runs: with it, the DOFs run one after
+    another in this process whatever the scheduler.
+    """
     bounds = omct.read_bounds(bounds_path or omct.EXAMPLE_BOUNDS)
-    tmp = out.with_name(out.name + ".partial")
-    shutil.rmtree(tmp, ignore_errors=True)
-    tmp.mkdir(parents=True)
-    try:
-        report, md = _run(bench, dofs, tmp, rrd, progress, bounds)
+    with replacing_dir(out) as tmp:
+        if rrd is not None or len(dofs) < 2:
+            parts = _in_session(bench, dofs, tmp, rrd, progress, bounds)
+        else:
+            with using(scheduler) as engine:
+                parts = engine.map(
+                    dof_suite,
+                    [(bench, dof, i, bounds) for i, dof in enumerate(dofs)],
+                    [{"dof": dof, "first_run": i * RUNS_PER_DOF} for i, dof in enumerate(dofs)],
+                    f"AGARD suites on {bench.name} [DOFs]",
+                    progress,
+                ).values()
+            for part in parts:
+                for name, data in part.files.items():
+                    (tmp / name).parent.mkdir(parents=True, exist_ok=True)
+                    (tmp / name).write_bytes(data)
+        report, md = _assemble(bench, parts)
         (tmp / "report.json").write_text(json.dumps(report, indent=2) + "\n")
         (tmp / "summary.md").write_text(md)
-    except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
-    if out.exists():
-        shutil.rmtree(out)
-    tmp.rename(out)
     return report
+
+
+@dataclass(frozen=True)
+class DofPart:
+    """One DOF's share of a report: its entry, its summary lines, its files and run count."""
+
+    dof: str
+    entry: dict[str, object]
+    md: list[str]
+    runs: int
+    files: dict[str, bytes] = field(default_factory=dict)
+
+
+def dof_suite(bench: Bench, dof: str, i: int, bounds: omct.OmctBounds) -> DofPart:
+    """Run the five tests in ``dof`` (the ``i``-th DOF of the report) in a folder of its own.
+
+    A task: returns the run folders and figures as files (relative path -> bytes).
+    """
+    with tempfile.TemporaryDirectory(prefix="twin-agard-") as folder:
+        root = Path(folder)
+        with Session(bench, root) as s:
+            s.count = i * RUNS_PER_DOF
+            part = _suite(s, dof, root, bounds)
+        files = {
+            str(p.relative_to(root)): p.read_bytes() for p in sorted(root.rglob("*")) if p.is_file()
+        }
+    return dataclasses.replace(part, files=files)
+
+
+def _in_session(bench, dofs, tmp, rrd, progress, bounds) -> list[DofPart]:
+    """Run every DOF's suite in one session (one recording), one after another."""
+    tests = 5 * len(dofs)
+
+    def beside(message: str, done: float | None = None, total: float | None = None) -> None:
+        if progress:  # a test's own runs, shown beside the report's bar
+            progress(message if done is None else f"{message} {done:g}/{total:g}")
+
+    parts = []
+    with Session(bench, tmp, rrd, beside) as s:
+        for i, dof in enumerate(dofs):
+            s.count = i * RUNS_PER_DOF
+            parts.append(_suite(s, dof, tmp, bounds, lambda k, i=i: progress and progress(
+                f"AGARD tests on {bench.name}", 5 * i + k, tests)))  # fmt: skip
+    return parts
 
 
 def _figure(fig, path: Path) -> str:
@@ -60,9 +126,54 @@ def _figure(fig, path: Path) -> str:
     return path.name
 
 
-def _run(bench, dofs, tmp, rrd, progress, bounds):
+def _tests(dof: str, bounds, cfg):
+    """Return the five tests of a DOF: (name, run, JSON of the result, figure, table)."""
+    amp, step = threshold_defaults(dof)
+    return (
+        ("df", lambda s: df.run_df(s, dof), lambda r: r.to_dict(),
+         lambda r: r.plot(config=cfg), lambda r: r.format_table()),
+        ("noise", lambda s: noise_level.run_noise(s, dof), lambda r: r.to_dict(),
+         lambda r: r.plot(), lambda r: r.format_table()),
+        ("threshold", lambda s: threshold.run_threshold(s, dof, amp, step), lambda r: r.to_dict(),
+         lambda r: r.plot(), lambda r: r.format_table()),
+        ("omct", lambda s: omct.run_omct(s, dof), lambda r: r.to_dict(bounds),
+         lambda r: omct.plot_omct([r], bounds), lambda r: r.format_table(bounds)),
+        ("snr", lambda s: snr.run_snr(s, dof), lambda r: r.to_dict(),
+         lambda r: r.plot(), lambda r: r.format_table()),
+    )  # fmt: skip
+
+
+def _suite(s: Session, dof: str, tmp: Path, bounds, tested=None) -> DofPart:
+    """Run df, noise, threshold, omct and snr in ``dof``; figures into ``tmp``."""
+    first = s.count
+    entry: dict[str, object] = {}
+    md = [f"## {dof}", ""]
+    for k, (name, run, as_json, figure, table) in enumerate(_tests(dof, bounds, s.bench.config)):
+        if tested:
+            tested(k)
+        result = run(s)
+        entry[name] = as_json(result)
+        md += [
+            "```",
+            table(result),
+            "```",
+            f"![]({_figure(figure(result), tmp / f'{name}-{dof}.png')})",
+            "",
+        ]
+    if tested:
+        tested(5)
+    if s.count - first > RUNS_PER_DOF:
+        raise RuntimeError(f"{dof}: {s.count - first} runs, more than RUNS_PER_DOF allows")
+    return DofPart(dof, entry, md, s.count - first)
+
+
+def _assemble(bench: Bench, parts: list[DofPart]) -> tuple[dict[str, object], str]:
     cfg = bench.config
-    report: dict[str, object] = {"bench": bench.name, "config": cfg.to_meta(), "dofs": {}}
+    report: dict[str, object] = {
+        "bench": bench.name,
+        "config": cfg.to_meta(),
+        "dofs": {p.dof: p.entry for p in parts},
+    }
     md = [
         f"# AGARD-AR-144 / OMCT report: {bench.name}",
         "",
@@ -73,73 +184,10 @@ def _run(bench, dofs, tmp, rrd, progress, bounds):
         + "".join(f" Extension {e.describe()}." for e in cfg.extensions),
         "",
     ]
-    tests = 5 * len(dofs)
-
-    def tested(k: int) -> None:
-        if progress:
-            progress(f"AGARD tests on {bench.name}", k, tests)
-
-    def beside(message: str, done: float | None = None, total: float | None = None) -> None:
-        if progress:  # a test's own runs, shown beside the report's bar
-            progress(message if done is None else f"{message} {done:g}/{total:g}")
-
-    with Session(bench, tmp, rrd, beside) as s:
-        tested(0)
-        for i, dof in enumerate(dofs):
-            entry: dict[str, object] = {}
-            d = df.run_df(s, dof)
-            entry["df"] = d.to_dict()
-            fig_df = _figure(d.plot(config=cfg), tmp / f"df-{dof}.png")
-            tested(5 * i + 1)
-            n = noise_level.run_noise(s, dof)
-            entry["noise"] = n.to_dict()
-            fig_n = _figure(n.plot(), tmp / f"noise-{dof}.png")
-            tested(5 * i + 2)
-            amp, step = threshold_defaults(dof)
-            th = threshold.run_threshold(s, dof, amp, step)
-            entry["threshold"] = th.to_dict()
-            fig_t = _figure(th.plot(), tmp / f"threshold-{dof}.png")
-            tested(5 * i + 3)
-            o = omct.run_omct(s, dof)
-            entry["omct"] = o.to_dict(bounds)
-            fig_o = _figure(omct.plot_omct([o], bounds), tmp / f"omct-{dof}.png")
-            tested(5 * i + 4)
-            g = snr.run_snr(s, dof)
-            entry["snr"] = g.to_dict()
-            fig_s = _figure(g.plot(), tmp / f"snr-{dof}.png")
-            tested(5 * i + 5)
-            report["dofs"][dof] = entry  # type: ignore[index]
-            md += [
-                f"## {dof}",
-                "",
-                "```",
-                d.format_table(),
-                "```",
-                f"![]({fig_df})",
-                "",
-                "```",
-                n.format_table(),
-                "```",
-                f"![]({fig_n})",
-                "",
-                "```",
-                th.format_table(),
-                "```",
-                f"![]({fig_t})",
-                "",
-                "```",
-                o.format_table(bounds),
-                "```",
-                f"![]({fig_o})",
-                "",
-                "```",
-                g.format_table(),
-                "```",
-                f"![]({fig_s})",
-                "",
-            ]
+    for p in parts:
+        md += p.md
     md += [
-        f"{s.count} runs, each a twin-run/1 folder under `runs/` (analyse one again with "
-        "`twin agard df runs/NN-...`)."
+        f"{sum(p.runs for p in parts)} runs, each a twin-run/1 folder under `runs/` (DOF i's "
+        f"numbered from {RUNS_PER_DOF} i; analyse one again with `twin agard df runs/NN-...`)."
     ]
     return report, "\n".join(md) + "\n"

@@ -93,10 +93,11 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
         p.set_defaults(func=_cmd_test)
     rep = tests.add_parser(
         "report",
-        parents=_common(),
+        parents=[*_common(), common.scheduler_parent()],
         help="run the whole suite and write a report folder",
         description="Run df, noise, threshold, omct and snr for each DOF and "
-        "write report.json, summary.md and figures into a folder.",
+        "write report.json, summary.md and figures into a folder. Each DOF's suite is a task "
+        "(--scheduler); with --rrd (one recording) the DOFs run one after another here.",
     )
     rep.add_argument("target", metavar="CONFIG", help=config_help())
     rep.add_argument(
@@ -242,7 +243,9 @@ def _cmd_report(args: argparse.Namespace) -> int:
         )
     bench = _bench(args, args.target)
     out = Path(args.out or f"out/agard-{bench.config.name}-{bench.model}")
-    report = write_report(bench, args.dof, out, args.rrd, common.progress(args))
+    with common.engine(args) as engine:
+        report = write_report(bench, args.dof, out, args.rrd, common.progress(args),
+                              scheduler=engine)  # fmt: skip
     print(json.dumps(report, indent=2) if args.json else (out / "summary.md").read_text())
     return 0
 

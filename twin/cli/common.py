@@ -8,6 +8,7 @@ type and help everywhere:
 ``--out DIR``                 where results go (the command says what it writes)
 ``--rrd FILE``                save a Rerun recording
 ``--quiet``                   no progress on stderr
+``--scheduler WHERE``         where a batch command's tasks run (:mod:`twin.tasks.engine`)
 ``--model {full,reduced}``    platform model; **full by default everywhere**; a command
                               that defaults to ``reduced`` says why in its help
 ``--delay-ms``, ``--break-hz``, ``--no-noise``, ``--resonance``
@@ -76,6 +77,22 @@ def rrd_parent(what: str = "save a Rerun recording") -> argparse.ArgumentParser:
     p = _parent()
     p.add_argument("--rrd", metavar="FILE", help=what)
     return p
+
+
+def scheduler_parent() -> argparse.ArgumentParser:
+    """Return a parent parser with ``--scheduler`` (:mod:`twin.tasks.engine`)."""
+    from twin.tasks.engine import SCHEDULER_HELP
+
+    p = _parent()
+    p.add_argument("--scheduler", metavar="WHERE", help=SCHEDULER_HELP)
+    return p
+
+
+def engine(args: argparse.Namespace):
+    """Return the :class:`~twin.tasks.engine.Engine` of ``--scheduler`` (checked, not started)."""
+    from twin.tasks.engine import Engine
+
+    return Engine(args.scheduler)
 
 
 def quiet_parent() -> argparse.ArgumentParser:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 from pathlib import Path
 
 from twin.cli import common
@@ -24,6 +25,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
             common.out_parent("report folder (default out/diagnose-<first run's name>)"),
             common.json_parent("the findings"),
             common.quiet_parent(),
+            common.scheduler_parent(),
         ],
         help="compare recorded runs with the nominal twin, name the cause, extend the model",
         description="Simulate the nominal twin with the runs' own commands, compare the measured "
@@ -45,6 +47,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="the IMU's noise over its data sheet's, when known (e.g. from a "
                    "recording at rest); default: fitted as a nuisance")  # fmt: skip
     p.add_argument("--no-figures", action="store_true", help="skip figures and the .rrd")
+    p.add_argument("--each", action="store_true",
+                   help="a batch: each RUN_DIR (a run folder, or a folder of run folders "
+                   "diagnosed together) is its own measurement, diagnosed as a task "
+                   "(--scheduler); writes one report per measurement and batch.csv")  # fmt: skip
     p.set_defaults(func=_cmd_diagnose)
 
 
@@ -60,9 +66,44 @@ def _nominal(args: argparse.Namespace):
     return common.configured(run_config(args.runs[0]), args)
 
 
+def _cmd_each(args: argparse.Namespace) -> int:
+    from twin.cli.sweep import EXIT_PARTIAL
+    from twin.diagnose.batch import diagnose_each, write_batch
+    from twin.errors import UsageError
+
+    if args.validate or args.save_config:
+        raise UsageError("--each diagnoses every measurement on its own: --validate and "
+                         "--save-config are for one measurement (each report folder holds "
+                         "its extended.json)")  # fmt: skip
+    overrides = (args.break_hz, args.delay_ms, args.no_noise or None, args.resonance or None)
+    if args.config is None and any(v is not None for v in overrides):
+        raise UsageError("with --each, configuration overrides need --config (the nominal of "
+                         "every measurement); without it each uses its own meta.json")  # fmt: skip
+    options = {"model": args.model, "max_hz": args.max_hz, "seed": args.seed, "dofs": args.dof,
+               "imu_noise": args.imu_noise}  # fmt: skip
+    config = _nominal(args)
+    with common.engine(args) as engine:
+        b = diagnose_each(args.runs, config, engine, common.progress(args), **options)
+    out = Path(args.out) if args.out else Path("out") / "diagnose-batch"
+    table = write_batch(b, out, figures=not args.no_figures)
+    if args.json:
+        print((out / "batch.json").read_text(), end="")
+    else:
+        for row in b.rows():
+            print(f"{row['measurement']}: {row['describe'] or 'no finding'}")
+        print(f"{len(b.names) - len(b.failures)} of {len(b.names)} measurements diagnosed "
+              f"({b.scheduler}); table: {table}")  # fmt: skip
+    for f in b.failures:
+        print(f"twin: measurement failed: {f.describe()}", file=sys.stderr)
+    return EXIT_PARTIAL if b.failures else 0
+
+
 def _cmd_diagnose(args: argparse.Namespace) -> int:
     from twin.diagnose.diagnosis import diagnose
     from twin.diagnose.report import write_report
+
+    if args.each:
+        return _cmd_each(args)
 
     d = diagnose(
         args.runs, _nominal(args), args.model, args.validate, args.max_hz, args.seed, args.dof,

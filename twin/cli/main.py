@@ -125,6 +125,9 @@ def build_parser() -> argparse.ArgumentParser:
     from twin.cli.ingest import add_parser as add_import
 
     add_import(sub)
+    from twin.cli.sweep import add_parser as add_sweep
+
+    add_sweep(sub)
     return parser
 
 

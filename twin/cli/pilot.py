@@ -4,13 +4,11 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 from pathlib import Path
 
 import numpy as np
 
 from twin.cli import common
-from twin.errors import UsageError
 from twin.plotting import pyplot
 
 DEG2 = (180 / np.pi) ** 2
@@ -57,6 +55,7 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
             common.seed_parent("seed of the runs"),
             common.json_parent(),
             common.quiet_parent(),
+            common.scheduler_parent(),
         ],
         help="the eight Table 6.3 conditions, pilot fixed (their filter, delay and noise are the "
         "experiment's factors: no overrides)",
@@ -81,12 +80,6 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
         type=int,
         default=9,
         help="simulated subjects with --pilot adaptive (default 9, the thesis' participants)",
-    )
-    exp.add_argument(
-        "--workers",
-        type=int,
-        default=None,
-        help="processes for --pilot adaptive (default: one per CPU core)",
     )
     exp.set_defaults(func=_cmd_experiment)
     ada = cmds.add_parser(
@@ -124,6 +117,7 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
             common.seed_parent("seed of the runs"),
             common.json_parent(),
             common.quiet_parent(),
+            common.scheduler_parent(),
         ],
         help="Chapter 2 Monte-Carlo: FC versus ARX (§2.5)",
     )
@@ -234,11 +228,8 @@ def _cmd_experiment(args: argparse.Namespace) -> int:
     if args.pilot == "adaptive":
         from twin.pilot.population import run_population
 
-        cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
-        workers = args.workers if args.workers is not None else min(cores or 1, args.subjects)
-        if workers < 1:
-            raise UsageError(f"--workers must be >= 1; got {workers}")
-        p = run_population(args.subjects, args.seed, common.progress(args), workers)
+        with common.engine(args) as engine:
+            p = run_population(args.subjects, args.seed, common.progress(args), engine)
         if args.plot:
             plt = pyplot()
             plt.close(p.plot(args.plot))
@@ -247,7 +238,9 @@ def _cmd_experiment(args: argparse.Namespace) -> int:
         print(json.dumps(p.to_dict(), indent=2) if args.json else p.format_table())
         return 0
     _check_runs(args.runs)
-    r = run_experiment(runs=args.runs, seed=args.seed, progress=common.progress(args), fit=True)
+    with common.engine(args) as engine:
+        r = run_experiment(runs=args.runs, seed=args.seed, progress=common.progress(args),
+                           fit=True, scheduler=engine)  # fmt: skip
     if args.plot:
         plt = pyplot()
         plt.close(r.plot(args.plot))
@@ -329,7 +322,9 @@ def _cmd_identify(args: argparse.Namespace) -> int:
 def _cmd_montecarlo(args: argparse.Namespace) -> int:
     from twin.pilot.montecarlo import monte_carlo
 
-    r = monte_carlo(args.runs, args.seed, fit_runs=args.fit_runs, progress=common.progress(args))
+    with common.engine(args) as engine:
+        r = monte_carlo(args.runs, args.seed, fit_runs=args.fit_runs,
+                        progress=common.progress(args), scheduler=engine)  # fmt: skip
     out = r.to_dict()
     if args.json:
         print(json.dumps(out, indent=2))

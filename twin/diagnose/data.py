@@ -29,7 +29,7 @@ from twin.errors import RunFormatError, SignalError
 from twin.frames import DOF_NAMES, dof_index
 from twin.measurement.measure import Measurement, from_imu, from_run
 from twin.progress import ProgressFn
-from twin.runs import read_run
+from twin.runs import RecordedRun, read_run
 from twin.trajectory import Trajectory
 
 FloatArray = NDArray[np.float64]
@@ -255,7 +255,7 @@ def measurement_channels(
 
 
 def load_case(
-    runs: Sequence[str | Path],
+    runs: Sequence[str | Path | RecordedRun],
     config: str | MotionSystem | None = None,
     model: str = "reduced",
     seed: int = 0,
@@ -303,7 +303,7 @@ def load_case(
         try:
             measurements.append(from_run(rec))
         except SignalError as e:
-            raise RunFormatError(f"{path}/meta.json: {e}") from e
+            raise RunFormatError(f"{rec.path}/meta.json: {e}") from e
     platforms = {m.config.platform for m in measurements}
     if len(platforms) > 1:
         raise SignalError(f"the runs are of different platforms ({', '.join(sorted(platforms))})")

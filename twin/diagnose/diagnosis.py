@@ -39,6 +39,7 @@ from twin.diagnose.select import BIC_MARGIN, Finding, Selection, name_causes
 from twin.errors import SignalError, UsageError
 from twin.plotting import finish, pyplot
 from twin.progress import ProgressFn
+from twin.runs import RecordedRun
 
 
 @dataclass(eq=False)
@@ -268,10 +269,10 @@ def _plain(v: object) -> object:
 
 
 def diagnose(
-    runs: Sequence[str | Path],
+    runs: Sequence[str | Path | RecordedRun],
     config: str | MotionSystem | None = None,
     model: str = "reduced",
-    validate: Sequence[str | Path] = (),
+    validate: Sequence[str | Path | RecordedRun] = (),
     max_hz: float = MAX_HZ,
     seed: int = 0,
     dofs: Sequence[str] | None = None,
@@ -283,8 +284,9 @@ def diagnose(
 
     Parameters
     ----------
-    runs : sequence of path
-        ``twin-run/1`` folders (same platform), e.g. Table 5.2's two multi-sines.
+    runs : sequence of path or RecordedRun
+        ``twin-run/1`` folders (same platform), e.g. Table 5.2's two multi-sines, or those
+        runs already read (:func:`twin.runs.read_run`; what a task on a cluster is given).
     config : str or MotionSystem, optional
         Nominal configuration; ``meta.json``'s by default.
     model : str
@@ -355,7 +357,11 @@ def diagnose(
         )
         if progress:
             progress("diagnosis [DOFs]", i + 1, len(case.dofs))
-    return Diagnosis(case, reports, [str(r) for r in runs], [str(v) for v in validate], max_hz)
+    return Diagnosis(case, reports, _names(runs), _names(validate), max_hz)
+
+
+def _names(runs: Sequence[str | Path | RecordedRun]) -> list[str]:
+    return [str(r.path if isinstance(r, RecordedRun) else r) for r in runs]
 
 
 def _noise_finding(dof: str, noise: NoiseJudgement) -> Finding:

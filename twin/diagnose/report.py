@@ -6,14 +6,13 @@ Written to a temporary folder and renamed when complete, so a failure leaves not
 from __future__ import annotations
 
 import json
-import shutil
 from pathlib import Path
 
 import numpy as np
 
 from twin.diagnose.diagnosis import Diagnosis, DofReport
 from twin.diagnose.residual_figure import plot_residual
-from twin.lifecycle import staging_dir
+from twin.lifecycle import replacing_dir
 from twin.plotting import pyplot
 
 HALVES = "the other half of the measurement window (two-fold)"
@@ -150,19 +149,11 @@ def _recording(d: Diagnosis, path: Path) -> None:
 def write_report(d: Diagnosis, out: str | Path, figures: bool = True, rrd: bool = True) -> Path:
     """Write ``summary.md``, ``diagnosis.json``, figures and ``diagnosis.rrd`` to ``out``."""
     out = Path(out)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = staging_dir(out)
-    try:
+    with replacing_dir(out) as tmp:
         (tmp / "summary.md").write_text(summary(d))
         (tmp / "diagnosis.json").write_text(json.dumps(d.to_dict(), indent=2) + "\n")
         if figures:
             _figures(d, tmp)
         if rrd:
             _recording(d, tmp / "diagnosis.rrd")
-        if out.exists():
-            shutil.rmtree(out)
-        tmp.replace(out)
-    except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
     return out

@@ -16,13 +16,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from twin.chain.config import motion_system
+from twin.chain.config import MotionSystem, motion_system
 from twin.errors import SignalError
 from twin.pilot.condition_figure import Panel, plot_conditions
 from twin.pilot.forcing import pitch_task
 from twin.pilot.mle import fit_pitch_pilot
 from twin.pilot.pitch import PitchPilot, open_loops, simulate_pitch, variance_decomposition
 from twin.progress import ProgressFn
+from twin.tasks.engine import Engine, using
 from twin.thesis import TABLE_6_3
 
 FACTORS = ("filter", "delay", "noise")
@@ -139,45 +140,26 @@ def run_experiment(
     conditions: Sequence[int] = tuple(TABLE_6_3),
     progress: ProgressFn | None = None,
     fit: bool = False,
+    scheduler: Engine | str | None = None,
 ) -> ExperimentResult:
     """Fly every condition ``runs`` times and compute the measures and factor effects.
 
     With ``fit``, the pilot model is also estimated (closed-loop MLE, :mod:`twin.pilot.mle`)
     from each condition's first run, as the thesis did per condition (Fig 6.6, 6.8, 6.9).
+    Each condition is a task (:mod:`twin.tasks`; condition ``n`` uses seed ``seed + n``), so
+    the result is the same whatever runs them (``scheduler``; default this process).
     """
     p = pilot or PitchPilot()
-    fd, ft = pitch_task()
     scale = pitch_remnant_scale(p, remnant_ratio, seed)
-    deg2 = (180 / np.pi) ** 2
-    out: dict[int, dict[str, object]] = {}
-    if progress:
-        progress("conditions", 0, len(conditions))
-    for n in conditions:
-        cfg = motion_system(f"condition-{n}")
-        r = simulate_pitch(p, cfg, runs, seed + n, scale)
-        parts = {name: variance_decomposition(getattr(r, name), fd, ft)
-                 for name in ("e", "u", "theta")}  # fmt: skip
-        ol = open_loops(p, cfg)
-        out[n] = {
-            "var_e": float(np.var(r.e, axis=1).mean() * deg2),
-            "var_u": float(np.var(r.u, axis=1).mean() * deg2),
-            "var_theta": float(np.var(r.theta, axis=1).mean() * deg2),
-            "runs_deg2": {
-                k: (np.var(getattr(r, k), axis=1) * deg2).tolist() for k in ("e", "u", "theta")
-            },
-            "parts_deg2": {k: {c: v * deg2 for c, v in d.items()} for k, d in parts.items()},
-            "crossover_d": ol.crossover_d,
-            "phase_margin_d": ol.phase_margin_d,
-            "crossover_t": ol.crossover_t,
-            "phase_margin_t": ol.phase_margin_t,
-            "motion_lead_phase_deg": ol.motion_lead_phase_deg,
-        }
-        if fit:  # the pilot as an experimenter would identify it from the first run (Fig 6.8-6.9)
-            est = fit_pitch_pilot(r.ft, r.fd, r.u[0], cfg)
-            out[n]["estimated"] = dataclasses.asdict(est.pilot)
-            out[n]["vaf_percent"] = est.vaf_percent
-        if progress:
-            progress("conditions", len(out), len(conditions))
+    with using(scheduler) as engine:
+        flown = engine.map(
+            fly_condition,
+            [(p, n, runs, seed + n, scale, fit) for n in conditions],
+            [{"condition": n, "runs": runs, "seed": seed + n} for n in conditions],
+            "conditions",
+            progress,
+        ).values()
+    out = dict(zip(conditions, flown, strict=True))
     effects = {}
     for i, f in enumerate(FACTORS):
         with_f = [n for n in out if bool(_levels(n)[i])]
@@ -187,6 +169,55 @@ def run_experiment(
                                    - np.mean([out[n][m] for n in without]))
                           for m in MEASURES}  # fmt: skip
     return ExperimentResult(out, effects)
+
+
+def fly_condition(
+    pilot: PitchPilot, n: int, runs: int, seed: int, scale: float, fit: bool = False
+) -> dict[str, object]:
+    """Fly condition ``n`` of Table 6.3 ``runs`` times; return its measures (one task)."""
+    return fly(pilot, motion_system(f"condition-{n}"), runs, seed, scale, fit)
+
+
+def fly(
+    pilot: PitchPilot,
+    cfg: MotionSystem,
+    runs: int,
+    seed: int,
+    scale: float,
+    fit: bool = False,
+    model: str = "reduced",
+) -> dict[str, object]:
+    """Fly the pitch task through ``cfg`` ``runs`` times; return the measures of Fig 6.5-6.9.
+
+    Variances [deg^2] (mean over runs, per run, and split into target, disturbance and
+    remnant parts), crossover frequencies [rad/s] and phase margins [deg] of both loops, and
+    with ``fit`` the pilot identified from the first run (closed-loop MLE).
+    """
+    fd, ft = pitch_task()
+    r = simulate_pitch(pilot, cfg, runs, seed, scale, model=model)
+    parts = {name: variance_decomposition(getattr(r, name), fd, ft)
+             for name in ("e", "u", "theta")}  # fmt: skip
+    ol = open_loops(pilot, cfg)
+    deg2 = (180 / np.pi) ** 2
+    out: dict[str, object] = {
+        "var_e": float(np.var(r.e, axis=1).mean() * deg2),
+        "var_u": float(np.var(r.u, axis=1).mean() * deg2),
+        "var_theta": float(np.var(r.theta, axis=1).mean() * deg2),
+        "runs_deg2": {
+            k: (np.var(getattr(r, k), axis=1) * deg2).tolist() for k in ("e", "u", "theta")
+        },
+        "parts_deg2": {k: {c: v * deg2 for c, v in d.items()} for k, d in parts.items()},
+        "crossover_d": ol.crossover_d,
+        "phase_margin_d": ol.phase_margin_d,
+        "crossover_t": ol.crossover_t,
+        "phase_margin_t": ol.phase_margin_t,
+        "motion_lead_phase_deg": ol.motion_lead_phase_deg,
+    }
+    if fit:  # the pilot as an experimenter would identify it from the first run (Fig 6.8-6.9)
+        est = fit_pitch_pilot(r.ft, r.fd, r.u[0], cfg)
+        out["estimated"] = dataclasses.asdict(est.pilot)
+        out["vaf_percent"] = est.vaf_percent
+    return out
 
 
 def _levels(n: int) -> tuple[bool, bool, bool]:

@@ -5,13 +5,12 @@ power of u by default) are identified with both methods; the sample standard dev
 of the estimates at the 24 input frequencies are compared, and the ARX model's analytic
 standard deviation (Eq 2.16-2.17, and the same parameter covariance propagated through the exact
 H(theta) by sampling) is averaged over the runs for comparison with the sample one (Fig 2.9).
-Runs are simulated in batches, vectorised, on two threads.
+Runs are simulated in batches, vectorised; each batch is a task (:mod:`twin.tasks`), so a
+study runs on one process or a Dask cluster with the same result.
 """
 
 from __future__ import annotations
 
-import threading
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
@@ -26,6 +25,7 @@ from twin.pilot.loop import remnant_scale_for, simulate_loop
 from twin.pilot.model import RollPilot
 from twin.plotting import finish, pyplot
 from twin.progress import ProgressFn
+from twin.tasks.engine import Engine, using
 
 FloatArray = NDArray[np.float64]
 ComplexArray = NDArray[np.complex128]
@@ -162,33 +162,46 @@ def monte_carlo(
     pilot: RollPilot | None = None,
     batch: int = 500,
     fit_runs: int = 0,
-    workers: int = 2,
     progress: ProgressFn | None = None,
+    scheduler: Engine | str | None = None,
 ) -> MonteCarloResult:
     """Run the Chapter 2 Monte-Carlo study.
+
+    Each batch of runs is one task (:mod:`twin.tasks`), a pure function of the pilot, the
+    remnant scale, the ARX orders and its seed: the result is bit-identical whatever runs the
+    batches (this process, a local cluster, a remote one).
 
     Parameters
     ----------
     runs : int
         Number of closed-loop runs (10,000 in the thesis).
     seed : int
-        Seed; batch ``b`` uses ``seed + b`` (same seed, same bits).
+        Seed; batch ``b`` uses ``seed + b`` (same seed and batch size, same bits).
     remnant_ratio : float
         Remnant power over control-signal power (0.1 in §2.5.1).
     pilot : RollPilot, optional
         The simulated pilot; Table 2.1 by default.
     batch : int
-        Runs simulated together (memory: about 0.26 MB per run).
+        Runs simulated together, vectorised, in one task (memory: about 0.26 MB per run).
     fit_runs : int
         Fit the pilot model to the first this many runs of each batch (slow: ~0.1 s a run).
-    workers : int
-        Threads.
     progress : callable, optional
-        Called with a message after each batch.
+        Called with the runs done as batches finish.
+    scheduler : Engine or str, optional
+        Where the batches run (:func:`twin.tasks.engine.using`; default this process).
+
+    Raises
+    ------
+    SignalError
+        For fewer than 2 runs or a batch size below 1.
+    TaskError
+        When a batch failed (named with its seed).
 
     """
     if runs < 2:
         raise SignalError(f"a Monte-Carlo study needs at least 2 runs; got {runs}")
+    if batch < 1:
+        raise SignalError(f"a Monte-Carlo batch needs at least 1 run; got {batch}")
     p = pilot or RollPilot()
     fd, ft = roll_task()
     scale = remnant_scale_for(p, fd, ft, remnant_ratio)
@@ -197,20 +210,11 @@ def monte_carlo(
         *(decimate(s[0], first.rate_hz) for s in (first.u, first.e, first.x))
     ).orders
     sizes = [min(batch, runs - b0) for b0 in range(0, runs, batch)]
-    done, lock = [0], threading.Lock()
-    if progress:
-        progress("Monte-Carlo runs", 0, runs)
-
-    def job(b: int):
-        out = _batch(p, fd, ft, sizes[b], seed + b, scale, orders, fit_runs)
-        with lock:  # runs finished, counted and reported in order
-            done[0] += sizes[b]
-            if progress:
-                progress("Monte-Carlo runs", done[0], runs)
-        return out
-
-    with ThreadPoolExecutor(max(1, workers)) as pool:
-        parts = list(pool.map(job, range(len(sizes))))
+    args = [(p, fd, ft, n, seed + b, scale, orders, fit_runs) for b, n in enumerate(sizes)]
+    inputs = [{"batch": b, "runs": n, "seed": seed + b} for b, n in enumerate(sizes)]
+    counted = _RunCounter(progress, sizes) if progress else None
+    with using(scheduler) as engine:
+        parts = engine.map(_batch, args, inputs, "Monte-Carlo batches", counted).values()
     w = parts[0][0]
     fc = {"pe": np.vstack([q[1] for q in parts]), "px": np.vstack([q[2] for q in parts])}
     arx = {"pe": np.vstack([q[3] for q in parts]), "px": np.vstack([q[4] for q in parts])}
@@ -219,3 +223,18 @@ def monte_carlo(
     pilots = {m: [pp for q in parts for pp in q[6][m]] for m in ("fc", "arx")}
     truth = {"pe": p.h_pe(w), "px": p.h_px(w)}
     return MonteCarloResult(w, fc, arx, *std[0], *std[1], truth, orders, pilots)
+
+
+class _RunCounter:
+    """Progress in runs, not batches: finished batches are counted as their runs."""
+
+    def __init__(self, progress: ProgressFn, sizes: list[int]) -> None:
+        self.progress, self.sizes, self.total = progress, sizes, sum(sizes)
+
+    def __call__(self, message: str, done: float | None = None, total: float | None = None):
+        if done is None:
+            self.progress(message)
+            return
+        # batches finish in any order; all but the last are full, so done batches ~ runs
+        runs = min(int(done) * self.sizes[0], self.total)
+        self.progress("Monte-Carlo runs", runs, self.total)

@@ -58,6 +58,7 @@ from twin.pilot.adapt import (
 )
 from twin.pilot.pitch import PitchPilot, open_loops
 from twin.progress import ProgressFn
+from twin.tasks.engine import Engine, using
 from twin.thesis import TABLE_6_3, TABLES_6_4_TO_6_7
 
 #: Factors of Table 6.3 and their levels (first, second).
@@ -350,28 +351,27 @@ def run_population(
     n_subjects: int = 6,
     seed: int = 0,
     progress: ProgressFn | None = None,
-    workers: int = 1,
+    scheduler: Engine | str | None = None,
 ) -> PopulationResult:
     """Fly the eight conditions with ``n_subjects`` adaptive subjects and run the ANOVA.
 
-    ``workers`` > 1 flies subjects in that many processes (same result: every subject's
-    randomness comes from its own seed).
+    Each subject is a task (:mod:`twin.tasks`): its randomness comes from its own seed, so the
+    result is the same whatever runs the subjects (``scheduler``; default this process).
+
+    Raises
+    ------
+    TaskError
+        When a subject failed (named with its number and seed).
+
     """
     subs = subjects(n_subjects, seed)
-    rows: list[dict[str, float]] = []
-    if progress:
-        progress("subjects", 0, len(subs))
-    if workers > 1:
-        from concurrent.futures import ProcessPoolExecutor
-
-        with ProcessPoolExecutor(workers) as pool:
-            for k, r in enumerate(pool.map(fly_subject, subs, [seed] * len(subs)), 1):
-                rows += r
-                if progress:
-                    progress("subjects", k, len(subs))
-    else:
-        for k, s in enumerate(subs, 1):
-            rows += fly_subject(s, seed)
-            if progress:
-                progress("subjects", k, len(subs))
+    with using(scheduler) as engine:
+        flown = engine.map(
+            fly_subject,
+            [(s, seed) for s in subs],
+            [{"subject": k, "seed": seed} for k in range(len(subs))],
+            "subjects",
+            progress,
+        ).values()
+    rows = [row for r in flown for row in r]
     return PopulationResult(rows, anova(rows), seed)

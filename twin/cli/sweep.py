@@ -1,0 +1,60 @@
+"""``twin sweep GRID.toml``: a parameter grid, one task per point, one tidy table."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from twin.cli import common
+
+#: Exit code of a sweep whose table was written but some points failed.
+EXIT_PARTIAL = 1
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    """Add ``twin sweep`` to the ``twin`` parser."""
+    from twin.tasks import sweep
+
+    p = sub.add_parser(
+        "sweep",
+        parents=[
+            common.out_parent("sweep folder (default out/sweep-<grid file's name>)"),
+            common.json_parent("the sweep's manifest (sweep.json)"),
+            common.quiet_parent(),
+            common.scheduler_parent(),
+        ],
+        help="run a parameter grid (TOML): describing functions or the pitch task per point",
+        description=sweep.__doc__.split("\n\n", 1)[0]  # type: ignore[union-attr]
+        + " Writes the tidy table (CSV or Parquet), each point's result (points/NNNN.json), "
+        "sweep.json and sweep.png. A point that fails is listed with its inputs and the others "
+        f"are written (exit code {EXIT_PARTIAL}). Tasks: "
+        + "; ".join(f"{k}: {v}" for k, v in sweep.TASKS.items()),
+    )
+    p.add_argument("grid", metavar="GRID_TOML", help="sweep file (see twin.tasks.sweep)")
+    p.add_argument("--format", choices=("csv", "parquet"), default="csv",
+                   help="table format (default csv)")  # fmt: skip
+    p.set_defaults(func=_cmd_sweep)
+
+
+def _cmd_sweep(args: argparse.Namespace) -> int:
+    from twin.tasks.sweep import read_grid, run_sweep
+    from twin.tasks.sweep_report import write_sweep
+
+    grid = read_grid(args.grid)
+    out = Path(args.out) if args.out else Path("out") / f"sweep-{Path(args.grid).stem}"
+    if out.exists() and not out.is_dir():
+        from twin.errors import UsageError
+
+        raise UsageError(f"--out {out} is a file; give a folder for the sweep")
+    with common.engine(args) as engine:
+        result = run_sweep(grid, engine, common.progress(args))
+    table = write_sweep(result, out, args.format)
+    if args.json:
+        print((out / "sweep.json").read_text(), end="")
+    else:
+        print(f"{len(result.points) - len(result.failures)} of {len(result.points)} points "
+              f"({result.scheduler}); table: {table}")  # fmt: skip
+    for f in result.failures:
+        print(f"twin: point failed: {f.describe()}", file=sys.stderr)
+    return EXIT_PARTIAL if result.failures else 0
