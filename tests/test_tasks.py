@@ -182,7 +182,8 @@ def test_batch_diagnosis_refuses_a_folder_without_runs(tmp_path):
         ({"task": "agard"}, "task must be one of"),
         ({"grid": {"break_hz": []}}, "non-empty list"),
         ({"grid": {"break_hz": ["fast"]}}, "must be a float"),
-        ({"grid": {"delay_ms": [-5.0]}}, "finite number >= 0"),
+        ({"grid": {"delay_ms": [-5.0]}}, r"number in \[0, 10000\]"),
+        ({"grid": {"break_hz": [1e300]}}, r"number in \[0, 100\]"),
         ({"grid": {"dof": ["up"]}}, "must be one of surge"),
         ({"grid": {"colour": [1]}}, "unknown axis"),
         ({"gain": 2}, "unknown key 'gain'"),
@@ -235,3 +236,24 @@ def test_agard_report_dofs_as_tasks_equal_one_session(cluster, tmp_path):
     runs = sorted(p.name for p in (tmp_path / "b" / "runs").iterdir())
     assert runs == sorted(p.name for p in (tmp_path / "a" / "runs").iterdir())
     assert runs[0].startswith("00-") and any(r.startswith("1000-") for r in runs)
+
+
+def test_a_result_that_cannot_come_back_is_a_failure_not_a_lost_batch(cluster):
+    # a generator cannot be pickled back from the worker; the other task's result is kept
+    out = cluster.map(eval, [("(x for x in [1])",), ("1 + 1",)], [{"k": 0}, {"k": 1}], "evals")
+    assert out.results[1] == 2 and [f.index for f in out.failures] == [0]
+    assert "pickle" in out.failures[0].error.lower() or "serializ" in out.failures[0].error
+
+
+def test_sweep_refuses_an_out_folder_it_did_not_write(tmp_path, capsys, monkeypatch):
+    grid = tmp_path / "g.toml"
+    grid.write_text('task = "df"\nmodel = "reduced"\n')
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    (mine / "keep.txt").write_text("the user's")
+    assert main(["sweep", str(grid), "--out", str(mine), "--scheduler", "inline"]) == 2
+    assert "is not an earlier output (no sweep.json)" in capsys.readouterr().err
+    monkeypatch.chdir(mine)
+    assert main(["sweep", str(grid), "--out", ".", "--scheduler", "inline"]) == 2
+    assert "current folder" in capsys.readouterr().err
+    assert (mine / "keep.txt").read_text() == "the user's" and grid.is_file()

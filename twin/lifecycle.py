@@ -18,6 +18,8 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Self
 
+from twin.errors import UsageError
+
 
 def staging_dir(final: Path) -> Path:
     """Return a new hidden folder beside ``final`` to write into before renaming it there.
@@ -33,14 +35,46 @@ def staging_dir(final: Path) -> Path:
     return tmp
 
 
-@contextmanager
-def replacing_dir(final: str | Path) -> Iterator[Path]:
-    """Yield a staging folder that replaces ``final`` when the block ends without an error.
+def check_output_dir(final: str | Path, marker: str) -> None:
+    """Refuse an output folder :func:`replacing_dir` must not replace (see there).
 
-    An existing ``final`` is removed only then; on an error the staging folder is removed and
-    ``final`` is left as it was.
+    Commands call it before their work, so a bad ``--out`` costs nothing.
     """
     final = Path(final)
+    here = Path.cwd().resolve()
+    where = final.resolve()
+    if where == here or where in here.parents:
+        raise UsageError(f"output folder {final} is the current folder or above it; give a new "
+                         "folder")  # fmt: skip
+    if final.exists() and not final.is_dir():
+        raise UsageError(f"output folder {final} is a file; give a folder")
+    if final.is_dir() and any(final.iterdir()) and not (final / marker).is_file():
+        raise UsageError(f"output folder {final} exists and is not an earlier output (no "
+                         f"{marker}); give a new folder or remove it")  # fmt: skip
+
+
+@contextmanager
+def replacing_dir(final: str | Path, marker: str) -> Iterator[Path]:
+    """Yield a staging folder that replaces ``final`` when the block ends without an error.
+
+    Parameters
+    ----------
+    final : str or Path
+        The output folder.
+    marker : str
+        A file every output of this kind holds (e.g. ``report.json``): an existing ``final``
+        is replaced only if it is empty or holds it (an earlier output of the same kind), so
+        a user's own folder, the current folder or one holding the inputs is never removed.
+
+    Raises
+    ------
+    UsageError
+        Before anything is written, for a ``final`` that is a file, the current folder or one
+        above it, or a non-empty folder that is not an earlier output of this kind.
+
+    """
+    final = Path(final)
+    check_output_dir(final, marker)
     tmp = staging_dir(final)
     try:
         yield tmp

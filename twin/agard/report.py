@@ -54,7 +54,7 @@ def write_report(
     another in this process whatever the scheduler.
     """
     bounds = omct.read_bounds(bounds_path or omct.EXAMPLE_BOUNDS)
-    with replacing_dir(out) as tmp:
+    with replacing_dir(out, "report.json") as tmp:
         if rrd is not None or len(dofs) < 2:
             parts = _in_session(bench, dofs, tmp, rrd, progress, bounds)
         else:

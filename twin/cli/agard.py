@@ -243,6 +243,9 @@ def _cmd_report(args: argparse.Namespace) -> int:
         )
     bench = _bench(args, args.target)
     out = Path(args.out or f"out/agard-{bench.config.name}-{bench.model}")
+    from twin.lifecycle import check_output_dir
+
+    check_output_dir(out, "report.json")
     with common.engine(args) as engine:
         report = write_report(bench, args.dof, out, args.rrd, common.progress(args),
                               scheduler=engine)  # fmt: skip

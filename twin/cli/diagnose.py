@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 
 from twin.cli import common
+from twin.lifecycle import check_output_dir
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -82,9 +83,10 @@ def _cmd_each(args: argparse.Namespace) -> int:
     options = {"model": args.model, "max_hz": args.max_hz, "seed": args.seed, "dofs": args.dof,
                "imu_noise": args.imu_noise}  # fmt: skip
     config = _nominal(args)
+    out = Path(args.out) if args.out else Path("out") / "diagnose-batch"
+    check_output_dir(out, "batch.json")
     with common.engine(args) as engine:
         b = diagnose_each(args.runs, config, engine, common.progress(args), **options)
-    out = Path(args.out) if args.out else Path("out") / "diagnose-batch"
     table = write_batch(b, out, figures=not args.no_figures)
     if args.json:
         print((out / "batch.json").read_text(), end="")
@@ -104,12 +106,13 @@ def _cmd_diagnose(args: argparse.Namespace) -> int:
 
     if args.each:
         return _cmd_each(args)
+    out = Path(args.out) if args.out else Path("out") / f"diagnose-{Path(args.runs[0]).name}"
+    check_output_dir(out, "diagnosis.json")
 
     d = diagnose(
         args.runs, _nominal(args), args.model, args.validate, args.max_hz, args.seed, args.dof,
         progress=common.progress(args), imu_noise=args.imu_noise,
     )  # fmt: skip
-    out = Path(args.out) if args.out else Path("out") / f"diagnose-{Path(args.runs[0]).name}"
     write_report(d, out, figures=not args.no_figures, rrd=not args.no_figures)
     if args.save_config:
         d.extended_config.save(args.save_config)

@@ -38,15 +38,13 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def _cmd_sweep(args: argparse.Namespace) -> int:
+    from twin.lifecycle import check_output_dir
     from twin.tasks.sweep import read_grid, run_sweep
     from twin.tasks.sweep_report import write_sweep
 
     grid = read_grid(args.grid)
     out = Path(args.out) if args.out else Path("out") / f"sweep-{Path(args.grid).stem}"
-    if out.exists() and not out.is_dir():
-        from twin.errors import UsageError
-
-        raise UsageError(f"--out {out} is a file; give a folder for the sweep")
+    check_output_dir(out, "sweep.json")
     with common.engine(args) as engine:
         result = run_sweep(grid, engine, common.progress(args))
     table = write_sweep(result, out, args.format)

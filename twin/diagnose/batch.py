@@ -142,7 +142,7 @@ def diagnose_each(
 
     """
     groups = [measurement_runs(t) for t in targets]
-    names = _unique([Path(t).name or "measurement" for t in targets])
+    names = _unique([Path(t).resolve().name or "measurement" for t in targets])
     data = [[read_run(p) for p in g] for g in groups]
     with using(scheduler) as engine:
         outcome = engine.map(
@@ -161,11 +161,22 @@ def diagnose_each(
 
 
 def _unique(names: list[str]) -> list[str]:
-    seen: dict[str, int] = {}
-    out = []
+    """Return the names made unique: a repeated name gets ``-2``, ``-3``, ... (never one taken).
+
+    >>> _unique(["a", "a", "a-2", "b"])
+    ['a', 'a-3', 'a-2', 'b']
+
+    """
+    taken = set(names)
+    out: list[str] = []
     for n in names:
-        seen[n] = seen.get(n, 0) + 1
-        out.append(n if seen[n] == 1 and names.count(n) == 1 else f"{n}-{seen[n]}")
+        if n not in out:
+            out.append(n)
+            continue
+        k = 2
+        while f"{n}-{k}" in taken or f"{n}-{k}" in out:
+            k += 1
+        out.append(f"{n}-{k}")
     return out
 
 
@@ -174,7 +185,7 @@ def write_batch(result: BatchResult, out: str | Path, figures: bool = True) -> P
     from twin.diagnose.report import write_report
 
     out = Path(out)
-    with replacing_dir(out) as tmp:
+    with replacing_dir(out, "batch.json") as tmp:
         for name, d in zip(result.names, result.diagnoses, strict=True):
             if d is not None:
                 write_report(d, tmp / name, figures=figures, rrd=figures)

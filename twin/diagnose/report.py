@@ -149,7 +149,7 @@ def _recording(d: Diagnosis, path: Path) -> None:
 def write_report(d: Diagnosis, out: str | Path, figures: bool = True, rrd: bool = True) -> Path:
     """Write ``summary.md``, ``diagnosis.json``, figures and ``diagnosis.rrd`` to ``out``."""
     out = Path(out)
-    with replacing_dir(out) as tmp:
+    with replacing_dir(out, "diagnosis.json") as tmp:
         (tmp / "summary.md").write_text(summary(d))
         (tmp / "diagnosis.json").write_text(json.dumps(d.to_dict(), indent=2) + "\n")
         if figures:

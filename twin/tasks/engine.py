@@ -34,6 +34,7 @@ Examples
 
 from __future__ import annotations
 
+import difflib
 import logging
 import os
 import re
@@ -51,6 +52,8 @@ from twin.tasks.outcome import Failure, Outcome
 SCHEDULER_ENV = "TWIN_SCHEDULER"
 #: ``--scheduler`` when neither the option nor the environment variable is given.
 DEFAULT_SCHEDULER = "local"
+#: Most worker processes ``local:N`` starts.
+MAX_LOCAL_WORKERS = 256
 #: How long to wait for a remote scheduler to answer and to have a worker [s].
 CONNECT_TIMEOUT_S = 20.0
 SCHEDULER_HELP = (
@@ -128,15 +131,30 @@ def parse_scheduler(text: str | None) -> SchedulerSpec:
         return SchedulerSpec("local")
     if value.startswith("local:"):
         n = value.removeprefix("local:")
-        if not n.isdigit() or int(n) < 1:
-            raise UsageError(f"{source} local:N needs a worker count N >= 1; got {raw!r}")
+        if not re.fullmatch(r"[0-9]{1,4}", n) or not 1 <= int(n) <= MAX_LOCAL_WORKERS:
+            raise UsageError(f"{source} local:N needs a worker count 1 <= N <= "
+                             f"{MAX_LOCAL_WORKERS}; got {raw!r}")  # fmt: skip
         return SchedulerSpec("local", workers=int(n))
-    if _ADDRESS.match(value):
+    host = value.split("://")[-1].rsplit(":", 1)[0]
+    near = difflib.get_close_matches(host, ["local", "inline"], cutoff=0.6)
+    if _ADDRESS.match(value) and near and host not in ("localhost", "127.0.0.1"):
+        raise UsageError(f"{source} {raw!r} looks like a misspelt 'local:N' or 'inline'; "
+                         "a scheduler address is tcp://HOST:PORT")  # fmt: skip
+    if _ADDRESS.match(value) and 1 <= int(value.rsplit(":", 1)[1]) <= 65535:
         return SchedulerSpec("remote", address=value if "://" in value else f"tcp://{value}")
     raise UsageError(
         f"{source} must be 'local', 'local:N', 'inline' or a scheduler address such as "
         f"tcp://HOST:8786; got {raw!r}"
     )
+
+
+def _failure(i: int, inputs: Mapping[str, Any], e: BaseException, tb: Any) -> Failure:
+    """Return a failed task's record: the same text whether it ran here or on a worker."""
+    from concurrent.futures import CancelledError
+
+    error = "cancelled" if isinstance(e, CancelledError) else f"{type(e).__name__}: {e}"
+    text = "".join(traceback.format_exception(type(e), e, tb)) if tb is not None else ""
+    return Failure(i, dict(inputs), error, text)
 
 
 def _twin_version() -> str:
@@ -283,10 +301,8 @@ class Engine:
         for i, a in enumerate(args):
             try:
                 out.results[i] = fn(*a)
-            except Exception as e:  # reported with its inputs; the others go on
-                out.failures.append(
-                    Failure(i, dict(inputs[i]), f"{type(e).__name__}: {e}", traceback.format_exc())
-                )
+            except (Exception, SystemExit) as e:  # reported with its inputs; the others go on
+                out.failures.append(_failure(i, inputs[i], e, e.__traceback__))
             if progress:
                 progress(what, i + 1, len(args))
         return out
@@ -301,19 +317,11 @@ class Engine:
         try:
             for done, fut in enumerate(as_completed(futures), 1):
                 i = index[fut.key]
-                if fut.status == "finished":
-                    out.results[i] = fut.result()
-                else:
-                    e = fut.exception()
-                    tb = fut.traceback()
-                    out.failures.append(
-                        Failure(
-                            i,
-                            dict(inputs[i]),
-                            f"{type(e).__name__}: {e}",
-                            "".join(traceback.format_tb(tb)) if tb is not None else "",
-                        )
-                    )
+                try:
+                    out.results[i] = fut.result()  # raises the task's error, or a transfer's
+                except (Exception, SystemExit) as e:
+                    tb = fut.traceback() if fut.status == "error" else e.__traceback__
+                    out.failures.append(_failure(i, inputs[i], e, tb))
                 fut.release()
                 if progress:
                     progress(what, done, len(args))

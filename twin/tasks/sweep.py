@@ -75,6 +75,8 @@ SETTINGS: dict[str, dict[str, Any]] = {
     "df": {"model": "reduced"},
     "pilot": {"runs": 2, "remnant": 0.15},
 }
+#: Largest value of each number axis: a platform filter up to 100 Hz, a delay up to 10 s.
+FLOAT_MAX = {"break_hz": 100.0, "delay_ms": 10_000.0}
 #: Most points a sweep may have (a bigger study: several sweep files, or the library).
 MAX_POINTS = 1_000_000
 #: Table columns per point of each task, after the axes.
@@ -135,7 +137,7 @@ class Grid:
                 point.get("break_hz"), point.get("delay_ms"), point.get("noise"),
                 point.get("resonance"),
             )  # fmt: skip
-        except TwinError as e:
+        except (TwinError, ArithmeticError, ValueError) as e:
             raise SweepError(f"{self.source}: point {_describe(point)}: {e}") from None
 
 
@@ -215,8 +217,9 @@ def _value(source: str, key: str, value: object, kind: type) -> Any:
     )  # fmt: skip
     if not ok:
         raise SweepError(f"{source}: {key} must be a {kind.__name__}; got {value!r}")
-    if kind is float and (not np.isfinite(value) or value < 0):  # type: ignore[call-overload]
-        raise SweepError(f"{source}: {key} must be a finite number >= 0; got {value!r}")
+    top = FLOAT_MAX.get(name, np.inf)
+    if kind is float and not 0 <= value <= top:  # type: ignore[operator]
+        raise SweepError(f"{source}: {key} must be a number in [0, {top:g}]; got {value!r}")
     if kind is int and value < 0:  # type: ignore[operator]
         raise SweepError(f"{source}: {key} must be >= 0; got {value!r}")
     if name == "dof" and value not in DOF_NAMES:
@@ -331,10 +334,12 @@ class SweepResult:
         return out
 
     def table(self):
-        """Return the tidy table as a pandas DataFrame."""
+        """Return the tidy table as a pandas DataFrame (with its columns when empty)."""
         import pandas as pd
 
-        return pd.DataFrame(self.rows())
+        measures = DF_COLUMNS if self.grid.task == "df" else PILOT_COLUMNS
+        columns = ["point", *(list(self.grid.axes) or ["config"]), *measures]
+        return pd.DataFrame(self.rows(), columns=columns)
 
 
 def run_sweep(

@@ -42,7 +42,7 @@ def write_sweep(result: SweepResult, out: str | Path, table_format: str = "csv")
         raise SweepError(f"table format must be one of {', '.join(FORMATS)}; got {table_format!r}")
     out = Path(out)
     g = result.grid
-    with replacing_dir(out) as tmp:
+    with replacing_dir(out, "sweep.json") as tmp:
         table = result.table()
         name = f"sweep.{table_format}"
         if table_format == "csv":
