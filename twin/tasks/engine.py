@@ -196,15 +196,6 @@ class Engine:
             self._cluster.close()
             self._cluster = None
 
-    @property
-    def workers(self) -> int:
-        """Tasks that can run at once (1 inline; the workers' threads on a cluster)."""
-        if self.spec.kind == "inline":
-            return 1
-        if self._client is None and self.spec.kind == "local":
-            return self.spec.workers or cpu_count()
-        return sum(self.client().nthreads().values())
-
     def client(self) -> Any:
         """Return the Dask client, starting the local cluster or connecting first if needed."""
         if self._client is not None:
