@@ -117,7 +117,7 @@ def test_cli_adapt_prints_parameters_and_margins(capsys):
     assert doc["pilot"]["k_m"] < 0.05
     assert doc["crossover_disturbance_rad_s"] > 0
     assert main(["pilot", "experiment", "--pilot", "adaptive", "--subjects", "1"]) == 2
-    assert "at least 2 subjects" in capsys.readouterr().err
+    assert "--subjects: must be an integer in [2, 1,000]" in capsys.readouterr().err
     assert main(["pilot", "adapt", "srs", "--weight", "0"]) == 2
     assert "weight r must be > 0" in capsys.readouterr().err
 

@@ -45,7 +45,7 @@ def test_montecarlo_and_lead_json(capsys):
     ("argv", "message"),
     [
         (["pilot", "run", "nosuch"], "unknown configuration"),
-        (["pilot", "run", "srs", "--runs", "0"], "--runs must be"),
+        (["pilot", "run", "srs", "--runs", "0"], "--runs: must be an integer in [1, 1,000]"),
         (["pilot", "run", "srs", "--remnant", "1.5"], "--remnant must be"),
         (["pilot", "identify", "/no/such.csv"], "no such pilot-run file"),
     ],
@@ -63,4 +63,4 @@ def test_a_malformed_pilot_csv_names_the_problem(capsys, tmp_path):
     assert "header must be" in capsys.readouterr().err
     bad.write_text("t,ft,fd,e,u,theta\n0,0,0,0,0,0\n0.01,0,0,nan,0,0\n")
     assert main(["pilot", "identify", str(bad)]) == 2
-    assert "e is not a finite number at row 3" in capsys.readouterr().err
+    assert "row 2 (line 3): e is nan; all values must be finite" in capsys.readouterr().err

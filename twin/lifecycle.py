@@ -3,8 +3,11 @@
 :class:`CloseOrAbort` gives a class with ``close()`` (finish: rename the output into place)
 and ``abort()`` (remove the partial output) its context-manager methods, so that leaving the
 block by an exception leaves nothing half-written; :func:`staging_dir` is the hidden folder
-such an output is written into before it is renamed into place, and :func:`replacing_dir`
-the ``with`` block that writes a report folder that way.
+such an output is written into before it is renamed into place, :func:`replacing_dir`
+the ``with`` block that writes a report folder that way and :func:`replacing_file` the one
+for a single file. :func:`check_output_file`, :func:`check_output_dir` and
+:func:`check_writable` refuse an output path before any work (the command line calls them
+while parsing, :mod:`twin.cli.common`).
 """
 
 from __future__ import annotations
@@ -27,12 +30,79 @@ def staging_dir(final: Path) -> Path:
     Made with the permissions a folder made by ``mkdir`` would have (``mkdtemp``'s private
     0700 would otherwise stay on the finished folder).
     """
-    final.parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{final.name}.", dir=final.parent))
+    try:
+        final.parent.mkdir(parents=True, exist_ok=True)
+        tmp = Path(tempfile.mkdtemp(prefix=f".{final.name}.", dir=final.parent))
+    except OSError as e:
+        raise UsageError(f"{final}: cannot be written there ({e.strerror})") from None
     mask = os.umask(0)
     os.umask(mask)
     tmp.chmod(0o777 & ~mask)
     return tmp
+
+
+def check_writable(final: str | Path) -> Path:
+    """Refuse an output path that cannot be created: under a file, or in a folder not writable.
+
+    Looks at the nearest folder that exists (the others are made when the output is written).
+
+    Raises
+    ------
+    UsageError
+        Naming the path and why (a file on the way, permission denied, read-only file system).
+
+    """
+    final = Path(final)
+    there = next((p for p in final.absolute().parents if p.exists()), None)
+    if there is not None and not there.is_dir():
+        raise UsageError(f"{final}: {there} is a file, not a folder")
+    if there is not None and not os.access(there, os.W_OK | os.X_OK):
+        raise UsageError(f"{final}: cannot write in {there} (permission denied or a read-only "
+                         "file system)")  # fmt: skip
+    return final
+
+
+def check_output_file(path: str | Path, suffixes: tuple[str, ...] = ()) -> Path:
+    """Refuse an output file that cannot be written: a folder, a bad suffix, no way to write.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file to be written.
+    suffixes : tuple of str
+        Allowed suffixes (lower case, with the dot), e.g. the figure formats; empty: any.
+
+    Raises
+    ------
+    UsageError
+        Naming the path and what is allowed.
+
+    """
+    final = Path(path)
+    if final.is_dir() or not final.name or str(path).endswith(os.sep):
+        raise UsageError(f"{final}: is a folder; give a file name")
+    if suffixes and final.suffix.lower() not in suffixes:
+        raise UsageError(f"{final}: unknown file type {final.suffix or '(none)'!r}; use one of "
+                         f"{', '.join(suffixes)}")  # fmt: skip
+    return check_writable(final)
+
+
+@contextmanager
+def replacing_file(final: str | Path) -> Iterator[Path]:
+    """Yield a hidden name beside ``final`` (same suffix) that becomes ``final`` on success.
+
+    The file appears under its name only when complete; on an exception the partial file is
+    removed. Missing parent folders are made.
+    """
+    final = check_output_file(final)
+    final.parent.mkdir(parents=True, exist_ok=True)
+    tmp = final.with_name(f".{final.stem}.partial{final.suffix}")
+    try:
+        yield tmp
+        tmp.replace(final)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
 
 
 def check_output_dir(final: str | Path, marker: str) -> None:
@@ -40,7 +110,7 @@ def check_output_dir(final: str | Path, marker: str) -> None:
 
     Commands call it before their work, so a bad ``--out`` costs nothing.
     """
-    final = Path(final)
+    final = check_writable(final)
     here = Path.cwd().resolve()
     where = final.resolve()
     if where == here or where in here.parents:

@@ -8,6 +8,7 @@ Every result object of the twin (:class:`~twin.agard.df.DfResult`, ...,
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
@@ -24,9 +25,17 @@ def pyplot() -> Any:
     return plt
 
 
-def finish(fig: Figure, path: str | None = None, dpi: int = 120) -> Figure:
-    """Lay out ``fig``, save it to ``path`` if given, and return it."""
+def save(fig: Figure, path: str | Path, dpi: int = 120) -> None:
+    """Save ``fig`` to ``path`` (format from its suffix); the file appears only when complete."""
+    from twin.lifecycle import replacing_file
+
+    with replacing_file(path) as tmp:
+        fig.savefig(tmp, dpi=dpi)
+
+
+def finish(fig: Figure, path: str | Path | None = None, dpi: int = 120) -> Figure:
+    """Lay out ``fig``, save it to ``path`` if given (:func:`save`), and return it."""
     fig.tight_layout()
     if path:
-        fig.savefig(path, dpi=dpi)
+        save(fig, path, dpi)
     return fig

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import json
 import shutil
+import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -29,7 +30,8 @@ from types import TracebackType
 import numpy as np
 from numpy.typing import NDArray
 
-from twin.errors import RunFormatError, SignalError
+from twin.checks import ENCODING, number, numbers, read_text
+from twin.errors import ConfigError, RunFormatError, SignalError
 from twin.lifecycle import staging_dir
 from twin.platform.facts import PLATFORMS
 from twin.trajectory import Trajectory, uniform_rate
@@ -41,6 +43,8 @@ HEADERS = {
     "imu.csv": ("t", "ax", "ay", "az", "p", "q", "r"),
     "actuators.csv": ("t", "l1", "l2", "l3", "l4", "l5", "l6"),
 }
+#: Highest sample rate a file may state [Hz] (a 1 MHz log is not a motion-system run).
+MAX_RATE_HZ = 1e6
 #: Allowed relative difference between a file's sample rate and the rate in meta.json.
 RATE_TOLERANCE = 0.005
 
@@ -79,30 +83,56 @@ def _read_csv(path: Path) -> FloatArray:
     name = path.name
     if not path.is_file():
         raise RunFormatError(f"{path.parent}: missing {name}")
-    with path.open() as fh:
-        header = tuple(c.strip() for c in fh.readline().strip().split(","))
-        if header != HEADERS[name]:
-            raise RunFormatError(
-                f"{name}: header must be {','.join(HEADERS[name])}; got {','.join(header)}"
-            )
-        try:
-            data = np.loadtxt(fh, delimiter=",", ndmin=2)
-        except ValueError as e:
-            raise RunFormatError(f"{name}: not a table of numbers ({e})") from None
-    if data.shape[0] < 2 or data.shape[1] != len(header):
-        raise RunFormatError(f"{name}: needs at least 2 rows of {len(header)} numbers")
-    bad = ~np.isfinite(data)
-    if bad.any():
-        row, col = np.argwhere(bad)[0]
-        raise RunFormatError(
-            f"{name}: row {row + 1} (line {row + 2}): {header[col]} is {data[row, col]}; "
-            "all values must be finite"
-        )
+    data, _ = read_table(path, HEADERS[name])
     try:
         uniform_rate(data[:, 0], name)
     except SignalError as e:
         raise RunFormatError(str(e)) from None
     return data
+
+
+def read_table(
+    path: Path, header: tuple[str, ...], optional: tuple[str, ...] = ()
+) -> tuple[FloatArray, tuple[str, ...]]:
+    """Read a CSV of numbers with a header row: ``header``, then any of ``optional``.
+
+    UTF-8 (a byte-order mark is dropped); shared by the ``twin-run/1`` files and
+    ``twin-pilot/1``.
+
+    Raises
+    ------
+    RunFormatError
+        Naming the file: not UTF-8 text, a header that is not ``header`` (+ ``optional``), a
+        value that is not a finite number, rows of different lengths, fewer than 2 rows.
+
+    """
+    try:
+        with path.open(encoding=ENCODING) as fh:
+            got = tuple(c.strip() for c in fh.readline().strip().split(","))
+            extra = got[len(header) :]
+            if got[: len(header)] != header or any(c not in optional for c in extra):
+                want = ",".join(header) + "".join(f"[,{c}]" for c in optional)
+                raise RunFormatError(f"{path}: header must be {want}; got {','.join(got)[:200]}")
+            with warnings.catch_warnings():  # an empty table is refused below, not warned of
+                warnings.simplefilter("ignore", UserWarning)
+                data = np.loadtxt(fh, delimiter=",", ndmin=2)
+    except UnicodeDecodeError as e:
+        raise RunFormatError(
+            f"{path}: not UTF-8 text (byte 0x{e.object[e.start]:02x} at offset {e.start}); "
+            "expected a CSV of numbers"
+        ) from None
+    except ValueError as e:
+        raise RunFormatError(f"{path}: not a table of numbers ({str(e)[:200]})") from None
+    if data.shape[0] < 2 or data.shape[1] != len(got):
+        raise RunFormatError(f"{path}: needs at least 2 rows of {len(got)} numbers")
+    bad = ~np.isfinite(data)
+    if bad.any():
+        row, col = np.argwhere(bad)[0]
+        raise RunFormatError(
+            f"{path}: row {row + 1} (line {row + 2}): {got[col]} is {data[row, col]}; "
+            "all values must be finite"
+        )
+    return data, got
 
 
 def _check_rate(name: str, t: FloatArray, expected: float) -> None:
@@ -112,6 +142,9 @@ def _check_rate(name: str, t: FloatArray, expected: float) -> None:
 
 
 def _check_meta(meta: object, path: Path) -> dict:
+    """Check a ``meta.json``'s keys and types (the configuration as :meth:`from_meta` does)."""
+    from twin.chain.config import MotionSystem
+
     where = f"{path}/meta.json"
     if not isinstance(meta, dict):
         raise RunFormatError(f"{where}: must hold a JSON object")
@@ -121,23 +154,19 @@ def _check_meta(meta: object, path: Path) -> dict:
         raise RunFormatError(
             f"{where}: platform must be one of {', '.join(PLATFORMS)}; got {meta.get('platform')!r}"
         )
-    cfg = meta.get("platform_config")
-    if not isinstance(cfg, dict) or not {"filter_break_hz", "delay_s", "noise"} <= cfg.keys():
-        raise RunFormatError(
-            f"{where}: platform_config must hold filter_break_hz, delay_s and noise"
-        )
-    rate = meta.get("command_rate_hz")
-    if not isinstance(rate, int | float) or rate <= 0:
-        raise RunFormatError(f"{where}: command_rate_hz must be a number > 0; got {rate!r}")
+    try:
+        MotionSystem.from_meta(meta["platform"], meta.get("platform_config"))
+    except ConfigError as e:
+        raise RunFormatError(f"{where}: {e}") from None
+    number(meta.get("command_rate_hz"), f"{where}: command_rate_hz", lo=0, lo_open=True,
+           hi=MAX_RATE_HZ, error=RunFormatError)  # fmt: skip
     imu = meta.get("imu")
-    if (
-        not isinstance(imu, dict)
-        or not isinstance(imu.get("rate_hz"), int | float)
-        or imu["rate_hz"] <= 0
-        or not isinstance(imu.get("position_m"), list)
-        or len(imu["position_m"]) != 3
-    ):
+    if not isinstance(imu, dict):
         raise RunFormatError(f"{where}: imu must hold position_m [x, y, z] and rate_hz > 0")
+    number(imu.get("rate_hz"), f"{where}: imu.rate_hz", lo=0, lo_open=True, hi=MAX_RATE_HZ,
+           error=RunFormatError)  # fmt: skip
+    numbers(imu.get("position_m"), f"{where}: imu.position_m [x, y, z]", size=3,
+            error=RunFormatError)  # fmt: skip
     return meta
 
 
@@ -160,8 +189,9 @@ def read_run(folder: str | Path | RecordedRun) -> RecordedRun:
     meta_path = path / "meta.json"
     if not meta_path.is_file():
         raise RunFormatError(f"{path}: missing meta.json")
+    text = read_text(meta_path, "a twin-run/1 meta.json", RunFormatError)
     try:
-        meta = _check_meta(json.loads(meta_path.read_text()), path)
+        meta = _check_meta(json.loads(text), path)
     except json.JSONDecodeError as e:
         raise RunFormatError(f"{meta_path}: not valid JSON ({e})") from None
     cmd = _read_csv(path / "commands.csv")
@@ -171,7 +201,7 @@ def read_run(folder: str | Path | RecordedRun) -> RecordedRun:
     act = None
     if (path / "actuators.csv").exists():
         act = _read_csv(path / "actuators.csv")
-    commands = _trajectory(cmd)
+    commands = _trajectory(cmd, path / "commands.csv")
     return RecordedRun(path, meta, commands, imu[:, 0], imu[:, 1:], act)
 
 
@@ -182,11 +212,19 @@ def read_commands(path: str | Path) -> Trajectory:
         raise RunFormatError(f"{p}: no such commands file")
     if p.name != "commands.csv":
         raise RunFormatError(f"{p}: a commands file must be named commands.csv (twin-run/1)")
-    return _trajectory(_read_csv(p))
+    return _trajectory(_read_csv(p), p)
 
 
-def _trajectory(cmd: FloatArray) -> Trajectory:
-    return Trajectory(uniform_rate(cmd[:, 0]), cmd[:, 1:], float(cmd[0, 0]))
+def _trajectory(cmd: FloatArray, path: Path) -> Trajectory:
+    """Return the commands of a ``commands.csv`` (refused beyond :data:`MAX_COMMAND`)."""
+    from twin.signals import check_physical
+
+    tr = Trajectory(uniform_rate(cmd[:, 0]), cmd[:, 1:], float(cmd[0, 0]))
+    try:
+        check_physical(tr, str(path))
+    except SignalError as e:
+        raise RunFormatError(str(e)) from None
+    return tr
 
 
 def _write_rows(fh, t: FloatArray, values: FloatArray, block: int = 8192) -> None:

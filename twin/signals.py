@@ -26,6 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from twin.checks import check_duration
 from twin.errors import SignalError, SignalLimitError
 from twin.frames import DOF_NAMES, acceleration_unit, dof_index
 from twin.thesis import TABLE_5_2
@@ -378,7 +379,7 @@ def square_steps(
     if step_s * rate_hz < 2 or rest_s < 0:
         raise SignalError(f"steps must last at least 2 command samples; got {step_s} s")
     levels = STEP_PATTERN * repeats
-    total = 2 * rest_s + len(levels) * step_s
+    total = check_duration(2 * rest_s + len(levels) * step_s, "step signal", SignalError)
     t = np.arange(round(total * rate_hz) + 1) / rate_hz
     x = np.zeros_like(t)
     v = p = 0.0
@@ -393,6 +394,35 @@ def square_steps(
     values[:, dof_index(dof)] = x
     return StepSignal(Trajectory(rate_hz, values), dof, float(amplitude), float(step_s), rest_s,
                       levels)  # fmt: skip
+
+
+#: Largest pose offset a command may ask for: 10 m and 180 deg from neutral. Beyond them a
+#: command is not a motion-platform pose (a unit or file error); within them the platform's
+#: own limits (stroke, velocity, acceleration) apply as the limit mode says.
+MAX_COMMAND = (10.0, 10.0, 10.0, np.pi, np.pi, np.pi)
+
+
+def check_physical(commands: Trajectory, what: str = "the commands") -> None:
+    """Raise :class:`SignalLimitError` for a pose command beyond :data:`MAX_COMMAND`.
+
+    Examples
+    --------
+    >>> bad = Trajectory(100.0, np.array([[0, 0, 0, 0, 0, 0], [0, 0, 1e300, 0, 0, 0.0]]))
+    >>> check_physical(bad, "commands.csv")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    twin.errors.SignalLimitError: commands.csv: heave is 1e+300 m at row 2 (t = 0.01 s); ...
+
+    """
+    over = np.abs(commands.values) > np.asarray(MAX_COMMAND)
+    if over.any():
+        row, col = np.argwhere(over)[0]
+        unit = "m" if col < 3 else "rad"
+        raise SignalLimitError(
+            f"{what}: {DOF_NAMES[col]} is {commands.values[row, col]:g} {unit} at row {row + 1} "
+            f"(t = {commands.t0 + row / commands.rate_hz:g} s); a pose command must lie within "
+            "10 m and 180 deg of neutral"
+        )
 
 
 def check_signal(commands: Trajectory, platform: str, what: str = "the signal") -> None:
@@ -426,9 +456,10 @@ def check_signal(commands: Trajectory, platform: str, what: str = "the signal") 
 
 
 def rest(duration_s: float, rate_hz: float = 100.0) -> Trajectory:
-    """Return neutral-pose commands for ``duration_s`` seconds."""
+    """Return neutral-pose commands for ``duration_s`` seconds (refused if a run cannot fit)."""
     if not np.isfinite(duration_s) or duration_s <= 0:
         raise SignalError(f"rest duration must be a positive number of seconds; got {duration_s}")
+    check_duration(duration_s, f"rest-{duration_s:g}", SignalError)
     return Trajectory(rate_hz, np.zeros((round(duration_s * rate_hz) + 1, 6)))
 
 

@@ -32,6 +32,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from twin.agard.session import Session
+from twin.checks import number, numbers, read_text
 from twin.errors import SignalError, TwinError
 from twin.frames import DOF_NAMES, dof_index
 from twin.measurement.describing_function import ResponseMixin, describing_function, phase_deg
@@ -94,8 +95,9 @@ def read_bounds(path: str | Path = EXAMPLE_BOUNDS) -> OmctBounds:
     p = Path(path)
     if not p.is_file():
         raise BoundsFileError(f"{p}: no such OMCT bounds file")
+    text = read_text(p, f"a {BOUNDS_FORMAT} TOML file", BoundsFileError)
     try:
-        data = tomllib.loads(p.read_text())
+        data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as e:
         raise BoundsFileError(f"{p}: not valid TOML ({e})") from None
     if data.get("format") != BOUNDS_FORMAT:
@@ -111,7 +113,8 @@ def read_bounds(path: str | Path = EXAMPLE_BOUNDS) -> OmctBounds:
         missing = [k for k in _KEYS if k not in table]
         if missing:
             raise BoundsFileError(f"{p}: [{name}] misses {', '.join(missing)}")
-        arrays = {k: np.asarray(table[k], dtype=float) for k in _KEYS}
+        arrays = {k: numbers(table[k], f"{p}: [{name}] {k}", min_size=2, error=BoundsFileError)
+                  for k in _KEYS}  # fmt: skip
         sizes = {a.size for a in arrays.values()}
         if len(sizes) != 1 or sizes.pop() < 2:
             raise BoundsFileError(f"{p}: [{name}] arrays must have one equal length >= 2")
@@ -283,7 +286,12 @@ def run_omct(
     window_s: float = 10.0,
     label: str | None = None,
 ) -> OmctResult:
-    """Run one single sine per OMCT frequency in ``dof`` and collect the describing function."""
+    """Run one single sine per OMCT frequency in ``dof`` and collect the describing function.
+
+    ``fraction`` (of the DOF's system limit, Fig 3.6) must lie in (0, 1].
+    """
+    number(fraction, "OMCT amplitude fraction of the system limit", lo=0, lo_open=True, hi=1,
+           error=SignalError)  # fmt: skip
     cfg = session.bench.config
     ws, hs, skipped = [], [], {}
     session.expect(len(w_rad_s), f"OMCT {dof}")

@@ -37,13 +37,15 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from twin.chain.block import Backlash, Block
-from twin.chain.delay import Delay
+from twin.chain.delay import MAX_DELAY_S, Delay
 from twin.chain.extensions import Extension
-from twin.chain.filter import PlatformFilter
+from twin.chain.filter import MAX_BREAK_HZ, PlatformFilter
 from twin.chain.lti import LinearModel
 from twin.chain.noise import MotionNoise
 from twin.chain.resonance import Resonance
+from twin.checks import flag, number, read_text
 from twin.errors import ConfigError, SignalError, UnknownPlatformError
+from twin.lifecycle import replacing_file
 from twin.platform.facts import PLATFORMS, load_facts
 from twin.thesis import TABLE_6_3
 
@@ -176,13 +178,11 @@ class MotionSystem:
         changes: dict[str, object] = {}
         tags = []
         if break_hz is not None:
-            if not np.isfinite(break_hz) or break_hz < 0:
-                raise ConfigError(f"--break-hz must be >= 0 (0: no filter); got {break_hz}")
+            number(break_hz, "--break-hz", lo=0, hi=MAX_BREAK_HZ, error=ConfigError)
             changes["filter_break_hz"] = float(break_hz) or None
             tags.append(f"fb{break_hz:g}")
         if delay_ms is not None:
-            if not np.isfinite(delay_ms) or delay_ms < 0:
-                raise ConfigError(f"--delay-ms must be >= 0; got {delay_ms}")
+            number(delay_ms, "--delay-ms", lo=0, hi=MAX_DELAY_S * 1e3, error=ConfigError)
             changes["delay_s"] = float(delay_ms) / 1e3
             tags.append(f"{delay_ms:g}ms")
         if noise is not None and noise != self.noise:
@@ -292,23 +292,32 @@ class MotionSystem:
             if key not in cfg:
                 raise ConfigError(f"platform_config lacks {key!r}")
         fb = cfg["filter_break_hz"]
-        if fb is not None and (isinstance(fb, bool) or not isinstance(fb, int | float)):
-            raise ConfigError(
-                f"platform_config filter_break_hz must be a number or null; got {fb!r}"
-            )
-        if isinstance(cfg["delay_s"], bool) or not isinstance(cfg["delay_s"], int | float):
-            raise ConfigError(f"platform_config delay_s must be a number; got {cfg['delay_s']!r}")
+        if fb is not None:
+            fb = number(fb, "platform_config filter_break_hz (or null)", lo=0, lo_open=True,
+                        hi=MAX_BREAK_HZ, error=ConfigError)  # fmt: skip
         exts = cfg.get("extensions", [])
         if not isinstance(exts, list):
             raise ConfigError(f"platform_config extensions must be a list; got {exts!r}")
+        name = cfg.get("name", "recorded")
+        if not isinstance(name, str):
+            raise ConfigError(f"platform_config name must be a string; got {name!r}")
         return cls(
-            name=str(cfg.get("name", "recorded")),
+            name=name,
             platform=platform,
-            filter_break_hz=None if fb is None else float(fb),
-            delay_s=float(cfg["delay_s"]),
-            noise=bool(cfg["noise"]),
-            noise_highpass_hz=float(cfg.get("noise_highpass_hz", 1.0)),
-            resonance=bool(cfg.get("resonance", False)),
+            filter_break_hz=fb,
+            delay_s=number(
+                cfg["delay_s"], "platform_config delay_s", lo=0, hi=MAX_DELAY_S, error=ConfigError
+            ),
+            noise=flag(cfg["noise"], "platform_config noise", ConfigError),
+            noise_highpass_hz=number(
+                cfg.get("noise_highpass_hz", 1.0),
+                "platform_config noise_highpass_hz",
+                lo=0,
+                lo_open=True,
+                hi=MAX_BREAK_HZ,
+                error=ConfigError,
+            ),
+            resonance=flag(cfg.get("resonance", False), "platform_config resonance", ConfigError),
             description=description,
             extensions=tuple(Extension.from_json(e) for e in exts),
         )
@@ -322,9 +331,8 @@ class MotionSystem:
             "description": self.description,
             "platform_config": self.to_meta(),
         }
-        tmp = path.with_name(path.name + ".tmp")
-        tmp.write_text(json.dumps(data, indent=2) + "\n")
-        tmp.replace(path)
+        with replacing_file(path) as tmp:
+            tmp.write_text(json.dumps(data, indent=2) + "\n")
         return path
 
 
@@ -339,10 +347,9 @@ def _sensed(ext: Extension) -> NDArray[np.bool_]:
 def load_config(path: str | Path) -> MotionSystem:
     """Read a ``twin-config/1`` file (written by :meth:`MotionSystem.save`)."""
     path = Path(path)
+    text = read_text(path, f"a {CONFIG_FORMAT} configuration file", ConfigError)
     try:
-        data = json.loads(path.read_text())
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ConfigError(f"{path}: cannot read the configuration file ({exc})") from exc
+        data = json.loads(text)
     except json.JSONDecodeError as exc:
         raise ConfigError(f"{path}: not valid JSON ({exc.msg}, line {exc.lineno})") from exc
     if not isinstance(data, dict) or data.get("format") != CONFIG_FORMAT:

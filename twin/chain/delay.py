@@ -21,6 +21,10 @@ from twin.errors import SignalError
 FloatArray = NDArray[np.float64]
 
 
+#: Longest motion-system delay [s] (a command answered 10 s late is not a motion system).
+MAX_DELAY_S = 10.0
+
+
 @dataclass(frozen=True)
 class Delay(Block):
     """Delay every DOF by ``seconds`` (scalar or six values, each >= 0).
@@ -40,8 +44,8 @@ class Delay(Block):
     def __post_init__(self) -> None:
         """Check the delays."""
         d = np.broadcast_to(np.asarray(self.seconds, dtype=float), (6,))
-        if not np.all(np.isfinite(d)) or np.any(d < 0):
-            raise SignalError(f"delay must be finite and >= 0 s; got {self.seconds}")
+        if not np.all(np.isfinite(d)) or np.any(d < 0) or np.any(d > MAX_DELAY_S):
+            raise SignalError(f"delay must be in [0, {MAX_DELAY_S:g}] s; got {self.seconds}")
 
     @property
     def per_dof(self) -> NDArray[np.float64]:

@@ -37,6 +37,7 @@ from scipy import signal
 
 from twin.chain.block import Backlash, Block, Gain, Lead, backlash  # noqa: F401 (re-exported)
 from twin.chain.lti import LtiBlock
+from twin.checks import number
 from twin.errors import ConfigError, SignalError
 from twin.frames import DOF_NAMES
 
@@ -53,6 +54,19 @@ EFFECTS: Mapping[str, tuple[str, ...]] = {
     "sensor_filter": ("cutoff_hz", "channels"),
     "backlash": ("play",),
     "noise": ("scale",),
+}
+#: Allowed range of each numeric parameter: (low, high, low excluded). The bounds keep a
+#: configuration file physical (a 1e300 Hz filter or a 1e9 s delay is refused, not run).
+RANGES: Mapping[str, tuple[float, float, bool]] = {
+    "extra_delay_s": (-10.0, 10.0, False),
+    "gain": (0.0, 1e3, True),
+    "break_hz": (0.0, 1e3, True),
+    "frequency_hz": (0.0, 1e3, True),
+    "damping": (0.0, 100.0, True),
+    "time_constant_s": (0.0, 10.0, False),
+    "cutoff_hz": (0.0, 1e3, True),
+    "play": (0.0, 10.0, False),
+    "scale": (0.0, 1e3, False),
 }
 IMU_CHANNELS = ("ax", "ay", "az", "p", "q", "r")
 #: The IMU channel that measures each DOF's acceleration (after App. C.2.3 processing).
@@ -102,19 +116,9 @@ class Extension:
                 raise ConfigError(f"unknown DOF {dof!r}; expected one of {', '.join(DOF_NAMES)}")
         for name in names:
             if name != "channels":
-                self._number(name)
-        p = self.value
-        checks = {
-            "gain": p("gain", 0) > 0,
-            "platform_filter": p("break_hz", 0) > 0,
-            "resonance": p("frequency_hz", 0) > 0 and p("damping", 0) > 0,
-            "lead": p("time_constant_s", -1) >= 0,
-            "sensor_filter": p("cutoff_hz", 0) > 0,
-            "backlash": p("play", -1) >= 0,
-            "noise": p("scale", -1) >= 0,
-        }
-        if not checks.get(self.effect, True):
-            raise ConfigError(f"{self.describe()}: out of range ({_RANGES[self.effect]})")
+                lo, hi, lo_open = RANGES[name]
+                number(self.parameters[name], f"{self.effect} parameter {name}", lo=lo, hi=hi,
+                       lo_open=lo_open, error=ConfigError)  # fmt: skip
         if self.effect == "sensor_filter":
             ch = self.parameters["channels"]
             if (
@@ -127,14 +131,6 @@ class Extension:
                     f"sensor_filter channels must be a non-empty list of {', '.join(IMU_CHANNELS)};"
                     f" got {ch!r}"
                 )
-
-    def _number(self, name: str) -> float:
-        v = self.parameters[name]
-        if isinstance(v, bool) or not isinstance(v, int | float | np.floating | np.integer):
-            raise ConfigError(f"{self.effect} parameter {name} must be a number; got {v!r}")
-        if not np.isfinite(v):
-            raise ConfigError(f"{self.effect} parameter {name} must be finite; got {v}")
-        return float(v)
 
     def value(self, name: str, default: float = 0.0) -> float:
         """Return a numeric parameter."""
@@ -227,17 +223,6 @@ class Extension:
         if self.effect == "backlash":
             return Backlash(p("play"), mask)
         raise SignalError(f"{self.effect} is not applied to the commands")
-
-
-_RANGES = {
-    "gain": "gain > 0",
-    "platform_filter": "break_hz > 0",
-    "resonance": "frequency_hz > 0, damping > 0",
-    "lead": "time_constant_s >= 0",
-    "sensor_filter": "cutoff_hz > 0",
-    "backlash": "play >= 0",
-    "noise": "scale >= 0",
-}
 
 
 class SensorFilterStream:

@@ -28,6 +28,7 @@ from twin.chain.response import PlatformResponse
 from twin.chain.stepping import CHUNK_S, Platform
 from twin.chain.stream import ChainStream, noise_streams
 from twin.errors import SignalError
+from twin.signals import check_physical
 from twin.trajectory import Trajectory
 
 MODELS = ("full", "reduced")
@@ -204,6 +205,7 @@ def prepare(
     ms = motion_system(config) if isinstance(config, str) else config
     if not isinstance(seed, int | np.integer) or seed < 0:
         raise SignalError(f"seed must be an integer >= 0; got {seed!r}")
+    check_physical(commands)
     plat = platform if platform is not None else make_platform(ms.platform, model, limit_mode)
     notes = []
     short = ms.delays_s < plat.own_lag_s

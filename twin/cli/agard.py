@@ -14,6 +14,7 @@ from pathlib import Path
 
 from twin.cli import common
 from twin.frames import DOF_NAMES, dof_index
+from twin.lifecycle import replacing_file
 
 TESTS = ("df", "noise", "snr", "threshold", "omct")
 HELP = {
@@ -216,10 +217,8 @@ def _save(out: Path, test: str, result, payload: dict, config, bounds) -> None:
     """Write result.json and the test's figure into ``out``."""
     import matplotlib.pyplot as plt
 
-    out.mkdir(parents=True, exist_ok=True)
-    tmp = out / ".result.json.partial"
-    tmp.write_text(json.dumps(payload, indent=2) + "\n")
-    tmp.replace(out / "result.json")
+    with replacing_file(out / "result.json") as tmp:
+        tmp.write_text(json.dumps(payload, indent=2) + "\n")
     png = str(out / f"{test}.png")
     if test == "df":
         fig = result.plot(png, config=config)

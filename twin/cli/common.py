@@ -23,8 +23,12 @@ it prints on stderr only when stderr is a terminal and ``--quiet`` is not given.
 from __future__ import annotations
 
 import argparse
+from collections.abc import Callable
+from pathlib import Path
 from typing import TYPE_CHECKING
 
+from twin.errors import UsageError
+from twin.lifecycle import check_output_file, check_writable
 from twin.progress import Progress
 
 if TYPE_CHECKING:
@@ -32,6 +36,9 @@ if TYPE_CHECKING:
 
 #: The default platform model of every command (unless its help says why not).
 DEFAULT_MODEL = "full"
+#: Figure files the twin writes (by suffix; matplotlib's common formats).
+FIGURE_SUFFIXES = (".png", ".pdf", ".svg", ".svgz", ".jpg", ".jpeg", ".tif", ".tiff", ".webp",
+                   ".eps", ".ps")  # fmt: skip
 #: The platform models (as :data:`twin.chain.simulate.MODELS`; not imported: startup stays light).
 MODELS = ("full", "reduced")
 
@@ -51,6 +58,21 @@ def seed_type(text: str) -> int:
     return seed
 
 
+def count(lo: int, hi: int) -> Callable[[str], int]:
+    """Return an argparse ``type``: an integer in [lo, hi] (``--runs``, ``--subjects``)."""
+
+    def parse(text: str) -> int:
+        try:
+            n = int(text)
+        except ValueError:
+            n = None
+        if n is None or not lo <= n <= hi:
+            raise argparse.ArgumentTypeError(f"must be an integer in [{lo}, {hi:,}]; got {text!r}")
+        return n
+
+    return parse
+
+
 def json_parent(what: str = "the result") -> argparse.ArgumentParser:
     """Return a parent parser with ``--json``."""
     p = _parent()
@@ -65,17 +87,50 @@ def seed_parent(what: str = "seed of the noise and the IMU") -> argparse.Argumen
     return p
 
 
+def _path_type(check: Callable[[str], object]) -> Callable[[str], str]:
+    """Return an argparse ``type`` that runs ``check`` on an output path (text kept as given)."""
+
+    def parse(text: str) -> str:
+        try:
+            check(text)
+        except UsageError as e:
+            raise argparse.ArgumentTypeError(str(e)) from None
+        return text
+
+    return parse
+
+
+def check_output_dir_path(text: str) -> None:
+    """Refuse an output folder path that is a file or cannot be written (while parsing)."""
+    if Path(text).exists() and not Path(text).is_dir():
+        raise UsageError(f"{text}: is a file; give a folder")
+    check_writable(text)
+
+
+#: ``type=`` of an output folder: not a file, and somewhere this process may write.
+output_dir = _path_type(check_output_dir_path)
+#: ``type=`` of an output file: not a folder, and somewhere this process may write.
+output_file = _path_type(check_output_file)
+#: ``type=`` of a figure file: also a suffix matplotlib writes (:data:`FIGURE_SUFFIXES`).
+figure_file = _path_type(lambda text: check_output_file(text, FIGURE_SUFFIXES))
+
+
 def out_parent(what: str, metavar: str = "DIR") -> argparse.ArgumentParser:
-    """Return a parent parser with ``--out``; ``what`` says what is written there."""
+    """Return a parent parser with ``--out``; ``what`` says what is written there.
+
+    A ``metavar`` of ``DIR`` is a folder; anything else (``CSV``) a file. The path is checked
+    while parsing (:func:`output_dir`, :func:`output_file`), before any work.
+    """
     p = _parent()
-    p.add_argument("--out", metavar=metavar, help=what)
+    kind = output_dir if metavar == "DIR" else output_file
+    p.add_argument("--out", metavar=metavar, type=kind, help=what)
     return p
 
 
 def rrd_parent(what: str = "save a Rerun recording") -> argparse.ArgumentParser:
-    """Return a parent parser with ``--rrd FILE``."""
+    """Return a parent parser with ``--rrd FILE`` (checked while parsing)."""
     p = _parent()
-    p.add_argument("--rrd", metavar="FILE", help=what)
+    p.add_argument("--rrd", metavar="FILE", type=output_file, help=what)
     return p
 
 

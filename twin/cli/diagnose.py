@@ -41,7 +41,12 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    "default: the runs' meta.json; the overrides below apply to it")  # fmt: skip
     p.add_argument("--validate", nargs="+", default=[], metavar="RUN_DIR",
                    help="runs only for measuring the gain (default: held-out halves)")  # fmt: skip
-    p.add_argument("--save-config", metavar="FILE", help="write the extended configuration (JSON)")
+    p.add_argument(
+        "--save-config",
+        metavar="FILE",
+        type=common.output_file,
+        help="write the extended configuration (JSON)",
+    )
     p.add_argument("--max-hz", type=float, default=15.0, help="top of the band (default 15 Hz)")
     p.add_argument("--dof", nargs="+", help="DOFs to analyse (default: the driven ones)")
     p.add_argument("--imu-noise", type=float, metavar="FACTOR",

@@ -1,13 +1,16 @@
 """The ``twin`` command line.
 
 Errors from bad input are printed as one line on stderr (``twin: error: ...``) with exit
-code 2; nothing is written before the input has been checked.
+code 2 (:func:`error_line` is the one place that decides); output paths are checked while
+the arguments are parsed, and outputs are written under a temporary name and renamed, so
+nothing half-written is left.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 from collections.abc import Sequence
 from typing import NoReturn
@@ -19,6 +22,10 @@ from twin.errors import TwinError, UsageError
 from twin.frames import DOF_NAMES
 
 EXIT_USAGE = 2
+#: Exit code of a bug (``EX_SOFTWARE`` of sysexits.h).
+EXIT_BUG = 70
+#: Exit code after Ctrl-C (128 + SIGINT).
+EXIT_INTERRUPTED = 130
 
 
 class _Parser(argparse.ArgumentParser):
@@ -83,7 +90,7 @@ def _add_analysis(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("config", metavar="CONFIG", help=config_help())
     p.add_argument("--dofs", nargs="+", choices=DOF_NAMES, help="DOFs (default all six)")
-    p.add_argument("--plot", metavar="PNG", help="save a Bode plot")
+    p.add_argument("--plot", metavar="PNG", type=common.figure_file, help="save a Bode plot")
     p.set_defaults(func=_cmd_compare)
     d = sub.add_parser(
         "dynamics",
@@ -131,14 +138,56 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _os_error(e: OSError) -> str:
+    """One line for an operating-system error: the path(s) and the reason."""
+    paths = " -> ".join(str(p) for p in (e.filename, e.filename2) if p is not None)
+    reason = e.strerror or str(e)
+    return f"{paths}: {reason}" if paths else reason
+
+
+def error_line(e: BaseException) -> tuple[str, int]:
+    """Return the one line printed for an exception that ends a command, and the exit code.
+
+    The one place where errors become ``twin: error: ...`` on stderr:
+
+    - bad input of any kind (:class:`~twin.errors.TwinError`: usage, data, configuration,
+      output path): exit code 2;
+    - the operating system refusing a file or folder (missing, permission, read-only file
+      system, disk full): the path and the reason, exit 2;
+    - a text file that is not UTF-8, or a job larger than memory: exit 2;
+    - Ctrl-C: ``interrupted``, exit 130 (outputs are written under a temporary name, so
+      nothing half-written is left);
+    - anything else is a bug in the twin: one line saying so, exit 70 (``TWIN_DEBUG=1``
+      shows the traceback instead).
+    """
+    if isinstance(e, TwinError):
+        return f"twin: error: {e}", EXIT_USAGE
+    if isinstance(e, OSError):
+        return f"twin: error: {_os_error(e)}", EXIT_USAGE
+    if isinstance(e, UnicodeDecodeError):
+        return f"twin: error: an input file is not UTF-8 text ({e.reason})", EXIT_USAGE
+    if isinstance(e, MemoryError):
+        why = f" ({e})" if str(e) else ""
+        return f"twin: error: not enough memory for this job{why}; give a shorter run or fewer "\
+               "runs", EXIT_USAGE  # fmt: skip
+    if isinstance(e, KeyboardInterrupt):
+        return "twin: interrupted", EXIT_INTERRUPTED
+    return (f"twin: internal error: {type(e).__name__}: {e} (a bug in twin {__version__}; "
+            "please report it with the command; TWIN_DEBUG=1 shows the traceback)",
+            EXIT_BUG)  # fmt: skip
+
+
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run the ``twin`` command; return its exit code."""
+    """Run the ``twin`` command; return its exit code (see :func:`error_line`)."""
     try:
         args = build_parser().parse_args(argv)
         return int(args.func(args))
-    except TwinError as e:
-        print(f"twin: error: {e}", file=sys.stderr)
-        return EXIT_USAGE
+    except (Exception, KeyboardInterrupt) as e:
+        if os.environ.get("TWIN_DEBUG") and not isinstance(e, TwinError):
+            raise
+        line, code = error_line(e)
+        print(line, file=sys.stderr)
+        return code
 
 
 if __name__ == "__main__":

@@ -12,11 +12,16 @@ from twin.cli import common
 from twin.plotting import pyplot
 
 DEG2 = (180 / np.pi) ** 2
-
-
-def _batch() -> list[argparse.ArgumentParser]:
-    """Return the parent parsers of the batch commands (experiment, montecarlo)."""
-    return [common.seed_parent("seed of the runs"), common.json_parent(), common.quiet_parent()]
+#: Most runs of ``pilot run`` and per condition of ``pilot experiment``
+#: (:data:`twin.pilot.pitch.MAX_RUNS`, not imported so that the parser stays light).
+MAX_RUNS = 1000
+#: Most simulated subjects of ``pilot experiment --pilot adaptive``.
+MAX_SUBJECTS = 1000
+#: Runs per task of ``pilot montecarlo`` (:func:`twin.pilot.montecarlo.monte_carlo`'s batch).
+MC_BATCH = 500
+#: Most runs of ``pilot montecarlo`` (:data:`twin.pilot.montecarlo.MAX_RUNS`, not imported
+#: so that the parser stays light).
+MAX_MC_RUNS = 100_000_000
 
 
 def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
@@ -41,7 +46,8 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
         help="fly the pitch task (§6.3) through a motion configuration",
     )
     run.add_argument("config", metavar="CONFIG", help=config_help())
-    run.add_argument("--runs", type=int, default=1, help="runs with fresh remnant (default 1)")
+    run.add_argument("--runs", type=common.count(1, MAX_RUNS), default=1,
+                     help=f"runs with fresh remnant (default 1; at most {MAX_RUNS})")  # fmt: skip
     run.add_argument(
         "--remnant",
         type=float,
@@ -60,10 +66,12 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
         help="the eight Table 6.3 conditions, pilot fixed (their filter, delay and noise are the "
         "experiment's factors: no overrides)",
     )
-    exp.add_argument("--runs", type=int, default=5, help="runs per condition (default 5)")
+    exp.add_argument("--runs", type=common.count(1, MAX_RUNS), default=5,
+                     help=f"runs per condition (default 5; at most {MAX_RUNS})")  # fmt: skip
     exp.add_argument(
         "--plot",
         metavar="PNG",
+        type=common.figure_file,
         help="save the measures per condition as Fig 6.5-6.9 (fixed pilot); with --pilot "
         "adaptive, the ANOVA's effects beside the thesis' here and the measures per condition "
         "over subjects in PNG's name + '-conditions.png'",
@@ -77,7 +85,7 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
     )
     exp.add_argument(
         "--subjects",
-        type=int,
+        type=common.count(2, MAX_SUBJECTS),
         default=9,
         help="simulated subjects with --pilot adaptive (default 9, the thesis' participants)",
     )
@@ -121,8 +129,10 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
         ],
         help="Chapter 2 Monte-Carlo: FC versus ARX (§2.5)",
     )
-    mc.add_argument("--runs", type=int, default=1000, help="closed-loop runs (default 1000)")
-    mc.add_argument("--fit-runs", type=int, default=0, help="pilot-model fits per batch")
+    mc.add_argument("--runs", type=common.count(2, MAX_MC_RUNS), default=1000,
+                    help="closed-loop runs (default 1000)")  # fmt: skip
+    mc.add_argument("--fit-runs", type=common.count(0, MC_BATCH), default=0,
+                    help=f"pilot-model fits per batch of {MC_BATCH} runs (default 0)")  # fmt: skip
     mc.set_defaults(func=_cmd_montecarlo)
     lead = cmds.add_parser(
         "lead",
@@ -139,13 +149,6 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
     lead.set_defaults(func=_cmd_lead)
 
 
-def _check_runs(runs: int) -> None:
-    from twin.errors import SignalError
-
-    if runs < 1:
-        raise SignalError(f"--runs must be >= 1; got {runs}")
-
-
 def _cmd_run(args: argparse.Namespace) -> int:
     from twin.errors import SignalError
     from twin.pilot.experiment import pitch_remnant_scale
@@ -153,11 +156,6 @@ def _cmd_run(args: argparse.Namespace) -> int:
     from twin.pilot.pitch import PitchPilot, open_loops, simulate_pitch, variance_decomposition
     from twin.pilot.records import write_pilot_csv
 
-    _check_runs(args.runs)
-    if args.rrd:  # refused before the run, not after it
-        from twin.record.stream import check_recording_path
-
-        check_recording_path(args.rrd)
     if not 0 <= args.remnant < 1:
         raise SignalError(f"--remnant must be in [0, 1); got {args.remnant}")
     cfg = common.configured(args.config, args)
@@ -237,7 +235,6 @@ def _cmd_experiment(args: argparse.Namespace) -> int:
             plt.close(p.plot_conditions(str(plot.with_name(f"{plot.stem}-conditions.png"))))
         print(json.dumps(p.to_dict(), indent=2) if args.json else p.format_table())
         return 0
-    _check_runs(args.runs)
     with common.engine(args) as engine:
         r = run_experiment(runs=args.runs, seed=args.seed, progress=common.progress(args),
                            fit=True, scheduler=engine)  # fmt: skip
@@ -269,6 +266,13 @@ def _cmd_identify(args: argparse.Namespace) -> int:
             f"{args.csv}: needs at least {MEASUREMENT_S} s of data; has {d['t'].size / rate:.2f} s"
         )
     w = {k: v[-n:] for k, v in d.items() if k != "rate_hz"}
+    flat = [k for k in ("ft", "fd", "e", "u") if np.ptp(w[k]) == 0]
+    if flat:
+        raise SignalError(
+            f"{args.csv}: the run carries no excitation: {', '.join(flat)} constant over the "
+            f"last {MEASUREMENT_S} s (a tracking run has the Table 6.2 forcing functions in ft "
+            "and fd, and the pilot's e and u)"
+        )
     felt = w.get("theta_felt", w["theta"])
     fd, ft = pitch_task()
     fc = fc_estimate(w["e"][None], w["u"][None], felt[None], fd, ft, w["fd"], w["ft"])

@@ -55,7 +55,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("--overwrite", action="store_true", help="replace an existing run folder")
     view = p.add_mutually_exclusive_group()
-    view.add_argument("--rrd", metavar="FILE", help="also save a Rerun recording")
+    view.add_argument(
+        "--rrd", metavar="FILE", type=common.output_file, help="also save a Rerun recording"
+    )
     view.add_argument(
         "--connect",
         nargs="?",

@@ -22,6 +22,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from twin.chain.imu import G
+from twin.checks import ENCODING
 from twin.errors import DataError
 
 FloatArray = NDArray[np.float64]
@@ -141,7 +142,12 @@ def read_table(path: str | Path) -> Table:
     p = Path(path)
     if not p.is_file():
         raise DataError(f"{p}: no such file")
-    text = [ln for ln in p.read_text(errors="replace").splitlines() if ln.strip()]
+    data = p.read_bytes()
+    utf16 = data.startswith((b"\xff\xfe", b"\xfe\xff"))  # spreadsheets' "Unicode text"
+    raw = data.decode("utf-16" if utf16 else ENCODING, errors="replace")
+    if "\x00" in raw:
+        raise DataError(f"{p}: a binary file (it holds NUL bytes), not a CSV log")
+    text = [ln for ln in raw.splitlines() if ln.strip()]
     text = [ln for ln in text if not ln.lstrip().startswith("#")]
     if len(text) < 3:
         raise DataError(f"{p}: needs a header row and at least 2 rows of numbers")

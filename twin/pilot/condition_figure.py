@@ -16,7 +16,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy import stats
 
-from twin.plotting import pyplot
+from twin.plotting import pyplot, save
 from twin.thesis import TABLE_6_3
 
 FloatArray = NDArray[np.float64]
@@ -147,7 +147,7 @@ def plot_conditions(panels: Sequence[Panel], title: str, path: str | None = None
     fig.suptitle(title, fontsize=9, x=0.02, ha="left")
     fig.tight_layout(rect=(0, 0, 1, 1 - 0.5 / fig.get_figheight()))
     if path:
-        fig.savefig(path, dpi=110)
+        save(fig, path, dpi=110)
     return fig
 
 

@@ -19,6 +19,8 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import brentq
 
 from twin.chain.config import MotionSystem
+from twin.checks import number
+from twin.errors import SignalError
 
 FloatArray = NDArray[np.float64]
 
@@ -85,7 +87,17 @@ class LeadAnalysis:
 def analyse_lead(
     config: MotionSystem, sensor: str = "canals", margin_deg: float = MARGIN_DEG
 ) -> LeadAnalysis:
-    """Thresholds of the criterion for ``sensor`` and where ``config`` stands."""
+    """Thresholds of the criterion for ``sensor`` and where ``config`` stands.
+
+    Raises
+    ------
+    SignalError
+        For a ``margin_deg`` outside [0, 90] deg (0: the thesis' literal -90 deg; 90: a lag of
+        180 deg, where a loop closed on the sensor has no phase left).
+
+    """
+    number(margin_deg, "margin_deg (lag allowed behind an integrator)", lo=0, hi=90,
+           error=SignalError)  # fmt: skip
     limit = INTEGRATOR_DEG - margin_deg
     if _worst(sensor, None, 0.0) < limit:
         fb = tau = float("nan")  # the sensor alone already fails

@@ -33,6 +33,8 @@ ComplexArray = NDArray[np.complex128]
 #: Parameter draws per run for the sampled standard deviation (averaged over many runs, so
 #: fewer than a single-run estimate needs).
 SAMPLED_DRAWS = 100
+#: Most runs one study may have (1e8 runs: about 200 h on one core; split bigger studies).
+MAX_RUNS = 100_000_000
 
 
 @dataclass(frozen=True, eq=False)
@@ -193,15 +195,18 @@ def monte_carlo(
     Raises
     ------
     SignalError
-        For fewer than 2 runs or a batch size below 1.
+        For fewer than 2 or more than :data:`MAX_RUNS` runs, a batch size below 1, or
+        ``fit_runs`` outside [0, batch].
     TaskError
         When a batch failed (named with its seed).
 
     """
-    if runs < 2:
-        raise SignalError(f"a Monte-Carlo study needs at least 2 runs; got {runs}")
+    if not 2 <= runs <= MAX_RUNS:
+        raise SignalError(f"a Monte-Carlo study needs 2 to {MAX_RUNS:,} runs; got {runs}")
     if batch < 1:
         raise SignalError(f"a Monte-Carlo batch needs at least 1 run; got {batch}")
+    if not 0 <= fit_runs <= batch:
+        raise SignalError(f"fit_runs (fits per batch) must be in [0, {batch}]; got {fit_runs}")
     p = pilot or RollPilot()
     fd, ft = roll_task()
     scale = remnant_scale_for(p, fd, ft, remnant_ratio)

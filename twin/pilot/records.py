@@ -15,6 +15,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from twin.errors import RunFormatError
+from twin.lifecycle import replacing_file
+from twin.runs import read_table
 from twin.trajectory import uniform_rate
 
 FloatArray = NDArray[np.float64]
@@ -25,13 +27,10 @@ OPTIONAL = ("theta_felt",)
 def write_pilot_csv(path: str | Path, columns: dict[str, FloatArray]) -> Path:
     """Write a ``twin-pilot/1`` CSV (``columns`` holds COLUMNS and maybe theta_felt)."""
     names = [*COLUMNS, *(c for c in OPTIONAL if c in columns)]
-    p = Path(path)
-    p.parent.mkdir(parents=True, exist_ok=True)
-    tmp = p.with_name(f".{p.name}.partial")
     data = np.column_stack([np.asarray(columns[n], dtype=float) for n in names])
-    np.savetxt(tmp, data, delimiter=",", header=",".join(names), comments="", fmt="%.10g")
-    tmp.replace(p)
-    return p
+    with replacing_file(path) as tmp:
+        np.savetxt(tmp, data, delimiter=",", header=",".join(names), comments="", fmt="%.10g")
+    return Path(path)
 
 
 def read_pilot_csv(path: str | Path) -> dict[str, FloatArray]:
@@ -39,22 +38,7 @@ def read_pilot_csv(path: str | Path) -> dict[str, FloatArray]:
     p = Path(path)
     if not p.is_file():
         raise RunFormatError(f"{p}: no such pilot-run file")
-    with p.open() as fh:
-        header = fh.readline().strip().split(",")
-    if header[: len(COLUMNS)] != list(COLUMNS) or any(h not in OPTIONAL for h in header[6:]):
-        raise RunFormatError(
-            f"{p}: header must be {','.join(COLUMNS)}[,theta_felt]; got {','.join(header)}"
-        )
-    try:
-        data = np.loadtxt(p, delimiter=",", skiprows=1, ndmin=2)
-    except ValueError as e:
-        raise RunFormatError(f"{p}: not a table of numbers ({e})") from None
-    if data.shape[1] != len(header):
-        raise RunFormatError(f"{p}: rows must have {len(header)} values")
-    bad = ~np.isfinite(data)
-    if bad.any():
-        row, col = np.argwhere(bad)[0]
-        raise RunFormatError(f"{p}: {header[col]} is not a finite number at row {row + 2}")
+    data, header = read_table(p, COLUMNS, OPTIONAL)
     out = {h: data[:, i] for i, h in enumerate(header)}
     out["rate_hz"] = np.array(uniform_rate(out["t"], f"{p}"))
     return out

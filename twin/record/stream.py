@@ -13,28 +13,23 @@ import rerun as rr
 import rerun.blueprint as rrb
 
 from twin.errors import UsageError
-from twin.lifecycle import CloseOrAbort
+from twin.lifecycle import CloseOrAbort, check_output_file
 
 #: The time axis of every run.
 TIMELINE = "sim_time"
 
 
 def check_recording_path(rrd: str | Path) -> Path:
-    """Return ``rrd`` as a path a recording can be written to; refuse a folder or a file parent.
+    """Return ``rrd`` as a path a recording can be written to (:func:`check_output_file`).
 
     Raises
     ------
     UsageError
-        ``rrd`` is an existing folder, or one of its parents is a file.
+        ``rrd`` is an existing folder, one of its parents is a file, or its folder cannot be
+        written.
 
     """
-    final = Path(rrd)
-    if final.is_dir():
-        raise UsageError(f"{final}: is a folder; a recording needs a file name (e.g. run.rrd)")
-    blocking = next((p for p in final.parents if p.exists()), None)
-    if blocking is not None and not blocking.is_dir():
-        raise UsageError(f"{final}: {blocking} is a file, not a folder")
-    return final
+    return check_output_file(rrd)
 
 
 class Recording(CloseOrAbort):
@@ -67,7 +62,10 @@ class Recording(CloseOrAbort):
             self.final = check_recording_path(rrd)
             self.final.parent.mkdir(parents=True, exist_ok=True)
             self._partial = self.final.with_name(f".{self.final.name}.partial")
-            self.rec.save(str(self._partial), default_blueprint=layout)
+            try:
+                self.rec.save(str(self._partial), default_blueprint=layout)
+            except RuntimeError as e:  # Rerun's own error for a file it cannot create
+                raise UsageError(f"{self.final}: cannot write the recording ({e})") from None
         elif connect is not None:
             self.rec.connect_grpc(connect or None, default_blueprint=layout)
         else:

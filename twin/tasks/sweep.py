@@ -48,8 +48,12 @@ from typing import Any
 import numpy as np
 
 from twin.chain.config import MotionSystem, load_config, motion_system
+from twin.chain.delay import MAX_DELAY_S
+from twin.chain.filter import MAX_BREAK_HZ
+from twin.checks import number, read_text
 from twin.errors import ConfigError, TwinError
 from twin.frames import DOF_NAMES
+from twin.pilot.pitch import MAX_RUNS
 from twin.progress import ProgressFn
 from twin.tasks.engine import Engine, using
 from twin.tasks.outcome import Failure
@@ -75,8 +79,8 @@ SETTINGS: dict[str, dict[str, Any]] = {
     "df": {"model": "reduced"},
     "pilot": {"runs": 2, "remnant": 0.15},
 }
-#: Largest value of each number axis: a platform filter up to 100 Hz, a delay up to 10 s.
-FLOAT_MAX = {"break_hz": 100.0, "delay_ms": 10_000.0}
+#: Largest value of each number axis: a platform filter up to 1000 Hz, a delay up to 10 s.
+FLOAT_MAX = {"break_hz": MAX_BREAK_HZ, "delay_ms": MAX_DELAY_S * 1e3}
 #: Most points a sweep may have (a bigger study: several sweep files, or the library).
 MAX_POINTS = 1_000_000
 #: Table columns per point of each task, after the axes.
@@ -155,11 +159,10 @@ def read_grid(path: str | Path) -> Grid:
 
     """
     path = Path(path)
+    text = read_text(path, "a TOML sweep file", SweepError)
     try:
-        doc = tomllib.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise SweepError(f"no sweep file {path}") from None
-    except (UnicodeDecodeError, IsADirectoryError, tomllib.TOMLDecodeError) as e:
+        doc = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as e:
         raise SweepError(f"{path} is not a TOML sweep file: {e}") from None
     return parse_grid(doc, str(path), path.parent)
 
@@ -217,9 +220,8 @@ def _value(source: str, key: str, value: object, kind: type) -> Any:
     )  # fmt: skip
     if not ok:
         raise SweepError(f"{source}: {key} must be a {kind.__name__}; got {value!r}")
-    top = FLOAT_MAX.get(name, np.inf)
-    if kind is float and not 0 <= value <= top:  # type: ignore[operator]
-        raise SweepError(f"{source}: {key} must be a number in [0, {top:g}]; got {value!r}")
+    if kind is float:
+        number(value, f"{source}: {key}", lo=0, hi=FLOAT_MAX.get(name, np.inf), error=SweepError)
     if kind is int and value < 0:  # type: ignore[operator]
         raise SweepError(f"{source}: {key} must be >= 0; got {value!r}")
     if name == "dof" and value not in DOF_NAMES:
@@ -235,13 +237,11 @@ def _setting(source: str, task: str, key: str, value: object) -> Any:
             raise SweepError(f"{source}: model must be 'full' or 'reduced'; got {value!r}")
         return value
     if key == "runs":
-        if not isinstance(value, int) or isinstance(value, bool) or value < 1:
-            raise SweepError(f"{source}: runs must be an integer >= 1; got {value!r}")
+        if not isinstance(value, int) or isinstance(value, bool) or not 1 <= value <= MAX_RUNS:
+            raise SweepError(f"{source}: runs must be an integer in [1, {MAX_RUNS}]; got {value!r}")
         return value
-    ok = isinstance(value, (int, float)) and not isinstance(value, bool)
-    if not ok or not 0 < value < 1:  # type: ignore[operator]
-        raise SweepError(f"{source}: remnant must be a number in (0, 1); got {value!r}")
-    return float(value)  # type: ignore[arg-type]
+    return number(value, f"{source}: remnant", lo=0, hi=1, lo_open=True, hi_open=True,
+                  error=SweepError)  # fmt: skip
 
 
 def run_point(
