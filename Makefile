@@ -5,7 +5,7 @@ BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 NBSTAMP := $(VENV)/.installed-notebooks
 
-.PHONY: demo test test-all lint models bench clean
+.PHONY: demo test test-all fuzz lint models bench clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -34,6 +34,9 @@ test: $(STAMP)
 
 test-all: $(NBSTAMP)
 	$(BIN)/python -m pytest -q -m ''
+
+fuzz: $(STAMP)
+	$(BIN)/python -m pytest -q -n 0 -s -m slow tests/test_fuzz_inputs.py
 
 lint: $(STAMP)
 	$(BIN)/ruff check twin tests bench

@@ -33,6 +33,12 @@ from twin.errors import DataError
 ENCODING = "utf-8-sig"
 
 
+def _shown(value: object, width: int = 60) -> str:
+    """``repr(value)``, cut to ``width`` characters (a 400-digit number is not read)."""
+    text = repr(value)
+    return text if len(text) <= width else text[: width - 3] + "..."
+
+
 def _range(lo: float, hi: float, lo_open: bool, hi_open: bool) -> str:
     """Describe an interval (``>= 0``, ``in (0, 100]``)."""
     if math.isinf(hi):
@@ -69,18 +75,23 @@ def number(
 
     """
     ok = isinstance(value, int | float | np.integer | np.floating) and not isinstance(value, bool)
-    v = float(value) if ok else math.nan  # type: ignore[arg-type]
+    try:
+        v = float(value) if ok else math.nan  # type: ignore[arg-type]
+    except OverflowError:  # an integer beyond any float
+        v = math.nan
     if ok and math.isfinite(v):
         ok = (v > lo if lo_open else v >= lo) and (v < hi if hi_open else v <= hi)
     if not ok or not math.isfinite(v):
-        raise error(f"{where} must be a number{_range(lo, hi, lo_open, hi_open)}; got {value!r}")
+        raise error(
+            f"{where} must be a number{_range(lo, hi, lo_open, hi_open)}; got {_shown(value)}"
+        )
     return v
 
 
 def flag(value: object, where: str, error: type[Exception] = DataError) -> bool:
     """Return ``value`` if it is a boolean (``true``/``false``), else raise ``error``."""
     if not isinstance(value, bool | np.bool_):
-        raise error(f"{where} must be true or false; got {value!r}")
+        raise error(f"{where} must be true or false; got {_shown(value)}")
     return bool(value)
 
 
@@ -112,7 +123,7 @@ def numbers(
     if not isinstance(value, list | tuple) or (
         len(value) != size if size is not None else len(value) < min_size
     ):
-        raise error(f"{where} must be {want}; got {value!r}")
+        raise error(f"{where} must be {want}; got {_shown(value)}")
     return np.array([number(v, f"{where}[{i}]", error=error) for i, v in enumerate(value)])
 
 

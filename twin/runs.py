@@ -22,7 +22,7 @@ from __future__ import annotations
 import json
 import shutil
 import warnings
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from types import TracebackType
@@ -43,6 +43,11 @@ HEADERS = {
     "imu.csv": ("t", "ax", "ay", "az", "p", "q", "r"),
     "actuators.csv": ("t", "l1", "l2", "l3", "l4", "l5", "l6"),
 }
+#: Largest magnitude a recorded value may have, per column (beyond it the file is not a
+#: recording of a motion system: a unit or logging error): specific force 1000 m/s^2 (100 g),
+#: angular rate 100 rad/s, leg length 100 m. Commands: :data:`twin.signals.MAX_COMMAND`.
+MAX_VALUE = {"ax": 1e3, "ay": 1e3, "az": 1e3, "p": 1e2, "q": 1e2, "r": 1e2,
+             **{f"l{i}": 1e2 for i in range(1, 7)}}  # fmt: skip
 #: Highest sample rate a file may state [Hz] (a 1 MHz log is not a motion-system run).
 MAX_RATE_HZ = 1e6
 #: Allowed relative difference between a file's sample rate and the rate in meta.json.
@@ -92,9 +97,14 @@ def _read_csv(path: Path) -> FloatArray:
 
 
 def read_table(
-    path: Path, header: tuple[str, ...], optional: tuple[str, ...] = ()
+    path: Path,
+    header: tuple[str, ...],
+    optional: tuple[str, ...] = (),
+    limits: Mapping[str, float] = MAX_VALUE,
 ) -> tuple[FloatArray, tuple[str, ...]]:
     """Read a CSV of numbers with a header row: ``header``, then any of ``optional``.
+
+    ``limits`` bounds the magnitude of named columns (:data:`MAX_VALUE` by default).
 
     UTF-8 (a byte-order mark is dropped); shared by the ``twin-run/1`` files and
     ``twin-pilot/1``.
@@ -103,7 +113,8 @@ def read_table(
     ------
     RunFormatError
         Naming the file: not UTF-8 text, a header that is not ``header`` (+ ``optional``), a
-        value that is not a finite number, rows of different lengths, fewer than 2 rows.
+        value that is not a finite number or beyond its limit, rows of different lengths,
+        fewer than 2 rows.
 
     """
     try:
@@ -132,7 +143,35 @@ def read_table(
             f"{path}: row {row + 1} (line {row + 2}): {got[col]} is {data[row, col]}; "
             "all values must be finite"
         )
+    check_values(data, got, str(path), limits)
     return data, got
+
+
+def check_values(
+    data: FloatArray, names: Sequence[str], where: str, limits: Mapping[str, float] = MAX_VALUE
+) -> None:
+    """Raise :class:`RunFormatError` for a value beyond its column's limit (:data:`MAX_VALUE`).
+
+    Parameters
+    ----------
+    data : ndarray, shape (n, len(names))
+        The table.
+    names : sequence of str
+        Its column names.
+    where : str
+        The file (or what the values are), for the message.
+    limits : mapping of str to float
+        Largest magnitude per column name (others are not bounded).
+
+    """
+    top = np.array([limits.get(c, np.inf) for c in names])
+    over = np.abs(data) > top
+    if over.any():
+        row, col = np.argwhere(over)[0]
+        raise RunFormatError(
+            f"{where}: data row {row + 1}: {names[col]} is {data[row, col]:g}; it must lie "
+            f"within +-{top[col]:g} (a larger value is a unit or logging error)"
+        )
 
 
 def _check_rate(name: str, t: FloatArray, expected: float) -> None:
@@ -150,7 +189,7 @@ def _check_meta(meta: object, path: Path) -> dict:
         raise RunFormatError(f"{where}: must hold a JSON object")
     if meta.get("format") != FORMAT:
         raise RunFormatError(f"{where}: format must be {FORMAT!r}; got {meta.get('format')!r}")
-    if meta.get("platform") not in PLATFORMS:
+    if not isinstance(meta.get("platform"), str) or meta["platform"] not in PLATFORMS:
         raise RunFormatError(
             f"{where}: platform must be one of {', '.join(PLATFORMS)}; got {meta.get('platform')!r}"
         )

@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from twin.checks import check_duration
+from twin.checks import check_duration, number
 from twin.errors import SignalError, SignalLimitError
 from twin.frames import DOF_NAMES, acceleration_unit, dof_index
 from twin.thesis import TABLE_5_2
@@ -292,6 +292,8 @@ def single_sine(
 #: Acceleration levels of the dynamic threshold signal, in units of the step amplitude: every
 #: level lasts one step length; velocity and position return to zero at the end (Fig 3.2b).
 STEP_PATTERN = (1, -1, -1, 1, -1, 1, 1, -1)
+#: Largest step amplitude [m/s^2 or rad/s^2]: ten times the SRS heave acceleration limit.
+MAX_STEP = 100.0
 
 
 @dataclass(frozen=True)
@@ -372,10 +374,9 @@ def square_steps(
         raise SignalError(f"repeats must be an integer >= 1; got {repeats!r}")
     if dof not in DOF_NAMES:
         raise SignalError(f"unknown DOF {dof!r}; expected one of {', '.join(DOF_NAMES)}")
-    if not (np.isfinite(amplitude) and amplitude > 0 and np.isfinite(step_s) and step_s > 0):
-        raise SignalError(
-            f"step amplitude and length must be positive; got {amplitude} and {step_s} s"
-        )
+    number(amplitude, "step amplitude [m/s^2 or rad/s^2]", lo=0, lo_open=True, hi=MAX_STEP,
+           error=SignalError)  # fmt: skip
+    number(step_s, "step length [s]", lo=0, lo_open=True, error=SignalError)
     if step_s * rate_hz < 2 or rest_s < 0:
         raise SignalError(f"steps must last at least 2 command samples; got {step_s} s")
     levels = STEP_PATTERN * repeats

@@ -37,8 +37,8 @@ def _sweep(config: str, model: str, out: Path, done) -> list[DfResult]:
         return results
 
 
-def run_demo(out: Path, progress: ProgressFn | None = None) -> str:
-    """Run the sweep into ``out``; return the printed table."""
+def run_demo(out: Path, progress: ProgressFn | None = None, shown_as: Path | None = None) -> str:
+    """Run the sweep into ``out``; return the printed table (naming ``shown_as`` or ``out``)."""
     import matplotlib.pyplot as plt
 
     out.mkdir(parents=True, exist_ok=True)
@@ -83,7 +83,7 @@ def run_demo(out: Path, progress: ProgressFn | None = None) -> str:
         plt.close(fig)
     (out / "df.json").write_text(json.dumps(payload, indent=2) + "\n")
     lines.append(
-        f"figures, results and recordings in {out}/: df-pitch.png, df-heave.png, "
+        f"figures, results and recordings in {shown_as or out}/: df-pitch.png, df-heave.png, "
         "df.json, " + ", ".join(f"{c}-{m}.rrd" for c, m in BENCHES)
     )
     return "\n".join(lines)

@@ -39,7 +39,7 @@ from numpy.typing import ArrayLike, NDArray
 from twin.chain.block import Backlash, Block
 from twin.chain.delay import MAX_DELAY_S, Delay
 from twin.chain.extensions import Extension
-from twin.chain.filter import MAX_BREAK_HZ, PlatformFilter
+from twin.chain.filter import MAX_BREAK_HZ, MIN_BREAK_HZ, PlatformFilter
 from twin.chain.lti import LinearModel
 from twin.chain.noise import MotionNoise
 from twin.chain.resonance import Resonance
@@ -178,7 +178,9 @@ class MotionSystem:
         changes: dict[str, object] = {}
         tags = []
         if break_hz is not None:
-            number(break_hz, "--break-hz", lo=0, hi=MAX_BREAK_HZ, error=ConfigError)
+            if not (break_hz == 0 or MIN_BREAK_HZ <= break_hz <= MAX_BREAK_HZ):
+                raise ConfigError(f"--break-hz must be 0 (no filter) or in [{MIN_BREAK_HZ:g}, "
+                                  f"{MAX_BREAK_HZ:g}] Hz; got {break_hz}")  # fmt: skip
             changes["filter_break_hz"] = float(break_hz) or None
             tags.append(f"fb{break_hz:g}")
         if delay_ms is not None:
@@ -293,7 +295,7 @@ class MotionSystem:
                 raise ConfigError(f"platform_config lacks {key!r}")
         fb = cfg["filter_break_hz"]
         if fb is not None:
-            fb = number(fb, "platform_config filter_break_hz (or null)", lo=0, lo_open=True,
+            fb = number(fb, "platform_config filter_break_hz (or null)", lo=MIN_BREAK_HZ,
                         hi=MAX_BREAK_HZ, error=ConfigError)  # fmt: skip
         exts = cfg.get("extensions", [])
         if not isinstance(exts, list):
@@ -312,8 +314,7 @@ class MotionSystem:
             noise_highpass_hz=number(
                 cfg.get("noise_highpass_hz", 1.0),
                 "platform_config noise_highpass_hz",
-                lo=0,
-                lo_open=True,
+                lo=MIN_BREAK_HZ,
                 hi=MAX_BREAK_HZ,
                 error=ConfigError,
             ),
@@ -356,7 +357,7 @@ def load_config(path: str | Path) -> MotionSystem:
         raise ConfigError(
             f"{path}: not a {CONFIG_FORMAT} file (its 'format' must be {CONFIG_FORMAT!r})"
         )
-    if data.get("platform") not in PLATFORMS:
+    if not isinstance(data.get("platform"), str) or data["platform"] not in PLATFORMS:
         raise UnknownPlatformError(
             f"{path}: unknown platform {data.get('platform')!r}; "
             f"expected one of {', '.join(PLATFORMS)}"

@@ -59,12 +59,12 @@ EFFECTS: Mapping[str, tuple[str, ...]] = {
 #: configuration file physical (a 1e300 Hz filter or a 1e9 s delay is refused, not run).
 RANGES: Mapping[str, tuple[float, float, bool]] = {
     "extra_delay_s": (-10.0, 10.0, False),
-    "gain": (0.0, 1e3, True),
-    "break_hz": (0.0, 1e3, True),
-    "frequency_hz": (0.0, 1e3, True),
-    "damping": (0.0, 100.0, True),
+    "gain": (1e-3, 1e3, False),
+    "break_hz": (0.01, 1e3, False),
+    "frequency_hz": (0.01, 1e3, False),
+    "damping": (1e-3, 100.0, False),
     "time_constant_s": (0.0, 10.0, False),
-    "cutoff_hz": (0.0, 1e3, True),
+    "cutoff_hz": (0.01, 1e3, False),
     "play": (0.0, 10.0, False),
     "scale": (0.0, 1e3, False),
 }

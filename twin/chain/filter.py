@@ -7,15 +7,17 @@ import numpy as np
 from twin.chain.lti import LtiBlock, System
 from twin.errors import SignalError
 
-#: Highest break frequency a platform filter may have [Hz] (above the 819.2 Hz IMU rate).
-MAX_BREAK_HZ = 1000.0
+#: Lowest and highest break frequency a platform filter may have [Hz] (a 0.01 Hz filter
+#: passes nothing a motion system moves; 1 kHz is above the 819.2 Hz IMU rate).
+MIN_BREAK_HZ, MAX_BREAK_HZ = 0.01, 1000.0
 
 
 def eq_5_1(break_hz: float) -> System:
     """Return the Eq 5.1 filter with break frequency ``break_hz`` as (num, den) in s."""
-    if not np.isfinite(break_hz) or not 0 < break_hz <= MAX_BREAK_HZ:
+    if not np.isfinite(break_hz) or not MIN_BREAK_HZ <= break_hz <= MAX_BREAK_HZ:
         raise SignalError(
-            f"filter break frequency must be in (0, {MAX_BREAK_HZ:g}] Hz; got {break_hz}"
+            f"filter break frequency must be in [{MIN_BREAK_HZ:g}, {MAX_BREAK_HZ:g}] Hz; "
+            f"got {break_hz}"
         )
     wb = 2 * np.pi * break_hz
     return ((1.0,), (1 / wb**2, 2 / wb, 1.0))

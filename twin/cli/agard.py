@@ -14,7 +14,7 @@ from pathlib import Path
 
 from twin.cli import common
 from twin.frames import DOF_NAMES, dof_index
-from twin.lifecycle import replacing_file
+from twin.lifecycle import replacing_dir, replacing_file
 
 TESTS = ("df", "noise", "snr", "threshold", "omct")
 HELP = {
@@ -63,10 +63,9 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
             p.add_argument(
                 "--amplitude",
                 type=float,
-                default=0.1,
                 help="step amplitude, m/s^2 or rad/s^2 (default 0.1, §3.3.4)",
             )
-            p.add_argument("--step-s", type=float, default=1.0, help="step length, s (default 1)")
+            p.add_argument("--step-s", type=float, help="step length, s (default 1)")
             p.add_argument(
                 "--fix-delay-ms",
                 type=float,
@@ -75,7 +74,6 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
             p.add_argument(
                 "--repeats",
                 type=int,
-                default=1,
                 help="run the 8-step pattern this many times (default 1)",
             )
         if name == "omct":
@@ -88,7 +86,6 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
             p.add_argument(
                 "--fraction",
                 type=float,
-                default=0.1,
                 help="sine amplitude as a fraction of the system limit (default 0.1)",
             )
         p.set_defaults(func=_cmd_test)
@@ -144,9 +141,18 @@ def _simulate(args: argparse.Namespace, out: Path | None):
         if args.test == "threshold":
             fix = None if args.fix_delay_ms is None else args.fix_delay_ms / 1e3
             return threshold.run_threshold(
-                s, args.dof, args.amplitude, args.step_s, fix, args.repeats
-            ), bench.config
-        return omct.run_omct(s, args.dof, args.fraction), bench.config
+                s, args.dof, _given(args.amplitude, 0.1), _given(args.step_s, 1.0), fix,
+                _given(args.repeats, 1),
+            ), bench.config  # fmt: skip
+        return omct.run_omct(s, args.dof, _given(args.fraction, 0.1)), bench.config
+
+
+#: Options that shape the signals of a simulated test: a recorded run has its own.
+SIGNAL_OPTIONS = ("amplitude", "step_s", "repeats", "fraction")
+
+
+def _given(value, default):
+    return default if value is None else value
 
 
 def _analyse(args: argparse.Namespace):
@@ -156,6 +162,13 @@ def _analyse(args: argparse.Namespace):
     from twin.agard import df, noise_level, omct, snr, threshold
     from twin.measurement.measure import from_run
 
+    given = [o for o in SIGNAL_OPTIONS if getattr(args, o, None) is not None]
+    if given:
+        from twin.errors import UsageError
+
+        names = ", ".join("--" + o.replace("_", "-") for o in given)
+        raise UsageError(f"{names}: shape the signals of a simulated test; the run "
+                         f"{args.target} has its own")  # fmt: skip
     m = from_run(args.target)
     if args.test == "df":
         return df.analyse_df(m, args.dof), m.config
@@ -255,6 +268,8 @@ def _cmd_report(args: argparse.Namespace) -> int:
 def _cmd_demo(args: argparse.Namespace) -> int:
     from twin.agard.demo import run_demo
 
-    text = run_demo(Path(args.out or "out/demo"), common.progress(args))
+    final = Path(args.out or "out/demo")
+    with replacing_dir(final, "df.json") as tmp:  # complete, or not there
+        text = run_demo(tmp, common.progress(args), shown_as=final)
     print(text)
     return 0

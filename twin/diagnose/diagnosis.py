@@ -20,6 +20,7 @@ import numpy as np
 
 from twin.chain.config import MotionSystem
 from twin.chain.extensions import Extension
+from twin.checks import number
 from twin.diagnose.candidates import DYNAMIC, Model
 from twin.diagnose.data import NOISE_REALISATIONS, Case, load_case
 from twin.diagnose.detect import smallest_detectable
@@ -308,8 +309,9 @@ def diagnose(
         recording at rest; by default it is fitted as a nuisance.
 
     """
-    if imu_noise is not None and not (np.isfinite(imu_noise) and imu_noise > 0):
-        raise SignalError(f"imu_noise must be a finite factor > 0; got {imu_noise!r}")
+    if imu_noise is not None:  # a factor on the data sheet's noise densities
+        number(imu_noise, "imu_noise (factor on the data sheet)", lo=1e-3, hi=1e3,
+               error=SignalError)  # fmt: skip
     if not np.isfinite(max_hz) or not 0.5 < max_hz <= 45.0:
         raise SignalError(
             f"max_hz must be in (0.5, 45] Hz (below the 50 Hz Nyquist frequency of the 100 Hz "

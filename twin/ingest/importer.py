@@ -50,7 +50,7 @@ from twin.ingest.columns import (
 )
 from twin.ingest.timebase import Regular, check_stamps, decimate, regularise
 from twin.progress import ProgressFn
-from twin.runs import RunWriter
+from twin.runs import HEADERS, RunWriter, check_values
 from twin.signals import check_signal
 from twin.trajectory import Trajectory
 
@@ -625,8 +625,10 @@ def import_run(
         "notes": f"imported by twin import from {', '.join(str(f) for f in files)}",
         "import": report.to_dict() | {"folder": None},
     }
+    imu = np.hstack([rec.accel, rec.gyro])
+    check_values(imu, HEADERS["imu.csv"][1:], f"the IMU of {imu_src.name} (in m/s^2 and rad/s)")
     with RunWriter(out, meta, overwrite=overwrite, files=("commands.csv", "imu.csv")) as w:
         w.write("commands.csv", commands.t, commands.values)
-        w.write("imu.csv", rec.t - t0, np.hstack([rec.accel, rec.gyro]))
+        w.write("imu.csv", rec.t - t0, imu)
     say(f"wrote {out}")
     return report

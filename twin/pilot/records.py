@@ -22,6 +22,8 @@ from twin.trajectory import uniform_rate
 FloatArray = NDArray[np.float64]
 COLUMNS = ("t", "ft", "fd", "e", "u", "theta")
 OPTIONAL = ("theta_felt",)
+#: Largest magnitude of each signal [rad]: a pitch-tracking run stays within 10 rad (573 deg).
+MAX_VALUE = {c: 10.0 for c in (*COLUMNS[1:], *OPTIONAL)}
 
 
 def write_pilot_csv(path: str | Path, columns: dict[str, FloatArray]) -> Path:
@@ -38,7 +40,7 @@ def read_pilot_csv(path: str | Path) -> dict[str, FloatArray]:
     p = Path(path)
     if not p.is_file():
         raise RunFormatError(f"{p}: no such pilot-run file")
-    data, header = read_table(p, COLUMNS, OPTIONAL)
+    data, header = read_table(p, COLUMNS, OPTIONAL, MAX_VALUE)
     out = {h: data[:, i] for i, h in enumerate(header)}
     out["rate_hz"] = np.array(uniform_rate(out["t"], f"{p}"))
     return out

@@ -170,7 +170,7 @@ def read_grid(path: str | Path) -> Grid:
 def parse_grid(doc: dict[str, Any], source: str = "<grid>", base: Path | None = None) -> Grid:
     """Check a sweep document (the parsed TOML) and return its :class:`Grid`."""
     task = doc.get("task")
-    if task not in TASKS:
+    if not isinstance(task, str) or task not in TASKS:
         raise SweepError(f"{source}: task must be one of {', '.join(map(repr, TASKS))}; "
                          f"got {task!r}")  # fmt: skip
     axes_types = AXES | TASK_AXES[task]

@@ -1,0 +1,228 @@
+"""The bad inputs of issue 17, one by one: each is one line naming what is wrong, exit 2.
+
+(:mod:`tests.test_fuzz_inputs` tries thousands of damaged files and odd numbers; this module
+names the cases a user met, with the message each must give.)
+"""
+
+from __future__ import annotations
+
+import json
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from twin.cli.main import EXIT_BUG, error_line, main
+from twin.errors import DataError
+
+REST = ["simulate", "srs", "--model", "reduced", "--signal", "rest-1", "--quiet"]
+
+
+@pytest.fixture(scope="module")
+def run(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A valid 1-s run folder."""
+    out = tmp_path_factory.mktemp("r") / "run"
+    assert main([*REST, "--out", str(out)]) == 0
+    return out
+
+
+def _one_line(capsys: pytest.CaptureFixture[str], argv: list[str], *fragments: str) -> str:
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("twin: error: ") and err.count("\n") == 1, err
+    for f in fragments:
+        assert f in err, err
+    return err
+
+
+def test_output_paths_are_refused_before_any_work(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "file.txt").write_text("mine")
+    (tmp_path / "folder").mkdir()
+    cases = [
+        ([*REST, "--out", "file.txt/sub"], "file.txt is a file, not a folder"),
+        ([*REST, "--out", "/proc/sys/twin-run"], "cannot write in /proc/sys"),
+        ([*REST, "--out", "o1", "--rrd", "folder"], "argument --rrd: folder: is a folder"),
+        ([*REST, "--out", "o2", "--rrd", "/proc/sys/x.rrd"], "read-only file system"),
+        (["pilot", "run", "srs", "--out", "folder", "--quiet"], "--out: folder: is a folder"),
+        (["compare", "srs", "--plot", "bode.xyz"], "unknown file type '.xyz'"),
+        (["diagnose", "x", "--save-config", "folder"], "--save-config: folder: is a folder"),
+        (["agard", "df", "srs", "--dof", "pitch", "--out", "file.txt"], "file.txt: is a file"),
+    ]
+    for argv, message in cases:
+        _one_line(capsys, argv, message)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["file.txt", "folder"]
+    assert (tmp_path / "file.txt").read_text() == "mine" and not any(
+        (tmp_path / "folder").iterdir()
+    )
+
+
+def test_missing_folders_of_an_output_file_are_made(tmp_path, run):
+    rrd = tmp_path / "new" / "deeper" / "run.rrd"
+    assert main([*REST, "--out", str(tmp_path / "o"), "--rrd", str(rrd)]) == 0
+    assert rrd.is_file() and not list(rrd.parent.glob(".*"))
+
+
+def _edited_run(run: Path, where: Path, edit) -> Path:
+    copy = where / "run"
+    shutil.copytree(run, copy)
+    meta = json.loads((copy / "meta.json").read_text())
+    edit(meta)
+    (copy / "meta.json").write_text(json.dumps(meta))
+    return copy
+
+
+@pytest.mark.parametrize(
+    ("keys", "value", "message"),
+    [
+        (
+            ("imu", "position_m"),
+            ["a", 0, 0],
+            "imu.position_m [x, y, z][0] must be a number; got 'a'",
+        ),
+        (("imu", "position_m"), [0, 0], "imu.position_m [x, y, z] must be 3 numbers"),
+        (("platform_config", "noise_highpass_hz"), "x", "noise_highpass_hz must be a number"),
+        (("platform_config", "noise_highpass_hz"), [1], "noise_highpass_hz must be a number"),
+        (("platform_config", "noise"), "yes", "noise must be true or false; got 'yes'"),
+        (("platform_config", "delay_s"), 1e300, "delay_s must be a number in [0, 10]"),
+        (("command_rate_hz",), True, "command_rate_hz must be a number"),
+        (("platform",), ["srs"], "platform must be one of mpi, srs; got ['srs']"),
+    ],
+)
+def test_wrong_types_in_meta_json_are_named(run, tmp_path, capsys, keys, value, message):
+    def edit(meta: dict) -> None:
+        node = meta
+        for k in keys[:-1]:
+            node = node[k]
+        node[keys[-1]] = value
+
+    bad = _edited_run(run, tmp_path, edit)
+    _one_line(capsys, ["agard", "noise", str(bad), "--quiet"], f"{bad}/meta.json: ", message)
+
+
+@pytest.mark.parametrize(
+    ("value", "message"),
+    [("abc", "noise_highpass_hz must be a number"), ([1], "noise_highpass_hz must be a number"),
+     (1e-300, "noise_highpass_hz must be a number in [0.01, 1000]")],
+)  # fmt: skip
+def test_wrong_types_in_a_config_file_are_named(tmp_path, capsys, value, message):
+    from twin.chain.config import motion_system
+
+    cfg = motion_system("mpi").save(tmp_path / "c.json")
+    doc = json.loads(cfg.read_text())
+    doc["platform_config"]["noise_highpass_hz"] = value
+    cfg.write_text(json.dumps(doc))
+    out = tmp_path / "o"
+    _one_line(capsys, ["simulate", str(cfg), *REST[2:], "--out", str(out)], message)
+    assert not out.exists()
+
+
+def test_wrong_types_in_omct_bounds_are_named(tmp_path, capsys, run):
+    from twin.agard.omct import EXAMPLE_BOUNDS
+
+    text = Path(EXAMPLE_BOUNDS).read_text()
+    for old, new, message in [
+        ("frequency_rad_s = [", 'frequency_rad_s = ["a", ', "frequency_rad_s[0] must be a number"),
+        ("frequency_rad_s = [", "frequency_rad_s = [[1], ", "frequency_rad_s[0] must be a number"),
+    ]:
+        bad = tmp_path / "b.toml"
+        bad.write_text(text.replace(old, new, 1))
+        _one_line(capsys, ["agard", "omct", str(run), "--bounds", str(bad), "--quiet"], message)
+    bad.write_bytes(b"\xff\xfe\x00 binary")
+    _one_line(capsys, ["agard", "omct", str(run), "--bounds", str(bad)], "not UTF-8 text")
+
+
+def test_binary_files_are_refused_and_a_byte_order_mark_is_read(tmp_path, capsys, run):
+    commands = tmp_path / "cmd" / "commands.csv"
+    commands.parent.mkdir()
+    commands.write_bytes(b"t,x,y,z,roll,pitch,yaw\n\xff\xfe\x00\x01")
+    argv = ["simulate", "srs", "--model", "reduced", "--signal", str(commands), "--quiet"]
+    _one_line(capsys, [*argv, "--out", str(tmp_path / "o1")], "not UTF-8 text (byte 0xff")
+    commands.write_bytes(b"\xef\xbb\xbf" + (run / "commands.csv").read_bytes())
+    assert main([*argv, "--out", str(tmp_path / "o2")]) == 0
+    pilot = tmp_path / "p.csv"
+    pilot.write_bytes(b"t,ft,fd,e,u,theta\n\x80\x81")
+    _one_line(capsys, ["pilot", "identify", str(pilot)], "not UTF-8 text")
+
+
+def test_odd_numbers_on_the_command_line(capsys, tmp_path):
+    cases = [
+        (["pilot", "run", "condition-1", "--seed", "-1"], "seed must be an integer >= 0"),
+        (["pilot", "lead", "srs", "--margin-deg", "nan"], "margin_deg"),
+        (["pilot", "lead", "srs", "--margin-deg", "1e9"], "in [0, 90]"),
+        (["simulate", "srs", "--signal", "rest-1", "--delay-ms", "1e300"], "[0, 10000]"),
+        (["simulate", "srs", "--signal", "rest-1", "--break-hz", "1e-300"], "0 (no filter) or in"),
+        (
+            ["pilot", "run", "srs", "--runs", "100000000"],
+            "--runs: must be an integer in [1, 1,000]",
+        ),
+        (["pilot", "montecarlo", "--fit-runs", "-1"], "--fit-runs: must be an integer in [0, 500]"),
+        (["agard", "threshold", "srs", "--dof", "pitch", "--amplitude", "1e300"], "step amplitude"),
+    ]
+    for argv, message in cases:
+        _one_line(capsys, argv, message)
+
+
+def test_a_run_longer_than_memory_is_refused_with_its_size(tmp_path, capsys):
+    out = tmp_path / "o"
+    argv = [
+        "simulate",
+        "srs",
+        "--model",
+        "reduced",
+        "--signal",
+        "rest-100000000",
+        "--out",
+        str(out),
+    ]
+    err = _one_line(capsys, argv, "rest-1e+08: a run of 1e+08 s needs about ", "TiB of memory")
+    assert "are available" in err and not out.exists()
+
+
+def test_non_physical_commands_are_refused_before_running(tmp_path, capsys, run):
+    commands = tmp_path / "cmd" / "commands.csv"
+    commands.parent.mkdir()
+    rows = (run / "commands.csv").read_text().splitlines()
+    rows[5] = "0.04,0,0,1e300,0,0,0"
+    commands.write_text("\n".join(rows) + "\n")
+    out = tmp_path / "o"
+    argv = ["simulate", "srs", "--model", "reduced", "--signal", str(commands), "--out", str(out)]
+    _one_line(capsys, argv, "heave is 1e+300 m at row 5", "within 10 m and 180 deg")
+    assert not out.exists()
+
+
+def test_identify_says_a_run_without_excitation_has_none(tmp_path, capsys):
+    from twin.pilot.records import write_pilot_csv
+
+    t = np.arange(9000) / 100.0
+    zero = np.zeros_like(t)
+    f = write_pilot_csv(
+        tmp_path / "zero.csv", dict(t=t, ft=zero, fd=zero, e=zero, u=zero, theta=zero)
+    )
+    _one_line(capsys, ["pilot", "identify", str(f)], "carries no excitation: ft, fd, e, u constant")
+
+
+def test_error_line_maps_every_kind_of_failure(monkeypatch):
+    line, code = error_line(PermissionError(13, "Permission denied", "/x/y.csv"))
+    assert (line, code) == ("twin: error: /x/y.csv: Permission denied", 2)
+    line, code = error_line(DataError("a.csv: bad"))
+    assert (line, code) == ("twin: error: a.csv: bad", 2)
+    assert error_line(MemoryError())[1] == 2 and "not enough memory" in error_line(MemoryError())[0]
+    assert error_line(KeyboardInterrupt()) == ("twin: interrupted", 130)
+    line, code = error_line(ZeroDivisionError("division by zero"))
+    assert code == EXIT_BUG and line.startswith("twin: internal error: ZeroDivisionError")
+    assert "TWIN_DEBUG=1" in line
+
+
+def test_twin_debug_shows_the_traceback_of_a_bug(monkeypatch):
+    import twin.cli.main as cli
+
+    def broken(args):
+        raise ZeroDivisionError("a bug")
+
+    monkeypatch.setattr(cli, "_cmd_workspace", broken)
+    assert main(["workspace", "srs"]) == EXIT_BUG
+    monkeypatch.setenv("TWIN_DEBUG", "1")
+    with pytest.raises(ZeroDivisionError):
+        main(["workspace", "srs"])

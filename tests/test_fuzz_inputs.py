@@ -1,0 +1,404 @@
+"""Fuzzed bad input: every command answers with exit 0, or one clear line and exit 2 (issue 17).
+
+Each example runs the ``twin`` command line in this process on a damaged copy of a valid
+file of one format: random bytes, a truncation, a splice of odd text (``nan``, ``1e300``, a
+NUL, a quote, a byte-order mark, a non-UTF-8 byte, ...), a CSV cell or a JSON/TOML value
+replaced by an odd value of another type, a JSON key removed. Odd numbers go to every numeric
+option. Each example must:
+
+- exit with 0 or 2 (70 is a bug: an exception the twin did not expect; warnings are errors
+  here, so a silent overflow fails too);
+- on 2, print exactly one line, ``twin: error: ...``, and no traceback;
+- leave nothing half-written: no hidden staging file or folder, and no output on failure.
+
+The fast suite tries :data:`FAST` examples per format (derandomised: the same examples every
+run); ``make test-all`` tries :data:`SLOW` per format and a full-length pilot run, and prints
+the counts (README, Reliability).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import json
+import re
+import shutil
+import tempfile
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from twin.cli.main import main
+
+FAST = 30
+SLOW = 300
+#: Odd text spliced into files and given to numeric options.
+TOKENS = ["", "nan", "NaN", "inf", "-inf", "1e300", "-1e300", "1e-300", "-1", "0", "-0", "1e9",
+          "99999999999999999999999", "0x10", "abc", "1e", "\uff11\uff12", "1,5", " 7", "\"",
+          "'", ",", ",,", "[", "{", "}", "]", "null", "true", "\n", "\r\n", "\ufeff", "\x00",
+          "\u00e9", "9" * 400]  # fmt: skip
+#: Odd values of other types put in JSON (and TOML) documents.
+_SCALARS = (
+    st.none() | st.booleans() | st.integers(-(2**70), 2**70) | st.floats()
+    | st.sampled_from(TOKENS) | st.text(max_size=8)
+)  # fmt: skip
+JSON_VALUES = st.recursive(
+    _SCALARS,
+    lambda inner: (
+        st.lists(inner, max_size=3) | st.dictionaries(st.text(max_size=6), inner, max_size=3)
+    ),
+    max_leaves=6,
+)
+TOML_VALUES = ['"a"', "[1]", "[[1], 2]", "{a = 1}", "true", "nan", "inf", "-inf", "1e300",
+               "[]", '["x", 2]', "-1", "0", "[1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13]",
+               "[0.0, 0.0]", '"""', "1979-05-27"]  # fmt: skip
+
+
+# --- the valid files the examples damage ------------------------------------------------------
+
+
+def _cli(argv: list[str]) -> tuple[int, str]:
+    """Run ``twin argv`` here; return the exit code and stderr."""
+    err = io.StringIO()
+    with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(err):
+        code = main(argv)
+    return code, err.getvalue()
+
+
+@pytest.fixture(scope="module")
+def valid(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
+    """Valid files of every format, and a small recorded run (6 s, 1 Hz heave sine)."""
+    root = tmp_path_factory.mktemp("valid")
+    t = np.arange(601) / 100.0
+    cmd = np.zeros((t.size, 7))
+    cmd[:, 0], cmd[:, 3] = t, 0.01 * np.sin(2 * np.pi * t)
+    (root / "cmd").mkdir()
+    np.savetxt(root / "cmd" / "commands.csv", cmd, delimiter=",", fmt="%.10g", comments="",
+               header="t,x,y,z,roll,pitch,yaw")  # fmt: skip
+    run = root / "run"
+    argv = ["simulate", "srs", "--model", "reduced", "--signal", str(root / "cmd" / "commands.csv"),
+            "--out", str(run), "--quiet"]  # fmt: skip
+    assert _cli(argv)[0] == 0
+    from twin.chain.config import motion_system
+
+    motion_system("mpi").save(root / "config.json")
+    pilot = root / "pilot.csv"  # 6 s: read in full, then refused as too short for the analysis
+    cols = {k: np.sin(t * (i + 1)) * 0.01 for i, k in enumerate(("ft", "fd", "e", "u", "theta"))}
+    from twin.pilot.records import write_pilot_csv
+
+    write_pilot_csv(pilot, {"t": t, **cols, "theta_felt": cols["theta"]})
+    from twin.agard.omct import EXAMPLE_BOUNDS
+
+    shutil.copy(EXAMPLE_BOUNDS, root / "bounds.toml")
+    (root / "grid.toml").write_text(
+        'task = "df"\nmodel = "reduced"\nconfig = "srs"\ndof = "heave"\n[grid]\ndelay_ms = [25]\n'
+    )
+    lab = root / "lab.csv"  # a lab log: commands and IMU in one file, its own names and units
+    imu = np.loadtxt(run / "imu.csv", delimiter=",", skiprows=1)[::8]
+    heave_mm = np.interp(imu[:, 0], t, cmd[:, 3]) * 1e3
+    rows = np.column_stack([imu[:, 0], heave_mm, imu[:, 3] / 9.81])
+    np.savetxt(lab, rows, delimiter=",", fmt="%.8g", comments="", header="time_s,heave_mm,AccZ (g)")
+    files = {"commands.csv": root / "cmd" / "commands.csv", "twin-config/1": root / "config.json",
+             "twin-pilot/1": pilot, "omct-bounds": root / "bounds.toml",
+             "sweep": root / "grid.toml", "lab-csv": lab}  # fmt: skip
+    return {"root": root, "run": run, **files}
+
+
+# --- damage ----------------------------------------------------------------------------------
+
+
+def _splices(data: bytes) -> st.SearchStrategy[bytes]:
+    """Random bytes, a truncation, or odd text (or bytes) spliced in anywhere."""
+    n = len(data)
+    odd = (
+        st.sampled_from(TOKENS).map(lambda s: s.encode())
+        | st.binary(max_size=12)
+        | st.just(b"\xff\xfe")
+    )
+    splice = st.tuples(st.integers(0, n), st.integers(0, 40), odd).map(
+        lambda a: data[: a[0]] + a[2] + data[a[0] + a[1] :]
+    )
+    return st.binary(max_size=600) | st.integers(0, n).map(lambda k: data[:k]) | splice
+
+
+def _csv_cells(data: bytes) -> st.SearchStrategy[bytes]:
+    """One cell of a CSV (header included) replaced by an odd value."""
+    lines = data.decode().split("\n")
+
+    def put(a: tuple[int, int, str]) -> bytes:
+        row, col, token = a
+        cells = lines[row % len(lines)].split(",")
+        cells[col % len(cells)] = token
+        out = list(lines)
+        out[row % len(lines)] = ",".join(cells)
+        return "\n".join(out).encode("utf-8", "surrogatepass")
+
+    rows = st.integers(0, 3) | st.integers(0, len(lines) - 1)  # the header and first rows often
+    return st.tuples(rows, st.integers(0, 9), st.sampled_from(TOKENS)).map(put)
+
+
+def _json_values(data: bytes) -> st.SearchStrategy[bytes]:
+    """A value anywhere in a JSON document replaced by one of another type, or a key removed."""
+    doc = json.loads(data)
+    paths: list[tuple] = []
+
+    def walk(node: object, path: tuple) -> None:
+        paths.append(path)
+        items = (
+            node.items()
+            if isinstance(node, dict)
+            else enumerate(node)
+            if isinstance(node, list)
+            else ()
+        )
+        for k, v in items:
+            walk(v, (*path, k))
+
+    walk(doc, ())
+
+    def put(a: tuple[int, object, bool]) -> bytes:
+        path, value, remove = paths[a[0] % len(paths)], a[1], a[2]
+        new = json.loads(data)
+        if not path:
+            new = value
+        else:
+            node = new
+            for k in path[:-1]:
+                node = node[k]
+            if remove and isinstance(node, dict):
+                del node[path[-1]]
+            else:
+                node[path[-1]] = value
+        return json.dumps(new).encode()
+
+    return st.tuples(st.integers(0, 10_000), JSON_VALUES, st.booleans()).map(put)
+
+
+def _toml_values(data: bytes) -> st.SearchStrategy[bytes]:
+    """A value of a TOML document (``key = value``) replaced by one of another type."""
+    text = data.decode()
+    spots = [m.span(1) for m in re.finditer(r"=\s*(.+)$", text, flags=re.M)]
+
+    def put(a: tuple[int, str]) -> bytes:
+        lo, hi = spots[a[0] % len(spots)]
+        return (text[:lo] + a[1] + text[hi:]).encode()
+
+    return st.tuples(st.integers(0, 10_000), st.sampled_from(TOML_VALUES)).map(put)
+
+
+class Damaged(bytes):
+    """A damaged file: bytes whose repr in a failure report is short (a run's imu.csv is 0.5 MB)."""
+
+    def __repr__(self) -> str:
+        head = bytes(self[:160])
+        return f"Damaged({head!r}{'...' if len(self) > 160 else ''}, {len(self)} bytes)"
+
+
+# --- one example ----------------------------------------------------------------------------
+
+
+def _leftovers(where: Path) -> list[str]:
+    """Hidden files or folders (staging names) anywhere under ``where``."""
+    return [str(p) for p in where.rglob(".*")]
+
+
+def check_clean(argv: list[str], work: Path, out: Path | None = None) -> int:
+    """Run one command and assert the contract of this module; return its exit code."""
+    code, err = _cli(argv)
+    shown = " ".join(argv)
+    assert code in (0, 2), f"twin {shown}: exit {code}: {err}"
+    assert "Traceback" not in err, f"twin {shown}: {err}"
+    if code == 2:
+        lines = [ln for ln in err.splitlines() if ln.strip()]
+        assert len(lines) == 1 and lines[0].startswith("twin: error: "), f"twin {shown}: {err}"
+        assert out is None or not out.exists(), f"twin {shown} failed but wrote {out}"
+    assert not _leftovers(work), f"twin {shown} left {_leftovers(work)}"
+    return code
+
+
+# --- the formats, each with a command that reads it ---------------------------------------------
+
+RUN_FILES = ("meta.json", "imu.csv", "actuators.csv", "commands.csv")
+
+
+def _format_case(
+    fmt: str, valid: dict[str, Path], work: Path, data: bytes
+) -> tuple[list[str], Path | None]:
+    """Write ``data`` as a file of ``fmt`` under ``work``; return the command and its output."""
+    out = work / "out"
+    if fmt.startswith("run/"):
+        run = work / "run"
+        shutil.copytree(valid["run"], run)
+        (run / fmt[4:]).write_bytes(data)
+        return ["agard", "noise", str(run), "--quiet", "--json"], None
+    if fmt == "commands.csv":
+        (work / "cmd").mkdir()
+        f = work / "cmd" / "commands.csv"
+        f.write_bytes(data)
+        return ["simulate", "srs", "--model", "reduced", "--signal", str(f), "--out", str(out),
+                "--quiet"], out  # fmt: skip
+    f = work / valid[fmt].name
+    f.write_bytes(data)
+    if fmt == "twin-config/1":
+        return ["simulate", str(f), "--model", "reduced", "--signal", "rest-1", "--out", str(out),
+                "--quiet"], out  # fmt: skip
+    if fmt == "twin-pilot/1":
+        return ["pilot", "identify", str(f), "--quiet", "--json"], None
+    if fmt == "omct-bounds":
+        return ["agard", "omct", str(valid["run"]), "--bounds", str(f), "--quiet", "--json"], None
+    if fmt == "sweep":
+        return ["sweep", str(f), "--scheduler", "inline", "--out", str(out), "--quiet"], out
+    return ["import", str(f), "--platform", "srs", "--out", str(out), "--quiet"], out
+
+
+def _original(fmt: str, valid: dict[str, Path]) -> bytes:
+    return (valid["run"] / fmt[4:] if fmt.startswith("run/") else valid[fmt]).read_bytes()
+
+
+MUTATORS: dict[str, Callable[[bytes], st.SearchStrategy[bytes]]] = {
+    "run/meta.json": lambda d: _splices(d) | _json_values(d),
+    "run/imu.csv": lambda d: _splices(d) | _csv_cells(d),
+    "run/actuators.csv": lambda d: _splices(d) | _csv_cells(d),
+    "run/commands.csv": lambda d: _splices(d) | _csv_cells(d),
+    "commands.csv": lambda d: _splices(d) | _csv_cells(d),
+    "twin-config/1": lambda d: _splices(d) | _json_values(d),
+    "twin-pilot/1": lambda d: _splices(d) | _csv_cells(d),
+    "omct-bounds": lambda d: _splices(d) | _toml_values(d),
+    "sweep": lambda d: _splices(d) | _toml_values(d),
+    "lab-csv": lambda d: _splices(d) | _csv_cells(d),
+}
+
+
+def _fuzz(fmt: str, valid: dict[str, Path], examples: int) -> tuple[int, int]:
+    """Try ``examples`` damaged files of ``fmt``; return (tried, accepted with exit 0)."""
+    counts = [0, 0]
+
+    @settings(max_examples=examples, derandomize=True, deadline=None, database=None,
+              suppress_health_check=list(HealthCheck))  # fmt: skip
+    @given(MUTATORS[fmt](_original(fmt, valid)).map(Damaged))
+    def one(data: bytes) -> None:
+        with tempfile.TemporaryDirectory(dir=valid["root"]) as tmp:
+            work = Path(tmp)
+            argv, out = _format_case(fmt, valid, work, data)
+            code = check_clean(argv, work, out)
+        counts[0] += 1
+        counts[1] += code == 0
+
+    one()
+    return counts[0], counts[1]
+
+
+@pytest.mark.parametrize("fmt", list(MUTATORS))
+def test_damaged_files_get_one_line_or_run(fmt: str, valid: dict[str, Path]) -> None:
+    tried, _ = _fuzz(fmt, valid, FAST)
+    assert tried >= FAST // 2  # hypothesis may stop early when it has seen every small case
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("fmt", list(MUTATORS))
+def test_many_damaged_files_get_one_line_or_run(fmt: str, valid: dict[str, Path]) -> None:
+    tried, ok = _fuzz(fmt, valid, SLOW)
+    print(f"\nfuzz {fmt}: {tried} tried, {tried} clean ({ok} accepted, {tried - ok} refused)")
+
+
+@pytest.mark.slow
+def test_damaged_full_pilot_runs_get_one_line_or_are_identified(valid: dict[str, Path]) -> None:
+    """A full-length ``twin-pilot/1`` run (the analysis runs: FC, ARX, MLE) with one cell odd."""
+    full = valid["root"] / "full" / "pilot.csv"
+    argv = ["pilot", "run", "condition-1", "--out", str(full), "--quiet"]
+    assert _cli(argv)[0] == 0
+    counts = [0, 0]
+
+    @settings(max_examples=SLOW // 10, derandomize=True, deadline=None, database=None,
+              suppress_health_check=list(HealthCheck))  # fmt: skip
+    @given(_csv_cells(full.read_bytes()).map(Damaged))
+    def one(data: bytes) -> None:
+        with tempfile.TemporaryDirectory(dir=valid["root"]) as tmp:
+            (Path(tmp) / "pilot.csv").write_bytes(data)
+            code = check_clean(["pilot", "identify", f"{tmp}/pilot.csv", "--quiet"], Path(tmp))
+        counts[0] += 1
+        counts[1] += code == 0
+
+    one()
+    print(f"\nfuzz twin-pilot/1 (full length): {counts[0]} tried, {counts[0]} clean "
+          f"({counts[1]} accepted, {counts[0] - counts[1]} refused)")  # fmt: skip
+
+
+def test_the_valid_files_and_a_byte_order_mark_are_accepted(valid: dict[str, Path]) -> None:
+    """The damage is what fails: the originals run, and so do they with a BOM in front."""
+    for fmt in MUTATORS:
+        if fmt in ("twin-pilot/1",):  # valid but 6 s long: refused as too short, by design
+            continue
+        for prefix in (b"", b"\xef\xbb\xbf"):
+            with tempfile.TemporaryDirectory(dir=valid["root"]) as tmp:
+                argv, out = _format_case(fmt, valid, Path(tmp), prefix + _original(fmt, valid))
+                assert check_clean(argv, Path(tmp), out) == 0, (fmt, prefix)
+
+
+# --- odd numbers on the command line ----------------------------------------------------------
+
+#: Numeric options, each in a command that is quick when the value is allowed (X: the value).
+SLOTS = [
+    ["simulate", "srs", "--model", "reduced", "--signal", "rest-1", "--delay-ms", "X"],
+    ["simulate", "srs", "--model", "reduced", "--signal", "rest-1", "--break-hz", "X"],
+    ["simulate", "srs", "--model", "reduced", "--signal", "rest-1", "--seed", "X"],
+    ["simulate", "srs", "--model", "reduced", "--signal", "rest-X"],
+    ["pilot", "lead", "srs", "--margin-deg", "X"],
+    ["pilot", "lead", "srs", "--delay-ms", "X"],
+    ["pilot", "run", "srs", "--remnant", "X"],
+    ["agard", "omct", "srs", "--dof", "pitch", "--model", "reduced", "--fraction", "X"],
+    ["agard", "threshold", "RUN", "--amplitude", "X"],
+    ["import", "RUN/commands.csv", "RUN/imu.csv", "--platform", "srs", "--clock-offset", "X"],
+    ["import", "RUN/commands.csv", "RUN/imu.csv", "--platform", "srs", "--imu-position", "X", "0",
+     "0"],
+]  # fmt: skip
+#: Numeric options whose allowed values start longer work (``make test-all`` only).
+SLOW_SLOTS = [
+    ["pilot", "montecarlo", "--runs", "2", "--fit-runs", "X", "--scheduler", "inline"],
+    ["pilot", "montecarlo", "--runs", "X", "--scheduler", "inline"],
+    ["pilot", "run", "srs", "--runs", "X"],
+    ["pilot", "adapt", "srs", "--weight", "X"],
+    ["agard", "threshold", "srs", "--dof", "pitch", "--model", "reduced", "--amplitude", "X"],
+    ["agard", "threshold", "srs", "--dof", "pitch", "--model", "reduced", "--step-s", "X"],
+    ["diagnose", "RUN", "--max-hz", "X", "--no-figures", "--scheduler", "inline"],
+    ["diagnose", "RUN", "--imu-noise", "X", "--no-figures", "--scheduler", "inline"],
+]  # fmt: skip
+#: Odd values tried in every slot.
+NUMBERS = ["nan", "inf", "-inf", "1e300", "-1e300", "1e-300", "-1", "-0", "1e9",
+           "99999999999999999999999", "0x10", "", "abc", "1e", "\uff11\uff12", "1,5"]  # fmt: skip
+
+
+def _slot_argv(slot: list[str], value: str, run: Path, out: Path) -> list[str]:
+    argv = [a.replace("RUN", str(run)).replace("X", value) if "X" in a or "RUN" in a else a
+            for a in slot]  # fmt: skip
+    if argv[0] in ("simulate", "import", "diagnose"):
+        argv += ["--out", str(out)]
+    return argv + (["--quiet"] if argv[:2] not in (["pilot", "lead"], ["pilot", "adapt"]) else [])
+
+
+def _odd_numbers(slot: list[str], valid: dict[str, Path]) -> None:
+    for value in NUMBERS:
+        with tempfile.TemporaryDirectory(dir=valid["root"]) as tmp:
+            out = Path(tmp) / "out"
+            check_clean(_slot_argv(slot, value, valid["run"], out), Path(tmp), out)
+
+
+def _slot_id(slot: list[str]) -> str:
+    return " ".join(a for a in slot if a.startswith("--") or a in ("X", "rest-X") or a == slot[0])
+
+
+@pytest.mark.parametrize("slot", SLOTS, ids=_slot_id)
+def test_odd_numbers_get_one_line_or_run(slot: list[str], valid: dict[str, Path]) -> None:
+    _odd_numbers(slot, valid)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("slot", SLOW_SLOTS, ids=_slot_id)
+def test_odd_numbers_in_long_commands_get_one_line_or_run(
+    slot: list[str], valid: dict[str, Path]
+) -> None:
+    _odd_numbers(slot, valid)
