@@ -67,5 +67,7 @@ def test_bad_signals_are_rejected():
         single_sine("pitch", 60.0, 0.1)
     with pytest.raises(SignalError, match="unknown DOF"):
         single_sine("wobble", 1.0, 0.1)
-    with pytest.raises(SignalError, match="positive"):
+    with pytest.raises(SignalError, match=r"step amplitude .* must be a number in \(0, 100\]"):
         square_steps("heave", -0.1, 1.0)
+    with pytest.raises(SignalError, match=r"step length \[s\] must be a number > 0; got nan"):
+        square_steps("heave", 0.1, float("nan"))

@@ -34,7 +34,7 @@ from hypothesis import strategies as st
 
 from twin.cli.main import main
 
-FAST = 30
+FAST = 20
 SLOW = 300
 #: Odd text spliced into files and given to numeric options.
 TOKENS = ["", "nan", "NaN", "inf", "-inf", "1e300", "-1e300", "1e-300", "-1", "0", "-0", "1e9",
@@ -349,7 +349,6 @@ SLOTS = [
     ["simulate", "srs", "--model", "reduced", "--signal", "rest-X"],
     ["pilot", "lead", "srs", "--margin-deg", "X"],
     ["pilot", "lead", "srs", "--delay-ms", "X"],
-    ["pilot", "run", "srs", "--remnant", "X"],
     ["agard", "omct", "srs", "--dof", "pitch", "--model", "reduced", "--fraction", "X"],
     ["agard", "threshold", "RUN", "--amplitude", "X"],
     ["import", "RUN/commands.csv", "RUN/imu.csv", "--platform", "srs", "--clock-offset", "X"],
@@ -361,6 +360,7 @@ SLOW_SLOTS = [
     ["pilot", "montecarlo", "--runs", "2", "--fit-runs", "X", "--scheduler", "inline"],
     ["pilot", "montecarlo", "--runs", "X", "--scheduler", "inline"],
     ["pilot", "run", "srs", "--runs", "X"],
+    ["pilot", "run", "srs", "--remnant", "X"],
     ["pilot", "adapt", "srs", "--weight", "X"],
     ["agard", "threshold", "srs", "--dof", "pitch", "--model", "reduced", "--amplitude", "X"],
     ["agard", "threshold", "srs", "--dof", "pitch", "--model", "reduced", "--step-s", "X"],

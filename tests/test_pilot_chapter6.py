@@ -118,6 +118,7 @@ def test_mle_escapes_the_local_optimum_and_names_what_it_cannot_identify():
     assert set(fit.to_dict()["not_identifiable"]) == set(fit.unidentifiable)
 
 
+@pytest.mark.slow
 def test_mle_on_repetitions_narrows_the_bound_as_averaging_should():
     """Five repetitions of condition 8 (15 % remnant), averaged at the lines as the thesis
     averaged its five: the gains' bounds shrink by about sqrt(5) (between 1.6x and 3.2x) and
