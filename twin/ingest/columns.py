@@ -175,7 +175,15 @@ def read_table(path: str | Path) -> Table:
                 raise DataError(
                     f"{p}: line {i + 2}, column {header[j]!r}: {cell!r} is not a number"
                 ) from None
+            if not abs(data[i, j]) <= MAX_CELL:
+                raise DataError(f"{p}: line {i + 2}, column {header[j]!r}: {cell[:40]!r} is not "
+                                f"a measurement (finite, within +-{MAX_CELL:g})")  # fmt: skip
     return Table(p, header, data)
+
+
+#: Largest magnitude of a logged number: room for time stamps in ns since 1970 (1.8e18),
+#: far below where arithmetic on it overflows.
+MAX_CELL = 1e20
 
 
 def _is_number(text: str) -> bool:
