@@ -6,6 +6,7 @@ names the cases a user met, with the message each must give.)
 
 from __future__ import annotations
 
+import inspect
 import json
 import shutil
 from pathlib import Path
@@ -200,7 +201,7 @@ def test_identify_says_a_run_without_excitation_has_none(tmp_path, capsys):
     f = write_pilot_csv(
         tmp_path / "zero.csv", dict(t=t, ft=zero, fd=zero, e=zero, u=zero, theta=zero)
     )
-    _one_line(capsys, ["pilot", "identify", str(f)], "carries no excitation: ft, fd, e, u constant")
+    _one_line(capsys, ["pilot", "identify", str(f)], "no excitation: ft, fd, e, u, theta constant")
 
 
 def test_error_line_maps_every_kind_of_failure(monkeypatch):
@@ -226,3 +227,35 @@ def test_twin_debug_shows_the_traceback_of_a_bug(monkeypatch):
     monkeypatch.setenv("TWIN_DEBUG", "1")
     with pytest.raises(ZeroDivisionError):
         main(["workspace", "srs"])
+
+
+def test_the_command_line_bounds_are_the_library_bounds():
+    """The parser keeps its own copies (it must not import the heavy modules)."""
+    from twin.cli import pilot as cli_pilot
+    from twin.pilot import montecarlo, pitch
+
+    assert cli_pilot.MAX_RUNS == pitch.MAX_RUNS
+    assert cli_pilot.MAX_MC_RUNS == montecarlo.MAX_RUNS
+    batch = inspect.signature(montecarlo.monte_carlo).parameters["batch"].default
+    assert cli_pilot.MC_BATCH == batch
+
+
+def test_outputs_never_replace_a_users_folder(tmp_path, capsys, monkeypatch, run):
+    monkeypatch.chdir(tmp_path)
+    mine = tmp_path / "mydocs"
+    mine.mkdir()
+    (mine / "thesis.txt").write_text("mine")
+    sim = ["simulate", "srs", "--model", "reduced", "--signal", "rest-1", "--quiet"]
+    for argv in (
+        [*sim, "--out", "mydocs", "--overwrite"],
+        [*sim, "--out", ".", "--overwrite"],
+        ["agard", "noise", str(run), "--out", "mydocs"],
+        ["agard", "noise", str(run), "--out", "."],
+        ["agard", "noise", str(run), "--out", str(run)],
+    ):
+        _one_line(capsys, argv, "give a new folder")
+    assert (mine / "thesis.txt").read_text() == "mine" and (run / "meta.json").is_file()
+    (tmp_path / "link").symlink_to(mine)
+    _one_line(capsys, [*sim, "--out", "link", "--overwrite"], "is a symbolic link")
+    _one_line(capsys, [*sim, "--out", "r", "--rrd", "r/x.rrd"], "must not lie inside the run")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["link", "mydocs"]

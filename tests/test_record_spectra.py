@@ -53,7 +53,7 @@ def test_a_recording_path_that_cannot_be_a_file_is_one_line_and_nothing_is_writt
     out = tmp_path / "out"
     for rrd, message in ((folder, "is a folder"), (afile / "x.rrd", "is a file, not a folder")):
         if command == "pilot":
-            argv = ["pilot", "run", "condition-1", "--out", str(out), "--rrd", str(rrd)]
+            argv = ["pilot", "run", "condition-1", "--out", f"{out}.csv", "--rrd", str(rrd)]
         else:
             argv = ["simulate", "srs", "--signal", "rest-2", "--model", "reduced", "--out",
                     str(out), "--rrd", str(rrd), "--quiet"]  # fmt: skip

@@ -127,6 +127,12 @@ def numbers(
     return np.array([number(v, f"{where}[{i}]", error=error) for i, v in enumerate(value)])
 
 
+def not_utf8(path: str | Path, e: UnicodeDecodeError, what: str) -> str:
+    """Return the message for a file that is not UTF-8: the path, its first bad byte, ``what``."""
+    return f"{path}: not UTF-8 text (byte 0x{e.object[e.start]:02x} at offset {e.start}); " \
+           f"expected {what}"  # fmt: skip
+
+
 def read_text(path: str | Path, what: str, error: type[Exception] = DataError) -> str:
     """Return a text file's contents (UTF-8, a byte-order mark dropped), else raise ``error``.
 
@@ -144,8 +150,7 @@ def read_text(path: str | Path, what: str, error: type[Exception] = DataError) -
     try:
         return p.read_text(encoding=ENCODING)
     except UnicodeDecodeError as e:
-        raise error(f"{p}: not UTF-8 text (byte 0x{e.object[e.start]:02x} at offset "
-                    f"{e.start}); expected {what}") from None  # fmt: skip
+        raise error(not_utf8(p, e, what)) from None
     except IsADirectoryError:
         raise error(f"{p}: is a folder; expected {what}") from None
     except FileNotFoundError:

@@ -17,7 +17,7 @@ import shutil
 import tempfile
 from abc import ABC, abstractmethod
 from collections.abc import Iterator
-from contextlib import contextmanager
+from contextlib import contextmanager, suppress
 from pathlib import Path
 from typing import Self
 
@@ -95,13 +95,18 @@ def replacing_file(final: str | Path) -> Iterator[Path]:
     removed. Missing parent folders are made.
     """
     final = check_output_file(final)
-    final.parent.mkdir(parents=True, exist_ok=True)
     tmp = final.with_name(f".{final.stem}.partial{final.suffix}")
     try:
+        final.parent.mkdir(parents=True, exist_ok=True)
         yield tmp
         tmp.replace(final)
+    except OSError as e:  # named by the user's path, not the hidden one
+        with suppress(OSError):
+            tmp.unlink(missing_ok=True)
+        raise UsageError(f"{final}: cannot be written ({e.strerror or e})") from None
     except BaseException:
-        tmp.unlink(missing_ok=True)
+        with suppress(OSError):
+            tmp.unlink(missing_ok=True)
         raise
 
 
@@ -111,6 +116,8 @@ def check_output_dir(final: str | Path, marker: str) -> None:
     Commands call it before their work, so a bad ``--out`` costs nothing.
     """
     final = check_writable(final)
+    if final.is_symlink():
+        raise UsageError(f"output folder {final} is a symbolic link; give the folder itself")
     here = Path.cwd().resolve()
     where = final.resolve()
     if where == here or where in here.parents:

@@ -30,9 +30,9 @@ from types import TracebackType
 import numpy as np
 from numpy.typing import NDArray
 
-from twin.checks import ENCODING, number, numbers, read_text
+from twin.checks import ENCODING, not_utf8, number, numbers, read_text
 from twin.errors import ConfigError, RunFormatError, SignalError
-from twin.lifecycle import staging_dir
+from twin.lifecycle import check_output_dir, staging_dir
 from twin.platform.facts import PLATFORMS
 from twin.trajectory import Trajectory, uniform_rate
 
@@ -88,7 +88,7 @@ def _read_csv(path: Path) -> FloatArray:
     name = path.name
     if not path.is_file():
         raise RunFormatError(f"{path.parent}: missing {name}")
-    data, _ = read_table(path, HEADERS[name])
+    data, _ = read_number_table(path, HEADERS[name])
     try:
         uniform_rate(data[:, 0], name)
     except SignalError as e:
@@ -96,7 +96,7 @@ def _read_csv(path: Path) -> FloatArray:
     return data
 
 
-def read_table(
+def read_number_table(
     path: Path,
     header: tuple[str, ...],
     optional: tuple[str, ...] = (),
@@ -117,23 +117,23 @@ def read_table(
         fewer than 2 rows.
 
     """
-    try:
-        with path.open(encoding=ENCODING) as fh:
+    with path.open(encoding=ENCODING) as fh:
+        try:
             got = tuple(c.strip() for c in fh.readline().strip().split(","))
             extra = got[len(header) :]
             if got[: len(header)] != header or any(c not in optional for c in extra):
                 want = ",".join(header) + "".join(f"[,{c}]" for c in optional)
-                raise RunFormatError(f"{path}: header must be {want}; got {','.join(got)[:200]}")
+                shown = ",".join(got)[:200] or "an empty line"
+                raise RunFormatError(f"{path}: header must be {want}; got {shown}")
             with warnings.catch_warnings():  # an empty table is refused below, not warned of
                 warnings.simplefilter("ignore", UserWarning)
                 data = np.loadtxt(fh, delimiter=",", ndmin=2)
-    except UnicodeDecodeError as e:
-        raise RunFormatError(
-            f"{path}: not UTF-8 text (byte 0x{e.object[e.start]:02x} at offset {e.start}); "
-            "expected a CSV of numbers"
-        ) from None
-    except ValueError as e:
-        raise RunFormatError(f"{path}: not a table of numbers ({str(e)[:200]})") from None
+        except UnicodeDecodeError as e:
+            raise RunFormatError(not_utf8(path, e, "a CSV of numbers")) from None
+        except RunFormatError:
+            raise
+        except ValueError as e:
+            raise RunFormatError(f"{path}: not a table of numbers ({str(e)[:200]})") from None
     if data.shape[0] < 2 or data.shape[1] != len(got):
         raise RunFormatError(f"{path}: needs at least 2 rows of {len(got)} numbers")
     bad = ~np.isfinite(data)
@@ -206,7 +206,44 @@ def _check_meta(meta: object, path: Path) -> dict:
            error=RunFormatError)  # fmt: skip
     numbers(imu.get("position_m"), f"{where}: imu.position_m [x, y, z]", size=3,
             error=RunFormatError)  # fmt: skip
+    _check_optional(meta, where)
     return meta
+
+
+def _check_optional(meta: dict, where: str) -> None:
+    """Check the optional ``signal`` (the test design) and ``import`` entries of a meta.json."""
+    from twin.frames import DOF_NAMES
+
+    def table(value: object, name: str) -> dict:
+        if not isinstance(value, dict):
+            raise RunFormatError(f"{where}: {name} must be a JSON object; got {value!r:.60}")
+        return value
+
+    sig = table(meta.get("signal", {}), "signal")
+    if "dof" in sig and (not isinstance(sig["dof"], str) or sig["dof"] not in DOF_NAMES):
+        raise RunFormatError(f"{where}: signal.dof must be one of {', '.join(DOF_NAMES)}; "
+                             f"got {sig['dof']!r:.60}")  # fmt: skip
+    for key in ("amplitude", "step_s"):
+        if key in sig:
+            number(sig[key], f"{where}: signal.{key}", lo=0, lo_open=True, error=RunFormatError)
+    if "start_s" in sig:
+        number(sig["start_s"], f"{where}: signal.start_s", lo=0, error=RunFormatError)
+    if "levels" in sig:
+        numbers(sig["levels"], f"{where}: signal.levels", error=RunFormatError)
+    if "frequencies_hz" in sig:
+        f = numbers(sig["frequencies_hz"], f"{where}: signal.frequencies_hz", error=RunFormatError)
+        if np.any(f <= 0):
+            raise RunFormatError(f"{where}: signal.frequencies_hz must be > 0")
+    if sig.get("amplitudes") is not None:
+        numbers(sig["amplitudes"], f"{where}: signal.amplitudes", error=RunFormatError)
+    if "window_s" in sig:
+        w = numbers(sig["window_s"], f"{where}: signal.window_s [start, end]", size=2,
+                    error=RunFormatError)  # fmt: skip
+        if not 0 <= w[0] < w[1]:
+            raise RunFormatError(f"{where}: signal.window_s must be [start, end], 0 <= start < end")
+    clock = table(table(meta.get("import", {}), "import").get("clock", {}), "import.clock")
+    if not isinstance(clock.get("delay_identifiable", False), bool):
+        raise RunFormatError(f"{where}: import.clock.delay_identifiable must be true or false")
 
 
 def read_run(folder: str | Path | RecordedRun) -> RecordedRun:
@@ -300,6 +337,7 @@ class RunWriter:
         self.folder = Path(folder)
         if self.folder.exists() and not overwrite:
             raise RunFormatError(f"{self.folder}: already exists (choose another --out)")
+        check_output_dir(self.folder, "meta.json")  # replaces only an earlier run folder
         self.meta = dict(meta, format=FORMAT)
         _check_meta(self.meta, self.folder)
         self.tmp = staging_dir(self.folder)
@@ -330,7 +368,12 @@ class RunWriter:
         if kind is not None:
             shutil.rmtree(self.tmp, ignore_errors=True)
             return
-        (self.tmp / "meta.json").write_text(json.dumps(self.meta, indent=2) + "\n")
-        if self.overwrite and self.folder.exists():
-            shutil.rmtree(self.folder)
-        self.tmp.rename(self.folder)
+        try:
+            (self.tmp / "meta.json").write_text(json.dumps(self.meta, indent=2) + "\n")
+            if self.overwrite and self.folder.exists():
+                shutil.rmtree(self.folder)
+            self.tmp.rename(self.folder)
+        except OSError as e:
+            shutil.rmtree(self.tmp, ignore_errors=True)
+            why = e.strerror or str(e)
+            raise RunFormatError(f"{self.folder}: the run cannot be put there ({why})") from None

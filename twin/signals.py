@@ -461,6 +461,9 @@ def rest(duration_s: float, rate_hz: float = 100.0) -> Trajectory:
     if not np.isfinite(duration_s) or duration_s <= 0:
         raise SignalError(f"rest duration must be a positive number of seconds; got {duration_s}")
     check_duration(duration_s, f"rest-{duration_s:g}", SignalError)
+    if round(duration_s * rate_hz) < 1:
+        raise SignalError(f"rest-{duration_s:g}: shorter than one command sample "
+                          f"({1 / rate_hz:g} s at {rate_hz:g} Hz)")  # fmt: skip
     return Trajectory(rate_hz, np.zeros((round(duration_s * rate_hz) + 1, 6)))
 
 

@@ -362,9 +362,12 @@ def load_config(path: str | Path) -> MotionSystem:
             f"{path}: unknown platform {data.get('platform')!r}; "
             f"expected one of {', '.join(PLATFORMS)}"
         )
-    return MotionSystem.from_meta(
-        data["platform"], data.get("platform_config"), str(data.get("description", path))
-    )
+    try:
+        return MotionSystem.from_meta(
+            data["platform"], data.get("platform_config"), str(data.get("description", path))
+        )
+    except ConfigError as e:
+        raise ConfigError(f"{path}: {e}") from None
 
 
 def _from_facts(platform: str, name: str, description: str) -> MotionSystem:

@@ -8,13 +8,13 @@ writes a report folder; ``demo`` is what ``make demo`` runs.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
-import shutil
 from pathlib import Path
 
 from twin.cli import common
 from twin.frames import DOF_NAMES, dof_index
-from twin.lifecycle import replacing_dir, replacing_file
+from twin.lifecycle import check_output_dir, replacing_dir, replacing_file
 
 TESTS = ("df", "noise", "snr", "threshold", "omct")
 HELP = {
@@ -197,11 +197,10 @@ def _cmd_test(args: argparse.Namespace) -> int:
         from twin.agard.omct import EXAMPLE_BOUNDS, read_bounds
 
         bounds = read_bounds(args.bounds or EXAMPLE_BOUNDS)
-    out = Path(args.out) if args.out else None
-    work = out.with_name(out.name + ".partial") if out else None  # renamed when complete
-    if work is not None:
-        shutil.rmtree(work, ignore_errors=True)
-    try:
+    if args.out:  # an earlier result folder is replaced; nothing else is (checked now)
+        check_output_dir(args.out, "result.json")
+    staged = replacing_dir(args.out, "result.json") if args.out else contextlib.nullcontext()
+    with staged as work:  # renamed into place when complete, removed on failure
         if is_run_folder(args.target):
             result, config = _analyse(args)
         else:
@@ -209,14 +208,6 @@ def _cmd_test(args: argparse.Namespace) -> int:
         payload = result.to_dict(bounds) if bounds is not None else result.to_dict()
         if work is not None:
             _save(work, args.test, result, payload, config, bounds)
-    except BaseException:
-        if work is not None:
-            shutil.rmtree(work, ignore_errors=True)
-        raise
-    if out is not None and work is not None:
-        if out.exists():
-            shutil.rmtree(out)
-        work.rename(out)
     if args.json:
         print(json.dumps(payload, indent=2))
     else:

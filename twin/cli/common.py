@@ -102,6 +102,8 @@ def _path_type(check: Callable[[str], object]) -> Callable[[str], str]:
 
 def check_output_dir_path(text: str) -> None:
     """Refuse an output folder path that is a file or cannot be written (while parsing)."""
+    if not text.strip():
+        raise UsageError("an empty folder name; give a folder")
     if Path(text).exists() and not Path(text).is_dir():
         raise UsageError(f"{text}: is a file; give a folder")
     check_writable(text)
@@ -111,6 +113,10 @@ def check_output_dir_path(text: str) -> None:
 output_dir = _path_type(check_output_dir_path)
 #: ``type=`` of an output file: not a folder, and somewhere this process may write.
 output_file = _path_type(check_output_file)
+#: ``type=`` of a Rerun recording: a ``.rrd`` file.
+rrd_file = _path_type(lambda text: check_output_file(text, (".rrd",)))
+#: ``type=`` of a CSV file written by the twin.
+csv_file = _path_type(lambda text: check_output_file(text, (".csv",)))
 #: ``type=`` of a figure file: also a suffix matplotlib writes (:data:`FIGURE_SUFFIXES`).
 figure_file = _path_type(lambda text: check_output_file(text, FIGURE_SUFFIXES))
 
@@ -118,11 +124,12 @@ figure_file = _path_type(lambda text: check_output_file(text, FIGURE_SUFFIXES))
 def out_parent(what: str, metavar: str = "DIR") -> argparse.ArgumentParser:
     """Return a parent parser with ``--out``; ``what`` says what is written there.
 
-    A ``metavar`` of ``DIR`` is a folder; anything else (``CSV``) a file. The path is checked
-    while parsing (:func:`output_dir`, :func:`output_file`), before any work.
+    A ``metavar`` of ``DIR`` is a folder, ``CSV`` a ``.csv`` file, anything else a file. The
+    path is checked while parsing (:func:`output_dir`, :func:`csv_file`, :func:`output_file`),
+    before any work.
     """
     p = _parent()
-    kind = output_dir if metavar == "DIR" else output_file
+    kind = {"DIR": output_dir, "CSV": csv_file}.get(metavar, output_file)
     p.add_argument("--out", metavar=metavar, type=kind, help=what)
     return p
 
@@ -130,7 +137,7 @@ def out_parent(what: str, metavar: str = "DIR") -> argparse.ArgumentParser:
 def rrd_parent(what: str = "save a Rerun recording") -> argparse.ArgumentParser:
     """Return a parent parser with ``--rrd FILE`` (checked while parsing)."""
     p = _parent()
-    p.add_argument("--rrd", metavar="FILE", type=output_file, help=what)
+    p.add_argument("--rrd", metavar="FILE", type=rrd_file, help=what)
     return p
 
 

@@ -266,12 +266,13 @@ def _cmd_identify(args: argparse.Namespace) -> int:
             f"{args.csv}: needs at least {MEASUREMENT_S} s of data; has {d['t'].size / rate:.2f} s"
         )
     w = {k: v[-n:] for k, v in d.items() if k != "rate_hz"}
-    flat = [k for k in ("ft", "fd", "e", "u") if np.ptp(w[k]) == 0]
+    felt = "theta_felt" if "theta_felt" in w else "theta"
+    flat = [k for k in ("ft", "fd", "e", "u", felt) if np.ptp(w[k]) == 0]
     if flat:
         raise SignalError(
             f"{args.csv}: the run carries no excitation: {', '.join(flat)} constant over the "
             f"last {MEASUREMENT_S} s (a tracking run has the Table 6.2 forcing functions in ft "
-            "and fd, and the pilot's e and u)"
+            "and fd, the pilot's e and u, and the motion the pilot felt)"
         )
     felt = w.get("theta_felt", w["theta"])
     fd, ft = pitch_task()

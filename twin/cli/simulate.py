@@ -56,7 +56,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--overwrite", action="store_true", help="replace an existing run folder")
     view = p.add_mutually_exclusive_group()
     view.add_argument(
-        "--rrd", metavar="FILE", type=common.output_file, help="also save a Rerun recording"
+        "--rrd", metavar="FILE", type=common.rrd_file, help="also save a Rerun recording"
     )
     view.add_argument(
         "--connect",
@@ -89,6 +89,11 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     name = Path(args.signal).stem if Path(args.signal).exists() else args.signal
     folder = Path(args.out or f"out/{run.config.name}-{args.model}-{name}-seed{args.seed}")
     meta = run_meta(run, f"simulated by twin ({args.model} model) from signal {args.signal!r}")
+    if args.rrd and folder.resolve() in Path(args.rrd).resolve().parents:
+        from twin.errors import UsageError
+
+        raise UsageError(f"--rrd {args.rrd}: the recording must not lie inside the run folder "
+                         f"{folder} (the run folder appears only when complete)")  # fmt: skip
     recorder = None
     if args.rrd is not None or args.connect is not None:
         from twin.record import Recorder

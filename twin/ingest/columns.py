@@ -144,7 +144,10 @@ def read_table(path: str | Path) -> Table:
         raise DataError(f"{p}: no such file")
     data = p.read_bytes()
     utf16 = data.startswith((b"\xff\xfe", b"\xfe\xff"))  # spreadsheets' "Unicode text"
-    raw = data.decode("utf-16" if utf16 else ENCODING, errors="replace")
+    try:
+        raw = data.decode("utf-16" if utf16 else ENCODING)
+    except UnicodeDecodeError:  # a log from an older Windows tool: "pitch [\xb0]" in Latin-1
+        raw = data.decode("utf-16" if utf16 else "latin-1", errors="replace")
     if "\x00" in raw:
         raise DataError(f"{p}: a binary file (it holds NUL bytes), not a CSV log")
     text = [ln for ln in raw.splitlines() if ln.strip()]

@@ -16,10 +16,11 @@ from numpy.typing import NDArray
 
 from twin.errors import RunFormatError
 from twin.lifecycle import replacing_file
-from twin.runs import read_table
+from twin.runs import read_number_table
 from twin.trajectory import uniform_rate
 
 FloatArray = NDArray[np.float64]
+FORMAT = "twin-pilot/1"
 COLUMNS = ("t", "ft", "fd", "e", "u", "theta")
 OPTIONAL = ("theta_felt",)
 #: Largest magnitude of each signal [rad]: a pitch-tracking run stays within 10 rad (573 deg).
@@ -38,9 +39,11 @@ def write_pilot_csv(path: str | Path, columns: dict[str, FloatArray]) -> Path:
 def read_pilot_csv(path: str | Path) -> dict[str, FloatArray]:
     """Read and check a ``twin-pilot/1`` CSV; returns the columns and ``rate_hz``."""
     p = Path(path)
+    if p.is_dir():
+        raise RunFormatError(f"{p}: is a folder; give a {FORMAT} CSV file")
     if not p.is_file():
         raise RunFormatError(f"{p}: no such pilot-run file")
-    data, header = read_table(p, COLUMNS, OPTIONAL, MAX_VALUE)
+    data, header = read_number_table(p, COLUMNS, OPTIONAL, MAX_VALUE)
     out = {h: data[:, i] for i, h in enumerate(header)}
     out["rate_hz"] = np.array(uniform_rate(out["t"], f"{p}"))
     return out
