@@ -257,3 +257,12 @@ def test_sweep_refuses_an_out_folder_it_did_not_write(tmp_path, capsys, monkeypa
     assert main(["sweep", str(grid), "--out", ".", "--scheduler", "inline"]) == 2
     assert "current folder" in capsys.readouterr().err
     assert (mine / "keep.txt").read_text() == "the user's" and grid.is_file()
+
+
+def test_two_local_clusters_at_once_do_not_clash(cluster):
+    """A second command on the same machine gets its own dashboard port (no warning: the suite
+    turns warnings into errors, and two clusters used to fight over port 8787)."""
+    with Engine("local:1") as other:
+        got = other.map(abs, [(-3.0,), (-4.0,)], [{"n": 0}, {"n": 1}], "abs").values()
+    assert got == [3.0, 4.0]
+    assert cluster.map(abs, [(-5.0,), (6.0,)], [{"n": 0}, {"n": 1}], "abs").values() == [5.0, 6.0]

@@ -207,7 +207,7 @@ class Engine:
                 n_workers=self.spec.workers or cpu_count(),
                 threads_per_worker=1,
                 processes=True,
-                dashboard_address=None,
+                dashboard_address=":0",  # a free port: two clusters at once do not clash
                 silence_logs=logging.CRITICAL,
             )
             self._client = Client(self._cluster)
