@@ -273,23 +273,34 @@ MUTATORS: dict[str, Callable[[bytes], st.SearchStrategy[bytes]]] = {
 }
 
 
-def _fuzz(fmt: str, valid: dict[str, Path], examples: int) -> tuple[int, int]:
-    """Try ``examples`` damaged files of ``fmt``; return (tried, accepted with exit 0)."""
+def _run_fuzz(
+    damage: st.SearchStrategy[bytes],
+    case: Callable[[Path, bytes], tuple[list[str], Path | None]],
+    root: Path,
+    examples: int,
+) -> tuple[int, int]:
+    """Try ``examples`` damaged files (``case`` writes one and gives its command and output)."""
     counts = [0, 0]
 
     @settings(max_examples=examples, derandomize=True, deadline=None, database=None,
               suppress_health_check=list(HealthCheck))  # fmt: skip
-    @given(MUTATORS[fmt](_original(fmt, valid)).map(Damaged))
+    @given(damage.map(Damaged))
     def one(data: bytes) -> None:
-        with tempfile.TemporaryDirectory(dir=valid["root"]) as tmp:
-            work = Path(tmp)
-            argv, out = _format_case(fmt, valid, work, data)
-            code = check_clean(argv, work, out)
+        with tempfile.TemporaryDirectory(dir=root) as tmp:
+            argv, out = case(Path(tmp), data)
+            code = check_clean(argv, Path(tmp), out)
         counts[0] += 1
         counts[1] += code == 0
 
     one()
     return counts[0], counts[1]
+
+
+def _fuzz(fmt: str, valid: dict[str, Path], examples: int) -> tuple[int, int]:
+    """Try ``examples`` damaged files of ``fmt``; return (tried, accepted with exit 0)."""
+    damage = MUTATORS[fmt](_original(fmt, valid))
+    return _run_fuzz(damage, lambda work, data: _format_case(fmt, valid, work, data),
+                     valid["root"], examples)  # fmt: skip
 
 
 @pytest.mark.parametrize("fmt", list(MUTATORS))
@@ -311,21 +322,14 @@ def test_damaged_full_pilot_runs_get_one_line_or_are_identified(valid: dict[str,
     full = valid["root"] / "full" / "pilot.csv"
     argv = ["pilot", "run", "condition-1", "--out", str(full), "--quiet"]
     assert _cli(argv)[0] == 0
-    counts = [0, 0]
 
-    @settings(max_examples=SLOW // 10, derandomize=True, deadline=None, database=None,
-              suppress_health_check=list(HealthCheck))  # fmt: skip
-    @given(_csv_cells(full.read_bytes()).map(Damaged))
-    def one(data: bytes) -> None:
-        with tempfile.TemporaryDirectory(dir=valid["root"]) as tmp:
-            (Path(tmp) / "pilot.csv").write_bytes(data)
-            code = check_clean(["pilot", "identify", f"{tmp}/pilot.csv", "--quiet"], Path(tmp))
-        counts[0] += 1
-        counts[1] += code == 0
+    def case(work: Path, data: bytes) -> tuple[list[str], Path | None]:
+        (work / "pilot.csv").write_bytes(data)
+        return ["pilot", "identify", str(work / "pilot.csv"), "--quiet"], None
 
-    one()
-    print(f"\nfuzz twin-pilot/1 (full length): {counts[0]} tried, {counts[0]} clean "
-          f"({counts[1]} accepted, {counts[0] - counts[1]} refused)")  # fmt: skip
+    tried, ok = _run_fuzz(_csv_cells(full.read_bytes()), case, valid["root"], SLOW // 10)
+    print(f"\nfuzz twin-pilot/1 (full length): {tried} tried, {tried} clean "
+          f"({ok} accepted, {tried - ok} refused)")  # fmt: skip
 
 
 def test_the_valid_files_and_a_byte_order_mark_are_accepted(valid: dict[str, Path]) -> None:

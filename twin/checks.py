@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import math
 import os
+from contextlib import suppress
 from pathlib import Path
 
 import numpy as np
@@ -166,13 +167,11 @@ BYTES_PER_RUN_S = 1_000_000
 
 def available_memory() -> int | None:
     """Return the memory this machine has available [bytes] (None where it cannot be read)."""
-    try:
+    with suppress(OSError, ValueError, IndexError):  # not Linux: ask sysconf
         with open("/proc/meminfo", encoding="ascii") as fh:
             for line in fh:
                 if line.startswith("MemAvailable:"):
                     return int(line.split()[1]) * 1024
-    except (OSError, ValueError, IndexError):
-        pass
     try:
         return os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
     except (ValueError, OSError, AttributeError):

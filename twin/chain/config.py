@@ -39,7 +39,7 @@ from numpy.typing import ArrayLike, NDArray
 from twin.chain.block import Backlash, Block
 from twin.chain.delay import MAX_DELAY_S, Delay
 from twin.chain.extensions import Extension
-from twin.chain.filter import MAX_BREAK_HZ, MIN_BREAK_HZ, PlatformFilter
+from twin.chain.filter import MAX_BREAK_HZ, MIN_BREAK_HZ, PlatformFilter, check_break_hz
 from twin.chain.lti import LinearModel
 from twin.chain.noise import MotionNoise
 from twin.chain.resonance import Resonance
@@ -178,9 +178,7 @@ class MotionSystem:
         changes: dict[str, object] = {}
         tags = []
         if break_hz is not None:
-            if not (break_hz == 0 or MIN_BREAK_HZ <= break_hz <= MAX_BREAK_HZ):
-                raise ConfigError(f"--break-hz must be 0 (no filter) or in [{MIN_BREAK_HZ:g}, "
-                                  f"{MAX_BREAK_HZ:g}] Hz; got {break_hz}")  # fmt: skip
+            check_break_hz(break_hz, "--break-hz", ConfigError)
             changes["filter_break_hz"] = float(break_hz) or None
             tags.append(f"fb{break_hz:g}")
         if delay_ms is not None:

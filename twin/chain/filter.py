@@ -12,6 +12,14 @@ from twin.errors import SignalError
 MIN_BREAK_HZ, MAX_BREAK_HZ = 0.01, 1000.0
 
 
+def check_break_hz(value: float, where: str, error: type[Exception] = SignalError) -> float:
+    """Return ``value`` if it is 0 (no filter) or a break frequency in the allowed range."""
+    if not (value == 0 or MIN_BREAK_HZ <= value <= MAX_BREAK_HZ):
+        raise error(f"{where} must be 0 (no filter) or in [{MIN_BREAK_HZ:g}, {MAX_BREAK_HZ:g}] "
+                    f"Hz; got {value!r}")  # fmt: skip
+    return value
+
+
 def eq_5_1(break_hz: float) -> System:
     """Return the Eq 5.1 filter with break frequency ``break_hz`` as (num, den) in s."""
     if not np.isfinite(break_hz) or not MIN_BREAK_HZ <= break_hz <= MAX_BREAK_HZ:

@@ -49,7 +49,7 @@ import numpy as np
 
 from twin.chain.config import MotionSystem, load_config, motion_system
 from twin.chain.delay import MAX_DELAY_S
-from twin.chain.filter import MAX_BREAK_HZ, MIN_BREAK_HZ
+from twin.chain.filter import MAX_BREAK_HZ, check_break_hz
 from twin.checks import number, read_text
 from twin.errors import ConfigError, TwinError
 from twin.frames import DOF_NAMES
@@ -222,9 +222,8 @@ def _value(source: str, key: str, value: object, kind: type) -> Any:
         raise SweepError(f"{source}: {key} must be a {kind.__name__}; got {value!r}")
     if kind is float:
         number(value, f"{source}: {key}", lo=0, hi=FLOAT_MAX.get(name, np.inf), error=SweepError)
-        if name == "break_hz" and 0 < value < MIN_BREAK_HZ:  # type: ignore[operator]
-            raise SweepError(f"{source}: {key} must be 0 (no filter) or in [{MIN_BREAK_HZ:g}, "
-                             f"{MAX_BREAK_HZ:g}] Hz; got {value!r}")  # fmt: skip
+        if name == "break_hz":
+            check_break_hz(value, f"{source}: {key}", SweepError)  # type: ignore[arg-type]
     if kind is int and value < 0:  # type: ignore[operator]
         raise SweepError(f"{source}: {key} must be >= 0; got {value!r}")
     if name == "dof" and value not in DOF_NAMES:
