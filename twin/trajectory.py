@@ -260,3 +260,26 @@ def uniform_rate(t: ArrayLike, what: str = "time column", tol: float = 0.01) -> 
             f"{tt[row]:.6g} s, {tt[row] - tt[0] - row * step:+.3g} s off the grid"
         )
     return 1.0 / step
+
+
+def interp_columns(x: ArrayLike, xp: ArrayLike, fp: ArrayLike) -> FloatArray:
+    """``numpy.interp`` of every column of ``fp`` (shape (len(xp), k)) at ``x``.
+
+    Where every ``x`` is one of the sample times ``xp`` (a platform sampled at the IMU rate, a
+    noise generated at it) the samples are taken as they are: ``numpy.interp`` returns the
+    sample itself at a sample time, so the result is the same, bit for bit, only faster.
+
+    Examples
+    --------
+    >>> xp = np.arange(4) / 4.0
+    >>> fp = np.column_stack([xp, 2 * xp])
+    >>> interp_columns([0.25, 0.5], xp, fp).tolist(), interp_columns([0.125], xp, fp).tolist()
+    ([[0.25, 0.5], [0.5, 1.0]], [[0.125, 0.25]])
+
+    """
+    xx, grid, values = np.asarray(x, float), np.asarray(xp, float), np.asarray(fp, float)
+    if xx.size and grid.size:
+        pos = np.minimum(np.searchsorted(grid, xx), grid.size - 1)
+        if np.array_equal(grid[pos], xx):
+            return values[pos]
+    return np.column_stack([np.interp(xx, grid, values[:, k]) for k in range(values.shape[1])])

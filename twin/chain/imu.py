@@ -22,6 +22,7 @@ from scipy import signal
 from twin.chain.response import GRAVITY_BASE, PlatformResponse
 from twin.errors import SignalError
 from twin.frames import rotation_matrix
+from twin.trajectory import interp_columns
 
 FloatArray = NDArray[np.float64]
 G = 9.81
@@ -43,10 +44,17 @@ def specific_force(response: PlatformResponse, mount: ArrayLike) -> FloatArray:
 
     """
     r = np.asarray(mount, dtype=float)
-    T = rotation_matrix(response.pose[:, 3:])
+    T = response.rotation if response.rotation is not None else rotation_matrix(response.pose[:, 3:])
     f = np.einsum("nji,nj->ni", T, response.acceleration - GRAVITY_BASE)
     w, wd = response.omega, response.omega_dot
-    return f + np.cross(wd, r) + np.cross(w, np.cross(w, r))
+    return f + _cross(wd, r) + _cross(w, _cross(w, r))
+
+
+def _cross(a: FloatArray, b: FloatArray) -> FloatArray:
+    """``numpy.cross`` of (n, 3) rows with one or n vectors: the same products, less overhead."""
+    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
+    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
+    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
 
 
 @dataclass(frozen=True)
@@ -168,7 +176,7 @@ class VirtualImu:
         last = int(np.floor((t[-1] - self._t0) * self.spec.rate_hz + 1e-9))
         idx = np.arange(self._next, last + 1)
         ti = self._t0 + idx / self.spec.rate_hz
-        values = np.column_stack([np.interp(ti, t, truth[:, k]) for k in range(6)])
+        values = interp_columns(ti, t, truth)
         self._next = last + 1
         self._carry = (t[-1:], truth[-1:])
         values += self._bias
@@ -256,6 +264,6 @@ def postprocess(record: ImuRecord, rate_hz: float = 100.0) -> ProcessedImu:
     t_out = np.arange(record.t[0], record.t[-1] + 1e-12, 1.0 / rate_hz)
 
     def at(x: FloatArray) -> FloatArray:
-        return np.column_stack([np.interp(t_out, record.t, x[:, k]) for k in range(3)])
+        return interp_columns(t_out, record.t, x)
 
     return ProcessedImu(t_out, at(acc), at(gyro), at(alpha))

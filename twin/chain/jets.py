@@ -87,6 +87,16 @@ _FALLING = np.array([[np.prod(np.arange(p - d + 1, p + 1)) if p >= d else 0.0 fo
                      for d in range(4)])  # fmt: skip
 
 
+def _weights_unscaled(ss: FloatArray, order: int) -> FloatArray:
+    """The weights of :func:`hermite_weights` before the division by h^d."""
+    powers = ss[..., None] ** np.arange(6)
+    basis = np.zeros((*ss.shape, order + 1, 6))
+    for d in range(order + 1):
+        basis[..., d, d:] = _FALLING[d, d:] * powers[..., : 6 - d]
+    # one (n, 6) @ (6, 6) product: the stacked (3, 6) @ (6, 6) ones give the same bits, slower
+    return (basis.reshape(-1, 6) @ HERMITE).reshape(basis.shape)
+
+
 def hermite_weights(s: ArrayLike, h: float, order: int = 2) -> FloatArray:
     """Weights of the scaled end jets for the quintic's derivatives 0..order at s = tau / h.
 
@@ -95,11 +105,49 @@ def hermite_weights(s: ArrayLike, h: float, order: int = 2) -> FloatArray:
     :func:`scaled`).
     """
     ss = np.asarray(s, dtype=float)
-    powers = ss[..., None] ** np.arange(6)
-    basis = np.zeros((*ss.shape, order + 1, 6))
-    for d in range(order + 1):
-        basis[..., d, d:] = _FALLING[d, d:] * powers[..., : 6 - d]
-    return (basis @ HERMITE) / (h ** np.arange(order + 1))[:, None]
+    return _weights_unscaled(ss, order) / (h ** np.arange(order + 1))[:, None]
+
+
+def hermite_samples(jets: FloatArray, k: NDArray[np.intp], s: FloatArray, h: float) -> FloatArray:
+    """Evaluate a sampled signal's quintics, and two derivatives, at many points at once.
+
+    Point ``i`` lies at ``s[i]`` in the interval from sample ``k[i]`` to ``k[i] + 1``. The
+    arithmetic is that of :func:`hermite_eval` (the same products and sums, in the same
+    order, so the same bits), laid out with the points on the last axis: about three times
+    faster for the long arrays of a platform's own samples.
+
+    Parameters
+    ----------
+    jets : ndarray, shape (runs, n, c, 3)
+        Jets of the signal's samples (interval length ``h``).
+    k : ndarray of int, shape (m,)
+        Interval of each point (``0 <= k < n - 1``).
+    s : ndarray, shape (m,)
+        Position of each point in its interval, in [0, 1].
+    h : float
+        Interval length [s].
+
+    Returns
+    -------
+    ndarray, shape (3, runs, m, c)
+        Value, first and second derivative.
+
+    """
+    table = np.ascontiguousarray(np.moveaxis(scaled(jets, h), (3, 1), (0, 3)))  # (3, runs, c, n)
+    start, end = table[..., k], table[..., k + 1]
+    data = (start[0], start[1], start[2], end[0], end[1], end[2])  # each (runs, c, m)
+    # hermite_weights(s, h) with the points last: the same values, transposed before dividing
+    unscaled = np.ascontiguousarray(np.moveaxis(_weights_unscaled(np.asarray(s, float), 2), 0, -1))
+    divisor = h ** np.arange(3)
+    runs, c, m = data[0].shape
+    out = np.empty((3, runs, m, c))
+    for d in range(3):
+        w = unscaled[d] / divisor[d]  # (6, m)
+        acc = data[0] * w[0]
+        for j in range(1, 6):
+            acc = acc + data[j] * w[j]
+        out[d] = acc.transpose(0, 2, 1)
+    return out
 
 
 def hermite_eval(

@@ -27,6 +27,7 @@ True
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cache
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -34,6 +35,7 @@ from scipy import signal
 
 from twin.errors import SignalError
 from twin.thesis import EQ_5_10
+from twin.trajectory import interp_columns
 
 FloatArray = NDArray[np.float64]
 
@@ -119,25 +121,9 @@ class MotionNoise:
         """Second-order sections of the acceleration, velocity and position filters.
 
         Velocity and position are returned only with a high-pass (otherwise unbounded).
+        Designed once per noise (the same sections for every run of a study).
         """
-        p1, p2 = EQ_5_10["poles_s"]
-        zeros = [-1.0 / EQ_5_10["zero_s"]]
-        poles = [-1.0 / p1, -1.0 / p2]
-        gain = self.scale * EQ_5_10["gain"] * EQ_5_10["zero_s"] / (p1 * p2)
-        if self.highpass_hz is None:
-            outputs = [(np.array(zeros), 0)]
-        else:
-            hz, hp, hk = signal.butter(HIGHPASS_ORDER, 2 * np.pi * self.highpass_hz, "highpass",
-                                       analog=True, output="zpk")  # fmt: skip
-            poles += list(hp)
-            gain *= hk
-            # acceleration, velocity (1/s cancels one zero at 0), position (two zeros)
-            outputs = [(np.concatenate([zeros, hz[: len(hz) - k]]), k) for k in range(3)]
-        out = []
-        for z, _ in outputs:
-            zd, pd, kd = signal.bilinear_zpk(z, np.array(poles), gain, self.rate_hz)
-            out.append(signal.zpk2sos(zd, pd, kd))
-        return out
+        return [sos.copy() for sos in _sections(self)]
 
     def stream(self, seed: int | np.random.SeedSequence | np.random.Generator = 0) -> NoiseStream:
         """Return a fresh stream of this noise (see :class:`NoiseStream`)."""
@@ -160,6 +146,29 @@ class MotionNoise:
             raise SignalError(f"noise duration must be > 0 s; got {duration_s}")
         n = int(np.ceil(duration_s * self.rate_hz)) + 1
         return self.stream(seed).take(n)
+
+
+@cache
+def _sections(noise: MotionNoise) -> tuple[FloatArray, ...]:
+    """The sections of :meth:`MotionNoise.sections`, designed once per noise."""
+    p1, p2 = EQ_5_10["poles_s"]
+    zeros = [-1.0 / EQ_5_10["zero_s"]]
+    poles = [-1.0 / p1, -1.0 / p2]
+    gain = noise.scale * EQ_5_10["gain"] * EQ_5_10["zero_s"] / (p1 * p2)
+    if noise.highpass_hz is None:
+        outputs = [(np.array(zeros), 0)]
+    else:
+        hz, hp, hk = signal.butter(HIGHPASS_ORDER, 2 * np.pi * noise.highpass_hz, "highpass",
+                                   analog=True, output="zpk")  # fmt: skip
+        poles += list(hp)
+        gain *= hk
+        # acceleration, velocity (1/s cancels one zero at 0), position (two zeros)
+        outputs = [(np.concatenate([zeros, hz[: len(hz) - k]]), k) for k in range(3)]
+    out = []
+    for z, _ in outputs:
+        zd, pd, kd = signal.bilinear_zpk(z, np.array(poles), gain, noise.rate_hz)
+        out.append(signal.zpk2sos(zd, pd, kd))
+    return tuple(out)
 
 
 class NoiseStream:
@@ -217,8 +226,7 @@ class NoiseStream:
             self._buffer = np.vstack([self._buffer, self._filter(more)])
         ts = (self._buffer_start + np.arange(self._buffer.shape[0])) / fs
         out = np.zeros((t.size, 3))
-        for k in range(self._buffer.shape[1]):
-            out[:, k] = np.interp(t, ts, self._buffer[:, k])
+        out[:, : self._buffer.shape[1]] = interp_columns(t, ts, self._buffer)
         drop = max(0, int(np.floor(float(t[-1]) * fs)) - self._buffer_start)
         self._buffer = self._buffer[drop:]
         self._buffer_start += drop

@@ -16,6 +16,7 @@ from twin.chain.limits import ActuatorLimits, LimitReport
 from twin.chain.response import PlatformResponse, rigid_motion
 from twin.chain.stepping import Platform, PlatformState, Reference
 from twin.platform.facts import load_facts
+from twin.frames import rotation_matrix
 from twin.platform.geometry import load_geometry
 from twin.platform.kinematics import leg_rates
 
@@ -59,11 +60,13 @@ class ReducedPlatform(Platform):
         runs, m = ref.pose.shape[:2]
         flat = [a.reshape(runs * m, 6) for a in (ref.pose, ref.rate, ref.acc)]
         pose, rate, acc = flat
-        lengths, _, _ = leg_rates(self.geometry, pose)
-        motion = rigid_motion(pose, rate, acc)
+        rotation = rotation_matrix(pose[:, 3:])  # once, for the legs, the motion and the IMU
+        lengths, _, _ = leg_rates(self.geometry, pose, rotation=rotation)
+        motion = rigid_motion(pose, rate, acc, rotation)
         self._check_limits(np.tile(ref.t, runs), pose, rate, acc, lengths, motion, state.report)
         shaped = [x.reshape(runs, m, -1) for x in (*motion, lengths)]
-        return PlatformResponse(ref.t, ref.command, ref.pose.copy(), *shaped)
+        return PlatformResponse(ref.t, ref.command, ref.pose.copy(), *shaped,
+                                rotation=rotation.reshape(runs, m, 3, 3))  # fmt: skip
 
     def _check_limits(
         self,

@@ -42,6 +42,9 @@ class PlatformResponse:
         thesis cabin axes. The gyro equals ``omega``; the accelerometer is NOT reliable under
         ``implicitfast`` (it misses the implicit damping correction, ~2.4x in heave): use
         :func:`twin.chain.imu.specific_force`.
+    rotation : ndarray, shape (n, 3, 3), or None
+        T_c^b of ``pose`` (Eq A.2) where the platform has computed it already (the reduced
+        platform), so that the IMU does not compute it again; None otherwise.
 
     """
 
@@ -55,6 +58,7 @@ class PlatformResponse:
     legs: FloatArray
     sensor_accelerometer: FloatArray | None = None
     sensor_gyro: FloatArray | None = None
+    rotation: FloatArray | None = None
 
     @property
     def rate_hz(self) -> float:

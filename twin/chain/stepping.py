@@ -26,7 +26,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from twin.chain.jets import JetSignal, hermite_eval
+from twin.chain.jets import JetSignal, hermite_samples
 from twin.chain.limits import ActuatorLimits, LimitReport
 from twin.chain.noise import NoiseStream
 from twin.chain.response import PlatformResponse
@@ -205,13 +205,12 @@ class Platform(ABC):
         k = np.clip(np.ceil(x - 1e-9).astype(int), 0, n - 1)  # interval (k-1, k]
         s = x - (k - 1)
         ext = np.concatenate([state.last[:, None], jets], axis=1)  # ext[k] is sample k - 1
-        ref = hermite_eval(ext[:, k], ext[:, k + 1], s[None, :, None], 1.0 / state.command_rate_hz)
+        pose, rate, acc = hermite_samples(ext, k, s, 1.0 / state.command_rate_hz)
         state.last = jets[:, -1].copy()
         state.consumed += n
         state.next_sample = stop
         t = state.t0 + idx / self.rate_hz
-        command = ref[..., 0].copy()
-        pose, rate, acc = ref[..., 0], ref[..., 1], ref[..., 2]
+        command = pose.copy()
         for r, stream in enumerate(state.noise):
             if stream is not None and t.size:
                 z = stream.at(t - state.t0)

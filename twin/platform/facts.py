@@ -132,8 +132,9 @@ class PlatformFacts:
     equivalent_delay_s: tuple[float, ...]
 
 
+@cache
 def load_facts(name: str) -> PlatformFacts:
-    """Read the platform's ``platform.toml``.
+    """Read the platform's ``platform.toml`` (once per process, as the geometry).
 
     Raises
     ------
