@@ -76,9 +76,10 @@ def _open_loop(config, seconds: float, model: str, seed: int) -> dict[str, np.nd
 
     sim = simulate(config, _commands(seconds), model, seed=seed)
     r = sim.response
+    counts = np.array([*sim.limits.samples.values(), sim.imu.saturated], dtype=float)
     return {"imu.accel": sim.imu.accel, "imu.gyro": sim.imu.gyro, "imu.t": sim.imu.t,
             "pose": r.pose, "command": r.command, "omega_dot": r.omega_dot, "legs": r.legs,
-            "limits": np.array([*sim.limits.samples.values(), sim.imu.saturated], dtype=float)}  # fmt: skip
+            "limits": counts}  # fmt: skip
 
 
 def _pilot() -> dict[str, np.ndarray]:

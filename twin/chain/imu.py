@@ -44,7 +44,9 @@ def specific_force(response: PlatformResponse, mount: ArrayLike) -> FloatArray:
 
     """
     r = np.asarray(mount, dtype=float)
-    T = response.rotation if response.rotation is not None else rotation_matrix(response.pose[:, 3:])
+    T = response.rotation
+    if T is None:
+        T = rotation_matrix(response.pose[:, 3:])
     f = np.einsum("nji,nj->ni", T, response.acceleration - GRAVITY_BASE)
     w, wd = response.omega, response.omega_dot
     return f + _cross(wd, r) + _cross(w, _cross(w, r))

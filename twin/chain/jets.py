@@ -88,7 +88,7 @@ _FALLING = np.array([[np.prod(np.arange(p - d + 1, p + 1)) if p >= d else 0.0 fo
 
 
 def _weights_unscaled(ss: FloatArray, order: int) -> FloatArray:
-    """The weights of :func:`hermite_weights` before the division by h^d."""
+    """Return the weights of :func:`hermite_weights` before the division by h^d."""
     powers = ss[..., None] ** np.arange(6)
     basis = np.zeros((*ss.shape, order + 1, 6))
     for d in range(order + 1):

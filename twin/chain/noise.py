@@ -150,7 +150,7 @@ class MotionNoise:
 
 @cache
 def _sections(noise: MotionNoise) -> tuple[FloatArray, ...]:
-    """The sections of :meth:`MotionNoise.sections`, designed once per noise."""
+    """Return the sections of :meth:`MotionNoise.sections`, designed once per noise."""
     p1, p2 = EQ_5_10["poles_s"]
     zeros = [-1.0 / EQ_5_10["zero_s"]]
     poles = [-1.0 / p1, -1.0 / p2]

@@ -15,8 +15,8 @@ from numpy.typing import NDArray
 from twin.chain.limits import ActuatorLimits, LimitReport
 from twin.chain.response import PlatformResponse, rigid_motion
 from twin.chain.stepping import Platform, PlatformState, Reference
-from twin.platform.facts import load_facts
 from twin.frames import rotation_matrix
+from twin.platform.facts import load_facts
 from twin.platform.geometry import load_geometry
 from twin.platform.kinematics import leg_rates
 
