@@ -18,8 +18,9 @@ if not os.environ.get("MUJOCO_GL"):
     os.environ["MUJOCO_GL"] = "disable"
 
 if os.environ.get("PYTEST_XDIST_WORKER") and "numpy" not in sys.modules:
-    for _name in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
-        os.environ.setdefault(_name, "1")
+    from twin.threads import single_blas_thread
+
+    single_blas_thread()
 
 #: Files taking longest in the fast suite (seconds measured on the 2-core machine, rounded).
 LONGEST_FIRST = (

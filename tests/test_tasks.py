@@ -266,3 +266,9 @@ def test_two_local_clusters_at_once_do_not_clash(cluster):
         got = other.map(abs, [(-3.0,), (-4.0,)], [{"n": 0}, {"n": 1}], "abs").values()
     assert got == [3.0, 4.0]
     assert cluster.map(abs, [(-5.0,), (6.0,)], [{"n": 0}, {"n": 1}], "abs").values() == [5.0, 6.0]
+
+
+def test_each_worker_of_a_local_cluster_uses_one_blas_thread(cluster):
+    """The workers run one BLAS thread each (two workers on two cores, no pools beside them)."""
+    settings = cluster.client().run(os.environ.get, "OPENBLAS_NUM_THREADS")
+    assert len(settings) == 2 and set(settings.values()) == {"1"}

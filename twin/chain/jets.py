@@ -130,7 +130,7 @@ def hermite_samples(jets: FloatArray, k: NDArray[np.intp], s: FloatArray, h: flo
     Returns
     -------
     ndarray, shape (3, runs, m, c)
-        Value, first and second derivative.
+        Value, first and second derivative (a transposed view of a (3, runs, c, m) array).
 
     """
     table = np.ascontiguousarray(np.moveaxis(scaled(jets, h), (3, 1), (0, 3)))  # (3, runs, c, n)
@@ -139,15 +139,14 @@ def hermite_samples(jets: FloatArray, k: NDArray[np.intp], s: FloatArray, h: flo
     # hermite_weights(s, h) with the points last: the same values, transposed before dividing
     unscaled = np.ascontiguousarray(np.moveaxis(_weights_unscaled(np.asarray(s, float), 2), 0, -1))
     divisor = h ** np.arange(3)
-    runs, c, m = data[0].shape
-    out = np.empty((3, runs, m, c))
+    out = np.empty((3, *data[0].shape))
     for d in range(3):
         w = unscaled[d] / divisor[d]  # (6, m)
         acc = data[0] * w[0]
         for j in range(1, 6):
             acc = acc + data[j] * w[j]
-        out[d] = acc.transpose(0, 2, 1)
-    return out
+        out[d] = acc
+    return out.transpose(0, 1, 3, 2)  # a view: a channel over time stays contiguous
 
 
 def hermite_eval(

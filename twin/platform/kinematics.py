@@ -321,31 +321,40 @@ def leg_rates(
 
     """
     p = as_pose(pose)
-    # Component by component (each array (..., 6) over the legs): 3x faster than einsum/cross.
+    # Component by component, each array (6, ...) with the legs first so that the long axis
+    # is the last (the same products and sums as over (..., 6), several times faster);
+    # 3x faster than einsum/cross.
     T = rotation_matrix(p[..., 3:]) if rotation is None else rotation
-    A, B = geo.cabin_gimbals, geo.base_gimbals
-    ab = [sum(T[..., i, j, None] * A[:, j] for j in range(3)) for i in range(3)]
-    L = [(geo.neutral_ugp[i] + p[..., i, None]) + ab[i] - B[:, i] for i in range(3)]
+    shape = (6,) + (1,) * (p.ndim - 1)  # a gimbal coordinate per leg, against (...)
+    A = [geo.cabin_gimbals[:, j].reshape(shape) for j in range(3)]
+    B = [geo.base_gimbals[:, j].reshape(shape) for j in range(3)]
+    ab = [sum(T[..., i, j] * A[j] for j in range(3)) for i in range(3)]
+    L = [(geo.neutral_ugp[i] + p[..., i]) + ab[i] - B[i] for i in range(3)]
     length = np.sqrt(L[0] ** 2 + L[1] ** 2 + L[2] ** 2)
-    inv = 1.0 / length
     if pose_rate is None:
-        return length, None, None
+        return _legs_last(length), None, None
+    inv = 1.0 / length
     pd = np.broadcast_to(as_pose(pose_rate, "pose_rate"), p.shape)
     pdd = None if pose_acc is None else np.broadcast_to(as_pose(pose_acc, "pose_acc"), p.shape)
     n = [Li * inv for Li in L]
     w_b, wd_b = angular_motion(p[..., 3:], pd[..., 3:], None if pdd is None else pdd[..., 3:])
-    w = [w_b[..., i, None] for i in range(3)]
+    w = [w_b[..., i] for i in range(3)]
     w_x_a = _cross(w, ab)
-    Ld = [pd[..., i, None] + w_x_a[i] for i in range(3)]
+    Ld = [pd[..., i] + w_x_a[i] for i in range(3)]
     ld = n[0] * Ld[0] + n[1] * Ld[1] + n[2] * Ld[2]
     if pdd is None:
-        return length, ld, None
-    wd = [wd_b[..., i, None] for i in range(3)]
+        return _legs_last(length), _legs_last(ld), None
+    wd = [wd_b[..., i] for i in range(3)]
     wd_x_a, w_x_w_x_a = _cross(wd, ab), _cross(w, w_x_a)
-    Ldd = [pdd[..., i, None] + wd_x_a[i] + w_x_w_x_a[i] for i in range(3)]
+    Ldd = [pdd[..., i] + wd_x_a[i] + w_x_w_x_a[i] for i in range(3)]
     ldd = n[0] * Ldd[0] + n[1] * Ldd[1] + n[2] * Ldd[2]
     ldd += (Ld[0] ** 2 + Ld[1] ** 2 + Ld[2] ** 2 - ld**2) * inv
-    return length, ld, ldd
+    return _legs_last(length), _legs_last(ld), _legs_last(ldd)
+
+
+def _legs_last(x: FloatArray) -> FloatArray:
+    """Return a (6, ...) array of leg values as (..., 6), C-contiguous."""
+    return np.ascontiguousarray(np.moveaxis(x, 0, -1))
 
 
 def _cross(u: list[FloatArray], v: list[FloatArray]) -> list[FloatArray]:

@@ -1,0 +1,34 @@
+"""One BLAS thread per twin process (twin.threads), the user's own choice kept."""
+
+import os
+import subprocess
+import sys
+
+#: Threads of the process once NumPy has loaded its BLAS (OpenBLAS starts its pool then).
+COUNT = "import numpy, os; print(len(os.listdir('/proc/self/task')), os.environ['{var}'])"
+
+
+def _run(code: str, **env: str) -> list[str]:
+    clean = {k: v for k, v in os.environ.items() if not k.endswith("_NUM_THREADS")}
+    out = subprocess.run([sys.executable, "-c", code], env={**clean, **env}, check=True,
+                         capture_output=True, text=True)  # fmt: skip
+    return out.stdout.split()
+
+
+def test_a_twin_command_process_has_no_blas_pool():
+    """The CLI sets one thread before NumPy loads: the process has its main thread only."""
+    threads, value = _run("import twin.cli.main; " + COUNT.format(var="OPENBLAS_NUM_THREADS"))
+    assert value == "1"
+    assert threads == "1"
+
+
+def test_a_users_own_thread_count_is_kept():
+    _, value = _run("import twin.cli; " + COUNT.format(var="OPENBLAS_NUM_THREADS"),
+                    OPENBLAS_NUM_THREADS="2")  # fmt: skip
+    assert value == "2"
+
+
+def test_importing_the_library_leaves_blas_alone():
+    """Only the command line decides for its process; ``import twin.chain`` does not."""
+    code = "import twin.chain.simulate, os; print(os.environ.get('OPENBLAS_NUM_THREADS', '-'))"
+    assert _run(code) == ["-"]
