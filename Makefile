@@ -48,6 +48,7 @@ models: $(STAMP)
 bench: $(STAMP)
 	$(BIN)/python bench/kinematics_throughput.py
 	$(BIN)/python bench/twin_throughput.py
+	$(BIN)/python bench/blas_threads.py
 	$(BIN)/python bench/agard_sweep.py
 	$(BIN)/python bench/pilot_montecarlo.py
 	$(BIN)/python bench/distributed_montecarlo.py
