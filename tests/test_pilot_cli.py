@@ -64,3 +64,24 @@ def test_a_malformed_pilot_csv_names_the_problem(capsys, tmp_path):
     bad.write_text("t,ft,fd,e,u,theta\n0,0,0,0,0,0\n0.01,0,0,nan,0,0\n")
     assert main(["pilot", "identify", str(bad)]) == 2
     assert "row 2 (line 3): e is nan; all values must be finite" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_identify_intervals_are_printed_and_in_the_json(capsys, tmp_path):
+    """--intervals: every parameter's likelihood-ratio interval holds its estimate."""
+    csv = tmp_path / "run.csv"
+    assert main(["pilot", "run", "condition-8", "--out", str(csv), "--quiet"]) == 0
+    capsys.readouterr()
+    assert main(["pilot", "identify", str(csv), "--config", "condition-8", "--intervals",
+                 "--json", "--quiet"]) == 0  # fmt: skip
+    mle = json.loads(capsys.readouterr().out)["mle"]
+    for name, (lo, hi) in mle["likelihood_interval_2sd"].items():
+        assert lo <= mle["parameters"][name] <= hi, name
+
+
+def test_an_interval_end_at_the_fit_range_is_called_open():
+    from twin.cli.pilot import _interval_text
+
+    assert _interval_text("omega_nm", 9.5, 12.0) == "[9.5000, 12.0000]"
+    assert _interval_text("omega_nm", 3.0, 12.0) == "[3.0000, 12.0000] (open below)"
+    assert _interval_text("t_lag", 0.0, 5.0) == "[0.0000, 5.0000] (open above)"  # 0: physical

@@ -26,6 +26,7 @@ from scipy.optimize import least_squares
 from twin.chain.config import MotionSystem
 from twin.errors import SignalError
 from twin.pilot.pitch import PitchPilot, aircraft, motion_response
+from twin.pilot.profile import likelihood_interval
 from twin.plotting import finish, pyplot
 from twin.progress import ProgressFn
 
@@ -79,6 +80,11 @@ class PilotFit:
     unidentifiable : tuple of str
         Parameters whose Cramer-Rao bound exceeds ``IDENTIFIABLE_REL_SD`` of their value or
         that another, equally good minimum puts elsewhere (reported, not hidden).
+    intervals : dict of str to (float, float), or None
+        Likelihood-ratio interval of each parameter (two standard deviations where the
+        likelihood is a parabola; :mod:`twin.pilot.profile`), when asked for: honest where the
+        bound is not (the lead-lag pair's several minima). An end at the parameter's range
+        (``LOWER``, ``UPPER``) is open: the data do not bound it there.
 
     """
 
@@ -87,13 +93,29 @@ class PilotFit:
     vaf_percent: float
     residual_sd: float
     unidentifiable: tuple[str, ...] = ()
+    intervals: dict[str, tuple[float, float]] | None = None
 
     def to_dict(self) -> dict[str, object]:
         """JSON-ready."""
         p = dataclasses.asdict(self.pilot)
-        return {"parameters": p, "crlb_sd": self.crlb, "vaf_percent": self.vaf_percent,
-                "residual_sd": self.residual_sd,
-                "not_identifiable": list(self.unidentifiable)}  # fmt: skip
+        out: dict[str, object] = {
+            "parameters": p,
+            "crlb_sd": self.crlb,
+            "vaf_percent": self.vaf_percent,
+            "residual_sd": self.residual_sd,
+            "not_identifiable": list(self.unidentifiable),
+        }
+        if self.intervals is not None:
+            out["likelihood_interval_2sd"] = {k: list(v) for k, v in self.intervals.items()}
+        return out
+
+    def covers(self, name: str, value: float) -> bool:
+        """Whether ``value`` lies within the parameter's interval (2 bounds without one)."""
+        est = float(getattr(self.pilot, name))
+        if self.intervals is None:
+            return abs(value - est) <= 2 * self.crlb[name]
+        lo, hi = self.intervals[name]
+        return lo <= value <= hi
 
     def plot(self, path: str | None = None):
         """Estimated parameters with their Cramer-Rao bounds (1 sd), relative to the estimate.
@@ -137,6 +159,8 @@ START_KM = (None, 0.0)
 #: Chi-square margin within which another minimum competes with the best (the 95 % point of
 #: chi-square with one degree of freedom).
 COMPETING_CHI2 = 3.84
+#: Minima within this chi-square of the best start the profile fits of the intervals.
+PROFILE_CHI2 = 10.0
 
 
 def _closed_loop_u(
@@ -230,6 +254,7 @@ def fit_pitch_pilot(
     start: PitchPilot | None = None,
     hold: bool = True,
     progress: ProgressFn | None = None,
+    intervals: bool = False,
 ) -> PilotFit:
     """Fit Eq 6.5-6.7 to one measurement window of u (or repetitions of it), given f_t, f_d.
 
@@ -263,7 +288,10 @@ def fit_pitch_pilot(
         The loop holds u over each sample (a digital simulator's zero-order hold, a half-sample
         delay; the twin's pitch task does); False for a continuous loop.
     progress : callable, optional
-        Called after each start of the grid (:mod:`twin.progress`).
+        Called after each start of the grid and each parameter's interval (:mod:`twin.progress`).
+    intervals : bool
+        Also compute each parameter's likelihood-ratio interval from the profile likelihood
+        (:attr:`PilotFit.intervals`; about 10 s more).
 
     """
     ft, fd, u = (np.asarray(a, dtype=float) for a in (ft, fd, u))
@@ -313,7 +341,24 @@ def fit_pitch_pilot(
         if not bounds[name] < IDENTIFIABLE_REL_SD * max(abs(float(best.x[i])), 1e-9)
         or any(abs(x[i] - best.x[i]) > 2 * crlb[i] for x in rivals)
     )  # fmt: skip
-    return PilotFit(fitted, bounds, vaf(mean_u, u_hat), float(np.std(mean_u - u_hat)), weak)
+    ranges = None
+    if intervals:
+        minima: list[FloatArray] = []
+        for sol in sols:  # best first, each distinct minimum once
+            near = any(np.allclose(sol.x, m, rtol=1e-3, atol=1e-4) for m in minima)
+            if 2 * (sol.cost - best.cost) < PROFILE_CHI2 and not near:
+                minima.append(sol.x)
+        ranges = {}
+        for k, name in enumerate(PARAMETERS):
+            # two bounds, or half the estimate where the bound is no guide (the pair at t_lead
+            # = t_lag: the bound is infinite there and the profile still curves)
+            scale = max(0.5 * abs(best.x[k]), 0.01 * (UPPER[k] - LOWER[k]))
+            step = min(2 * crlb[k], scale) if crlb[k] > 0 else scale
+            ranges[name] = likelihood_interval(residual, minima, k, LOWER, UPPER, step)
+            if progress:
+                progress("likelihood intervals", k + 1, len(PARAMETERS))
+    return PilotFit(fitted, bounds, vaf(mean_u, u_hat), float(np.std(mean_u - u_hat)), weak,
+                    ranges)  # fmt: skip
 
 
 def _starts(p0: PitchPilot) -> list[FloatArray]:
