@@ -2,6 +2,7 @@
 
 import numpy as np
 import pytest
+from configurations import everything
 
 from twin.chain.block import Backlash, Gain, Lead
 from twin.chain.config import motion_system
@@ -71,28 +72,12 @@ def test_linear_blocks_follow_their_frequency_response_within_0_01_db_and_0_1_de
         assert np.all(np.abs(np.angle(h_meas / h, deg=True)) < 0.1), block.name
 
 
-def _everything():
-    """A configuration that uses every block and every extension of the vocabulary."""
-    ext = [
-        Extension("delay", {"extra_delay_s": 0.012}, ("heave",)),
-        Extension("gain", {"gain": 0.9}, ("pitch",)),
-        Extension("platform_filter", {"break_hz": 2.5}, ("surge",)),
-        Extension("resonance", {"frequency_hz": 7.0, "damping": 0.3}, ("heave", "pitch")),
-        Extension("lead", {"time_constant_s": 0.01}, ("pitch",)),
-        Extension("backlash", {"play": 0.0005}, ("heave",)),
-        Extension("sensor_filter", {"cutoff_hz": 8.0, "channels": ("q",)}),
-        Extension("noise", {"scale": 1.5}),
-    ]
-    base = motion_system("condition-8")  # 1 Hz filter, 100 ms total, noise, on the SRS
-    return base.replace(name="everything", resonance=True, extensions=tuple(ext))
-
-
 @pytest.mark.parametrize(("model", "seconds"), [("reduced", 12.0), ("full", 3.0)])
 def test_open_and_closed_loop_drive_the_same_chain_to_numerical_precision(model, seconds):
     """Every block and extension, the noise and the limits: the open-loop run (10 s chunks)
     and the chain stepped one command sample at a time, as a pilot loop steps it, give the
     same platform motion (1e-9 m and rad)."""
-    cfg = _everything()
+    cfg = everything()
     cmd = _commands(seconds)
     run = prepare(cfg, cmd, model, seed=4)
     open_loop = run.collect().response
@@ -147,7 +132,7 @@ def test_every_block_has_its_transfer_function_in_python_control():
     from twin.chain.block import Backlash
     from twin.errors import SignalError
 
-    cfg = _everything()
+    cfg = everything()
     f = np.geomspace(0.02, 30.0, 120)
     h = cfg.frequency_response(f)
     for k in range(6):

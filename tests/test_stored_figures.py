@@ -30,6 +30,7 @@ import mujoco
 import numpy as np
 import pytest
 import scipy
+from configurations import everything
 
 STORE = Path(__file__).parent / "data" / "stored_figures.json"
 #: Values of each array kept (evenly spaced) for the comparison off the stored environment.
@@ -51,24 +52,6 @@ def _commands(seconds: float, rate: float = 100.0):
     v[:, 4] = fade * (0.03 * np.sin(2 * np.pi * 0.55 * t) + 0.005 * np.sin(2 * np.pi * 3.35 * t))
     v[:, 5] = fade * 0.01 * np.sin(2 * np.pi * 0.25 * t)
     return Trajectory(rate, v)
-
-
-def _everything():
-    """Condition 8 on the SRS with its resonance and every extension of the vocabulary."""
-    from twin.chain.config import motion_system
-    from twin.chain.extensions import Extension
-
-    ext = (
-        Extension("delay", {"extra_delay_s": 0.012}, ("heave",)),
-        Extension("gain", {"gain": 0.9}, ("pitch",)),
-        Extension("platform_filter", {"break_hz": 2.5}, ("surge",)),
-        Extension("resonance", {"frequency_hz": 7.0, "damping": 0.3}, ("heave", "pitch")),
-        Extension("lead", {"time_constant_s": 0.01}, ("pitch",)),
-        Extension("backlash", {"play": 0.0005}, ("heave",)),
-        Extension("sensor_filter", {"cutoff_hz": 8.0, "channels": ("q",)}),
-        Extension("noise", {"scale": 1.5}),
-    )
-    return motion_system("condition-8").replace(name="everything", resonance=True, extensions=ext)
 
 
 def _open_loop(config, seconds: float, model: str, seed: int) -> dict[str, np.ndarray]:
@@ -101,9 +84,9 @@ def _describing_function() -> dict[str, np.ndarray]:
 #: name -> the seeded run, its outputs by name (about 3 s for all of them).
 CASES: dict[str, Callable[[], dict[str, np.ndarray]]] = {
     "reduced-mpi-60s": lambda: _open_loop("mpi", 60.0, "reduced", 1),
-    "reduced-everything-srs-20s": lambda: _open_loop(_everything(), 20.0, "reduced", 4),
+    "reduced-everything-srs-20s": lambda: _open_loop(everything(), 20.0, "reduced", 4),
     "full-mpi-3s": lambda: _open_loop("mpi", 3.0, "full", 2),
-    "full-everything-srs-3s": lambda: _open_loop(_everything(), 3.0, "full", 4),
+    "full-everything-srs-3s": lambda: _open_loop(everything(), 3.0, "full", 4),
     "pilot-condition-8": _pilot,
     "df-mpi-heave-reduced": _describing_function,
 }
