@@ -44,7 +44,8 @@ class PlatformResponse:
         :func:`twin.chain.imu.specific_force`.
     rotation : ndarray, shape (n, 3, 3), or None
         T_c^b of ``pose`` (Eq A.2) where the platform has computed it already (the reduced
-        platform), so that the IMU does not compute it again; None otherwise.
+        platform), so that the IMU does not compute it again; None otherwise (and in the
+        chunks of :meth:`twin.chain.simulate.Run.chunks`, which keep no copy of it).
 
     """
 

@@ -11,6 +11,7 @@ Examples
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 
@@ -149,6 +150,7 @@ class Run:
             if chunk.t.size == 0:
                 continue
             rec = imu.feed(chunk)
+            chunk = dataclasses.replace(chunk, rotation=None)  # the IMU's only: not kept
             if filters:
                 values = np.hstack([rec.accel, rec.gyro])
                 for filt in filters:
