@@ -73,6 +73,9 @@ def test_identify_intervals_are_printed_and_in_the_json(capsys, tmp_path):
     assert main(["pilot", "run", "condition-8", "--out", str(csv), "--quiet"]) == 0
     capsys.readouterr()
     assert main(["pilot", "identify", str(csv), "--config", "condition-8", "--intervals",
+                 "--quiet"]) == 0  # fmt: skip
+    assert capsys.readouterr().out.count("2-sd interval [") == 8
+    assert main(["pilot", "identify", str(csv), "--config", "condition-8", "--intervals",
                  "--json", "--quiet"]) == 0  # fmt: skip
     mle = json.loads(capsys.readouterr().out)["mle"]
     for name, (lo, hi) in mle["likelihood_interval_2sd"].items():

@@ -34,9 +34,17 @@ def _two_minima(v):
 
 def test_an_interval_spans_every_equally_good_minimum_it_is_given():
     minima = [np.array([1.0, 3.0]), np.array([-1.0, 3.0])]
+    # chi2 rises by 4 where x0^2 = 1 +- 2 * 0.05: |x0| = sqrt(0.9) and sqrt(1.1)
     lo, hi = likelihood_interval(_two_minima, minima, 0, [-5, -5], [5, 5], 0.05)
-    assert lo < -1.0 and hi > 1.0  # the profile is low at both signs
-    assert profile_chi2(_two_minima, minima, 0, 0.0, [-5, -5], [5, 5]) > 4.0  # not between
+    assert lo == pytest.approx(-np.sqrt(1.1), abs=1e-4) and hi == pytest.approx(
+        np.sqrt(1.1), abs=1e-4
+    )
+    # from the best minimum alone the interval is its own region only
+    lo0, hi0 = likelihood_interval(_two_minima, minima[:1], 0, [-5, -5], [5, 5], 0.05)
+    assert lo0 == pytest.approx(np.sqrt(0.9), abs=1e-4) and hi0 == pytest.approx(
+        np.sqrt(1.1), abs=1e-4
+    )
+    assert profile_chi2(_two_minima, minima, 0, -1.0, [-5, -5], [5, 5]) == pytest.approx(0.0)
     # from one minimum only, the profile of x1 still finds its own interval (x0 refitted)
     lo1, hi1 = likelihood_interval(_two_minima, minima[:1], 1, [-5, -5], [5, 5], 0.1)
     assert lo1 == pytest.approx(2.8, abs=1e-3) and hi1 == pytest.approx(3.2, abs=1e-3)
@@ -48,9 +56,10 @@ def test_a_side_the_data_do_not_bound_is_open_at_the_range():
     def saturated(v):
         return np.array([(min(v[0], 1.0) - 1.0) / 0.1, (v[1] - 2.0) / 0.1])
 
-    lo, hi = likelihood_interval(saturated, [np.array([1.5, 2.0])], 0, [0, 0], [10, 10], 0.2)
-    assert hi == 10.0  # open above: the range's end
-    assert lo == pytest.approx(0.8, abs=1e-3)  # 2 sd below the saturation
+    for step in (0.2, 0.01):  # however small the first step, the open side reaches the end
+        lo, hi = likelihood_interval(saturated, [np.array([1.5, 2.0])], 0, [0, 0], [10, 10], step)
+        assert hi == 10.0  # open above: the range's end
+        assert lo == pytest.approx(0.8, abs=1e-3)  # 2 sd below the saturation
 
 
 @pytest.mark.slow

@@ -93,12 +93,28 @@ CASES: dict[str, Callable[[], dict[str, np.ndarray]]] = {
 
 
 def environment() -> dict[str, object]:
-    """What bit-identity depends on: library versions, machine, NumPy's CPU features."""
+    """What bit-identity depends on: library versions, BLAS, machine, CPU and its features.
+
+    OpenBLAS picks its kernels by the CPU at run time, so the CPU model is part of it.
+    """
     from numpy._core._multiarray_umath import __cpu_features__
 
+    blas = np.show_config(mode="dicts")["Build Dependencies"]["blas"]
     return {"numpy": np.__version__, "scipy": scipy.__version__, "mujoco": mujoco.__version__,
-            "machine": platform.machine(),
+            "blas": f"{blas.get('name')} {blas.get('version')}", "machine": platform.machine(),
+            "cpu": _cpu_model(),
             "cpu_features": sorted(k for k, on in __cpu_features__.items() if on)}  # fmt: skip
+
+
+def _cpu_model() -> str:
+    """The CPU's model name (Linux), or the platform's processor string."""
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor()
 
 
 def digest(a: np.ndarray) -> str:

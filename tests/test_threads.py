@@ -3,6 +3,9 @@
 import os
 import subprocess
 import sys
+from pathlib import Path
+
+import pytest
 
 #: Threads of the process once NumPy has loaded its BLAS (OpenBLAS starts its pool then).
 COUNT = "import numpy, os; print(len(os.listdir('/proc/self/task')), os.environ['{var}'])"
@@ -15,6 +18,7 @@ def _run(code: str, **env: str) -> list[str]:
     return out.stdout.split()
 
 
+@pytest.mark.skipif(not Path("/proc/self/task").is_dir(), reason="counts threads in /proc")
 def test_a_twin_command_process_has_no_blas_pool():
     """The CLI sets one thread before NumPy loads: the process has its main thread only."""
     threads, value = _run("import twin.cli.main; " + COUNT.format(var="OPENBLAS_NUM_THREADS"))

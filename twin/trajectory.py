@@ -279,7 +279,8 @@ def interp_columns(x: ArrayLike, xp: ArrayLike, fp: ArrayLike) -> FloatArray:
     """
     xx, grid, values = np.asarray(x, float), np.asarray(xp, float), np.asarray(fp, float)
     if xx.size and grid.size:
-        pos = np.minimum(np.searchsorted(grid, xx), grid.size - 1)
+        # the last of equal sample times, as numpy.interp takes it
+        pos = np.clip(np.searchsorted(grid, xx, "right") - 1, 0, grid.size - 1)
         if np.array_equal(grid[pos], xx):
             return values[pos]
     return np.column_stack([np.interp(xx, grid, values[:, k]) for k in range(values.shape[1])])

@@ -45,7 +45,8 @@ class PlatformResponse:
     rotation : ndarray, shape (n, 3, 3), or None
         T_c^b of ``pose`` (Eq A.2) where the platform has computed it already (the reduced
         platform), so that the IMU does not compute it again; None otherwise (and in the
-        chunks of :meth:`twin.chain.simulate.Run.chunks`, which keep no copy of it).
+        chunks of :meth:`twin.chain.simulate.Run.chunks`, which keep no copy of it). A
+        response made from another with a new ``pose`` must set it to None.
 
     """
 
@@ -81,7 +82,8 @@ class PlatformResponse:
         out = {}
         for f in fields(cls):
             arrays = [getattr(c, f.name) for c in chunks]
-            out[f.name] = None if arrays[0] is None else np.concatenate(arrays)
+            missing = any(a is None for a in arrays)  # e.g. a rotation some chunks dropped
+            out[f.name] = None if missing else np.concatenate(arrays)
         return cls(**out)
 
 

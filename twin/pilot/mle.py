@@ -83,8 +83,9 @@ class PilotFit:
     intervals : dict of str to (float, float), or None
         Likelihood-ratio interval of each parameter (two standard deviations where the
         likelihood is a parabola; :mod:`twin.pilot.profile`), when asked for: honest where the
-        bound is not (the lead-lag pair's several minima). An end at the parameter's range
-        (``LOWER``, ``UPPER``) is open: the data do not bound it there.
+        bound is not (the lead-lag pair's several minima). An end at ``UPPER``, or at a
+        ``LOWER`` above zero, is open: the data do not bound the parameter there (a lower end
+        at zero is the physical limit of a time constant, delay or gain).
 
     """
 
@@ -291,7 +292,7 @@ def fit_pitch_pilot(
         Called after each start of the grid and each parameter's interval (:mod:`twin.progress`).
     intervals : bool
         Also compute each parameter's likelihood-ratio interval from the profile likelihood
-        (:attr:`PilotFit.intervals`; about 10 s more).
+        (:attr:`PilotFit.intervals`; typically 10-45 s more).
 
     """
     ft, fd, u = (np.asarray(a, dtype=float) for a in (ft, fd, u))

@@ -8,13 +8,15 @@ single lead), and omega_nm and tau_m move with the pair, so their bounds are too
 (omega_nm: 85 % of 50 seeded estimates within two bounds of the truth).
 
 The profile likelihood follows the valley instead (Venzon & Moolgavkar 1988; Raue et al.
-2009): for a value ``theta`` of one parameter the others are fitted again, from every minimum
-the search found, and ``chi2(theta)`` is the best of those fits. The interval holds the
-values whose chi-square exceeds the best fit's by less than ``rise`` (4: two standard
-deviations where the likelihood is a parabola, where the interval equals the estimate plus or
-minus two Cramer-Rao bounds). An interval that reaches a bound of the parameter's range
-without the rise is open on that side: the data do not bound the parameter there (Raue et
-al.'s practical non-identifiability).
+2009): for a value ``theta`` of one parameter the others are fitted again, from each minimum
+it is given (the pilot fit gives those within chi-square 10 of the best), and
+``chi2(theta)`` is the best of those fits. The interval holds the values whose chi-square
+exceeds the best fit's by less than ``rise`` (4: two standard deviations where the
+likelihood is a parabola, where the interval equals the estimate plus or minus two
+Cramer-Rao bounds); where several minima lie within ``rise`` of the best, the interval is the
+hull of their regions (it may then hold values between them that fit worse). An interval
+that reaches a bound of the parameter's range without the rise is open on that side: the
+data do not bound the parameter there (Raue et al.'s practical non-identifiability).
 
 References: D. J. Venzon and S. H. Moolgavkar, "A method for computing profile-likelihood-
 based confidence intervals", Applied Statistics 37 (1988) 87-94. A. Raue et al., "Structural
@@ -50,8 +52,6 @@ Residual = Callable[[FloatArray], FloatArray]
 
 #: Chi-square rise that bounds the interval: two standard deviations of a parabola.
 RISE = 4.0
-#: Doublings of the first step (two bounds) tried before a side counts as open.
-MAX_DOUBLINGS = 6
 #: Most refinement steps once the crossing is bracketed, and the bracket width (relative to
 #: its distance from the minimum) at which they stop.
 MAX_REFINE, REFINE_TOL = 12, 1e-3
@@ -156,9 +156,7 @@ def _crossing(
     size = max(float(step), 1e-9)
     b = float(np.clip(a + sign * size, min(edge, start), max(edge, start)))
     fb = rise_at(b)
-    for _ in range(MAX_DOUBLINGS):
-        if fb >= rise or b == edge:
-            break
+    while fb < rise and b != edge:  # doubling reaches the edge in at most ~log2(range / step)
         a, fa, size = b, fb, 2.0 * size
         b = float(np.clip(a + sign * size, min(edge, start), max(edge, start)))
         fb = rise_at(b)
