@@ -62,10 +62,13 @@ def side_by_side(blas: str | None, repeats: int = 3) -> float:
 
 
 def main() -> None:
-    bare = threads(COUNT)
-    cli = threads("import twin.cli.main; " + COUNT)
-    print(f"threads after NumPy loads: bare python {bare}, twin command {cli} "
-          f"(goal: 1, the main thread; cores {os.cpu_count()})")  # fmt: skip
+    if os.path.isdir("/proc/self/task"):
+        bare = threads(COUNT)
+        cli = threads("import twin.cli.main; " + COUNT)
+        print(f"threads after NumPy loads: bare python {bare}, twin command {cli} "
+              f"(goal: 1, the main thread; cores {os.cpu_count()})")  # fmt: skip
+    else:
+        print("threads after NumPy loads: not counted (no /proc/self/task on this system)")
     print(f"Dask worker of the twin's local cluster: OPENBLAS_NUM_THREADS={worker_blas_setting()}")
     default, single = side_by_side(None), side_by_side("1")
     print(f"two 20 s full-model runs side by side: default BLAS pool {default:.2f} s, one BLAS "
