@@ -10,7 +10,10 @@ forcing functions' lines only, so the eight parameters minimise the line residua
 by the remnant's variance at each line (from the neighbouring bins): the maximum-likelihood
 estimate for a coloured Gaussian remnant. The fit reports the Variance-Accounted-For (Eq 2.25)
 and the Cramer-Rao lower bound of each parameter's standard deviation (Eq 2.26: the inverse
-Fisher information at the optimum), and names the parameters it cannot pin down.
+Fisher information at the optimum), and names the parameters it cannot pin down. Where the
+likelihood has several minima (the lead-lag pair at the thesis' remnant level) the bound is
+too narrow; ``intervals=True`` adds each parameter's likelihood-ratio interval from the
+profile likelihood (:mod:`twin.pilot.profile`).
 """
 
 from __future__ import annotations
