@@ -122,7 +122,7 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
         "--intervals",
         action="store_true",
         help="also each parameter's likelihood-ratio interval (2 sd) from the profile "
-        "likelihood: honest where the Cramer-Rao bound is not (typically 10-45 s more)",
+        "likelihood: honest where the Cramer-Rao bound is not (typically 5-35 s more)",
     )
     ide.set_defaults(func=_cmd_identify)
     mc = cmds.add_parser(

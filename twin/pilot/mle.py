@@ -295,7 +295,7 @@ def fit_pitch_pilot(
         Called after each start of the grid and each parameter's interval (:mod:`twin.progress`).
     intervals : bool
         Also compute each parameter's likelihood-ratio interval from the profile likelihood
-        (:attr:`PilotFit.intervals`; typically 10-45 s more).
+        (:attr:`PilotFit.intervals`; typically 5-35 s more).
 
     """
     ft, fd, u = (np.asarray(a, dtype=float) for a in (ft, fd, u))
