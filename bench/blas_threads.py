@@ -15,6 +15,8 @@ import subprocess
 import sys
 import time
 
+from twin.threads import BLAS_THREAD_VARIABLES
+
 #: Counts the threads of the process once NumPy has loaded (OpenBLAS starts its pool then).
 COUNT = "import numpy, os; print(len(os.listdir('/proc/self/task')))"
 #: One full-model run of 20 s on the MPI platform.
@@ -28,8 +30,7 @@ RUN = (
 
 
 def _env(blas: str | None) -> dict[str, str]:
-    env = {k: v for k, v in os.environ.items()
-           if k not in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")}  # fmt: skip
+    env = {k: v for k, v in os.environ.items() if k not in BLAS_THREAD_VARIABLES}
     if blas is not None:
         env["OPENBLAS_NUM_THREADS"] = blas
     return env

@@ -18,6 +18,7 @@ import numpy as np
 from twin.progress import ProgressFn
 from twin.runs import RunWriter
 from twin.signals import DescribingSignal, StepSignal
+from twin.trajectory import interp_columns
 
 if TYPE_CHECKING:
     from twin.chain.config import MotionSystem
@@ -104,7 +105,7 @@ def run_meta(
 
 
 def _legs_at(t_cmd: np.ndarray, t: np.ndarray, legs: np.ndarray) -> np.ndarray:
-    return np.column_stack([np.interp(t_cmd, t, legs[:, j]) for j in range(6)])
+    return interp_columns(t_cmd, t, legs)
 
 
 def execute(

@@ -141,11 +141,7 @@ def hermite_samples(jets: FloatArray, k: NDArray[np.intp], s: FloatArray, h: flo
     divisor = h ** np.arange(3)
     out = np.empty((3, *data[0].shape))
     for d in range(3):
-        w = unscaled[d] / divisor[d]  # (6, m)
-        acc = data[0] * w[0]
-        for j in range(1, 6):
-            acc = acc + data[j] * w[j]
-        out[d] = acc
+        out[d] = _weighted_sum(data, unscaled[d] / divisor[d])
     return out.transpose(0, 1, 3, 2)  # a view: a channel over time stays contiguous
 
 
@@ -173,9 +169,19 @@ def hermite_eval(
     """
     data = np.concatenate([scaled(j0, h), scaled(j1, h)], axis=-1)
     weights = hermite_weights(s, h, order)
-    out = data[..., 0, None] * weights[..., 0]
-    for j in range(1, 6):  # six broadcast multiply-adds beat a broadcast einsum by about 2x
-        out = out + data[..., j, None] * weights[..., j]
+    # six broadcast multiply-adds beat a broadcast einsum by about 2x
+    return _weighted_sum([data[..., j, None] for j in range(6)],
+                         [weights[..., j] for j in range(6)])  # fmt: skip
+
+
+def _weighted_sum(terms, weights) -> FloatArray:
+    """``terms[0] * weights[0] + ... + terms[5] * weights[5]``, summed in that order.
+
+    The one order both Hermite evaluations use, so that they give the same bits.
+    """
+    out = terms[0] * weights[0]
+    for x, w in zip(terms[1:], weights[1:], strict=True):
+        out = out + x * w
     return out
 
 

@@ -63,7 +63,8 @@ class ReducedPlatform(Platform):
         rotation = rotation_matrix(pose[:, 3:])  # once, for the legs, the motion and the IMU
         lengths, _, _ = leg_rates(self.geometry, pose, rotation=rotation)
         motion = rigid_motion(pose, rate, acc, rotation)
-        self._check_limits(np.tile(ref.t, runs), pose, rate, acc, lengths, motion, state.report)
+        self._check_limits(np.tile(ref.t, runs), pose, rate, acc, lengths, motion, rotation,
+                           state.report)  # fmt: skip
         shaped = [x.reshape(runs, m, -1) for x in (*motion, lengths)]
         return PlatformResponse(ref.t, ref.command, ref.pose.copy(), *shaped,
                                 rotation=rotation.reshape(runs, m, 3, 3))  # fmt: skip
@@ -76,6 +77,7 @@ class ReducedPlatform(Platform):
         acc: FloatArray,
         lengths: FloatArray,
         motion: tuple[FloatArray, ...],
+        rotation: FloatArray,
         report: LimitReport,
     ) -> None:
         """Count limit violations, computing leg rates only where a bound says they may occur.
@@ -102,7 +104,7 @@ class ReducedPlatform(Platform):
         rows = np.flatnonzero(suspect)
         if rows.size == 0:
             return
-        _, vel, lacc = leg_rates(self.geometry, pose[rows], rate[rows], acc[rows])
+        _, vel, lacc = leg_rates(self.geometry, pose[rows], rate[rows], acc[rows], rotation[rows])
         lim.check(t[rows], lengths[rows], vel, lacc, report)
 
 

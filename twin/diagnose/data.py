@@ -30,7 +30,7 @@ from twin.frames import DOF_NAMES, dof_index
 from twin.measurement.measure import Measurement, from_imu, from_run
 from twin.progress import ProgressFn
 from twin.runs import RecordedRun, read_run
-from twin.trajectory import Trajectory
+from twin.trajectory import Trajectory, interp_columns
 
 FloatArray = NDArray[np.float64]
 #: Noise realisations simulated per run and noise source for the nominal noise spectra.
@@ -215,7 +215,7 @@ def simulate_measurement(
     out = from_imu(sim.commands, sim.imu, f"{config.name} ({model})", config, {})
     if out.t.shape == t.shape and np.allclose(out.t, t, atol=1e-9):
         return out.measured
-    return np.column_stack([np.interp(t, out.t, out.measured[:, k]) for k in range(6)])
+    return interp_columns(t, out.t, out.measured)
 
 
 def measurement_channels(

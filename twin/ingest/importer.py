@@ -52,7 +52,7 @@ from twin.ingest.timebase import Regular, check_stamps, decimate, regularise
 from twin.progress import ProgressFn
 from twin.runs import HEADERS, RunWriter, check_values
 from twin.signals import check_signal
-from twin.trajectory import Trajectory
+from twin.trajectory import Trajectory, interp_columns
 
 FloatArray = NDArray[np.float64]
 #: Rate of the grids the clocks are compared on [Hz].
@@ -446,8 +446,7 @@ def _clock(
         g_ref = _grid(commands.t[0], commands.t[-1])
         g_copy = _grid(reg.t[0], reg.t[-1])
         ref = commands.at(g_ref)[:, idx]
-        other = np.column_stack([np.interp(g_copy, reg.t, reg.values[:, j])
-                                 for j in range(len(idx))])  # fmt: skip
+        other = interp_columns(g_copy, reg.t, reg.values[:, : len(idx)])
         offset = _search(g_ref[0], ref, g_copy[0], other, shared_guess,
                          "the commands and their copy in the IMU file")  # fmt: skip
         how = "measured"

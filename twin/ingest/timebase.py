@@ -25,6 +25,7 @@ from scipy.interpolate import CubicSpline
 from scipy.signal import butter, sosfiltfilt
 
 from twin.errors import DataError
+from twin.trajectory import interp_columns
 
 FloatArray = NDArray[np.float64]
 #: The largest gap (in median steps) interpolated over.
@@ -172,5 +173,5 @@ def regularise(t: FloatArray, values: FloatArray, what: str, smooth: bool) -> Re
     if smooth:
         out = CubicSpline(t, values, axis=0)(grid)
     else:
-        out = np.column_stack([np.interp(grid, t, values[:, j]) for j in range(values.shape[1])])
+        out = interp_columns(grid, t, values)
     return Regular(float(grid[0]), rate, out, "interpolated", **info)
