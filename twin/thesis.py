@@ -140,7 +140,8 @@ TABLE_2_3 = MappingProxyType(
 #: measures: measure -> factor -> (F, direction of the mean with the factor's second level
 #: minus its first: "+", "-", or None where not significant and no direction is stated).
 #: Directions from §6.4: with the 1 Hz filter var(e) rose, var(u) fell slightly, both
-#: crossovers fell, both phase margins rose, K_v and K_m fell, t_lead and t_lag rose.
+#: crossovers fell, both phase margins rose, K_v and K_m fell, t_lead and t_lag rose, the
+#: neuromuscular frequency fell and its damping fell slightly.
 TABLES_6_4_TO_6_7 = MappingProxyType(
     {
         "var_e": {"filter": (357.79, "+"), "delay": (0.39, None), "noise": (3.23, None)},
@@ -157,5 +158,8 @@ TABLES_6_4_TO_6_7 = MappingProxyType(
         "k_m": {"filter": (66.20, "-"), "delay": (4.67, None), "noise": (0.36, None)},
         "t_lead": {"filter": (60.96, "+"), "delay": (1.42, None), "noise": (0.13, None)},
         "t_lag": {"filter": (132.26, "+"), "delay": (2.22, None), "noise": (0.55, None)},
+        # Table 6.7 (the delays tau_v, tau_m fell too; the twin keeps them per subject)
+        "omega_nm": {"filter": (53.11, "-"), "delay": (0.00, None), "noise": (0.14, None)},
+        "zeta_nm": {"filter": (6.86, "-"), "delay": (0.34, None), "noise": (0.05, None)},
     }
 )  # fmt: skip

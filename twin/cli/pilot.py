@@ -81,8 +81,10 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
         choices=("fixed", "adaptive"),
         default="fixed",
         help="fixed: one pilot model in every condition; adaptive: simulated subjects who adapt "
-        "their equalisation to each motion system, with the thesis' repeated-measures ANOVA",
+        "their equalisation and neuromuscular tuning to each motion system, with the thesis' "
+        "repeated-measures ANOVA",
     )
+    _fixed_neuromuscular_option(exp)
     exp.add_argument(
         "--subjects",
         type=common.count(2, MAX_SUBJECTS),
@@ -93,13 +95,14 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
     ada = cmds.add_parser(
         "adapt",
         parents=[common.json_parent()],
-        help="the pitch-task pilot's equalisation adapted to a motion configuration "
-        "(minimises var(e) + r var(u))",
+        help="the pitch-task pilot's equalisation and neuromuscular tuning adapted to a motion "
+        "configuration (minimises var(e) + r var(u))",
     )
     ada.add_argument("config", metavar="CONFIG", help=config_help())
     ada.add_argument(
         "--weight", type=float, default=None, help="r of the cost (default: twin.pilot.adapt's)"
     )
+    _fixed_neuromuscular_option(ada)
     ada.set_defaults(func=_cmd_adapt)
     ide = cmds.add_parser(
         "identify",
@@ -216,24 +219,45 @@ def _cmd_run(args: argparse.Namespace) -> int:
     return 0
 
 
+def _fixed_neuromuscular_option(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "--fixed-neuromuscular",
+        action="store_true",
+        help="adapt only the equalisation (K_v, t_lead, t_lag, K_m) and keep the pilot's "
+        "neuromuscular system (omega_nm, zeta_nm), as a pilot model with fixed limitations",
+    )
+
+
+def _adapted(args: argparse.Namespace) -> tuple[str, ...]:
+    from twin.pilot.adapt import ADAPTED, EQUALISATION
+
+    return EQUALISATION if args.fixed_neuromuscular else ADAPTED
+
+
 def _cmd_adapt(args: argparse.Namespace) -> int:
     from twin.chain.config import motion_system
     from twin.pilot.adapt import CONTROL_WEIGHT, adapt
 
     a = adapt(motion_system(args.config),
-              weight=CONTROL_WEIGHT if args.weight is None else args.weight)  # fmt: skip
+              weight=CONTROL_WEIGHT if args.weight is None else args.weight,
+              adapted=_adapted(args))  # fmt: skip
     print(json.dumps(a.to_dict(), indent=2) if args.json else a.format())
     return 0
 
 
 def _cmd_experiment(args: argparse.Namespace) -> int:
+    from twin.errors import UsageError
     from twin.pilot.experiment import run_experiment
 
+    if args.fixed_neuromuscular and args.pilot != "adaptive":
+        raise UsageError("--fixed-neuromuscular chooses what adaptive subjects adapt: give it "
+                         "with --pilot adaptive")  # fmt: skip
     if args.pilot == "adaptive":
         from twin.pilot.population import run_population
 
         with common.engine(args) as engine:
-            p = run_population(args.subjects, args.seed, common.progress(args), engine)
+            p = run_population(args.subjects, args.seed, common.progress(args), engine,
+                               _adapted(args))  # fmt: skip
         if args.plot:
             plt = pyplot()
             plt.close(p.plot(args.plot))

@@ -2,16 +2,23 @@
 
 Chapter 6's pilots changed their control behaviour with the motion system (§6.4.2): behind the
 1 Hz platform filter the motion gain fell to about zero, the visual gain fell, the visual lead
-rose and both crossover frequencies fell. A fixed pilot model cannot show that. Here the pilot
-*chooses* its equalisation - visual gain K_v, lead and lag t_lead, t_lag (Eq 6.5) and motion
-gain K_m (Eq 6.7) - to minimise
+rose, both crossover frequencies fell and the neuromuscular frequency and damping fell (Table
+6.7). A fixed pilot model cannot show that. Here the pilot *chooses* its equalisation - visual
+gain K_v, lead and lag t_lead, t_lag (Eq 6.5) and motion gain K_m (Eq 6.7) - and the tuning of
+its neuromuscular system - omega_nm and zeta_nm (Eq 6.6), which a pilot sets by how stiffly
+it holds the stick (McRuer and Jex 1967 list the neuromuscular system among the adjustable
+parts of the pilot) - to minimise
 
     J = var(e) + r var(u)
 
-for the motion system at hand, while its limitations (visual and motion delays, the
-neuromuscular system of Eq 6.6) stay its own: the optimal-control view of manual control
-(Kleinman, Baron and Levison 1970; McRuer's adjustment rules, McRuer and Jex 1967, as the
-outcome), restricted to the structure of Eq 6.5-6.7 as in Hess (1990) and Zaal et al. (2009).
+for the motion system at hand, while its delays tau_v and tau_m stay its own: the
+optimal-control view of manual control (Kleinman, Baron and Levison 1970; McRuer's adjustment
+rules, McRuer and Jex 1967, as the outcome), restricted to the structure of Eq 6.5-6.7 as in
+Hess (1990) and Zaal et al. (2009). A stiffer, faster neuromuscular system passes more of the
+remnant to the stick (var(u) rises), a slower one costs phase at crossover, so the optimum is
+inside the physiological range: without the filter, where motion gives lead and the crossover
+is high, the pilot tunes it faster than behind the filter, and its control activity - mostly
+remnant, as the thesis found (Fig 6.5b) - is larger.
 
 Everything is computed in the frequency domain, so one evaluation takes about a millisecond:
 
@@ -56,15 +63,21 @@ from twin.pilot.pitch import (
 FloatArray = NDArray[np.float64]
 ComplexArray = NDArray[np.complex128]
 
-#: Parameters the pilot adapts (equalisation); the rest (limitations) are the pilot's own.
-ADAPTED = ("k_v", "t_lead", "t_lag", "k_m")
-#: Bounds of the adapted parameters.
-BOUNDS = {"k_v": (0.05, 20.0), "t_lead": (0.0, 2.0), "t_lag": (0.02, 2.0), "k_m": (0.0, 3.0)}
+#: Equalisation the pilot adapts (Eq 6.5, 6.7).
+EQUALISATION = ("k_v", "t_lead", "t_lag", "k_m")
+#: Parameters the pilot adapts: the equalisation and the neuromuscular tuning (Eq 6.6); the
+#: delays are the pilot's own.
+ADAPTED = (*EQUALISATION, "omega_nm", "zeta_nm")
+#: Bounds of the adapted parameters (the neuromuscular ones a physiological range, about
+#: twice either side of the 6-16 rad/s and 0.1-0.5 that pilot models identify).
+BOUNDS = {"k_v": (0.05, 20.0), "t_lead": (0.0, 2.0), "t_lag": (0.02, 2.0), "k_m": (0.0, 3.0),
+          "omega_nm": (3.0, 30.0), "zeta_nm": (0.05, 1.0)}  # fmt: skip
 #: Weight r on var(u) in the cost (rad^2 / rad^2).
 CONTROL_WEIGHT = 0.03
 #: Observation-noise ratio of the remnant (-20 dB, Kleinman, Baron and Levison 1970).
 NOISE_RATIO = 0.01
-#: Starting equalisations (K_v, t_lead, t_lag, K_m) of the search: with and without motion.
+#: Starting equalisations (K_v, t_lead, t_lag, K_m) of the search, with and without motion
+#: (the neuromuscular tuning starts from the pilot's given one).
 STARTS = ((3.0, 0.2, 0.6, 0.5), (2.0, 0.3, 0.8, 0.0))
 #: Cost given to unstable or remnant-dominated equalisations (relative to the start's).
 UNSTABLE_COST = 1e6
@@ -221,13 +234,15 @@ class Adapted:
     Attributes
     ----------
     pilot : PitchPilot
-        The adapted pilot (limitations as given, equalisation optimal).
+        The adapted pilot (delays as given; equalisation and neuromuscular tuning optimal).
     performance : Performance
         Its predicted variances and cost.
     loops : OpenLoops
         Crossover frequencies and phase margins.
     config : str
         The motion configuration's name.
+    adapted : tuple of str
+        The parameters that were adapted (the others are the pilot's own).
 
     """
 
@@ -235,6 +250,7 @@ class Adapted:
     performance: Performance
     loops: OpenLoops
     config: str
+    adapted: tuple[str, ...] = ADAPTED
 
     def to_dict(self) -> dict[str, object]:
         """JSON-ready: parameters, predicted variances [deg^2], crossovers and margins."""
@@ -242,7 +258,7 @@ class Adapted:
         return {
             "config": self.config,
             "pilot": dataclasses.asdict(self.pilot),
-            "adapted": list(ADAPTED),
+            "adapted": list(self.adapted),
             "var_e_deg2": self.performance.var_e * deg2,
             "var_u_deg2": self.performance.var_u * deg2,
             "cost": self.performance.cost,
@@ -260,8 +276,8 @@ class Adapted:
             f"pilot adapted to {self.config} (minimises var(e) + r var(u))",
             f"  K_v {p.k_v:.3f}  t_lead {p.t_lead:.3f} s  t_lag {p.t_lag:.3f} s  "
             f"K_m {p.k_m:.3f} s",
-            f"  limitations: tau_v {p.tau_v:.3f} s  tau_m {p.tau_m:.3f} s  "
-            f"omega_nm {p.omega_nm:.2f} rad/s  zeta_nm {p.zeta_nm:.2f}",
+            f"  neuromuscular: omega_nm {p.omega_nm:.2f} rad/s  zeta_nm {p.zeta_nm:.2f}  "
+            f"(delays, its own: tau_v {p.tau_v:.3f} s  tau_m {p.tau_m:.3f} s)",
             f"  var(e) {d['var_e_deg2']:.3f} deg^2  var(u) {d['var_u_deg2']:.3f} deg^2",
             f"  disturbance loop: crossover {self.loops.crossover_d:.2f} rad/s, "
             f"phase margin {self.loops.phase_margin_d:.1f} deg",
@@ -276,8 +292,9 @@ def adapt(
     weight: float = CONTROL_WEIGHT,
     noise_ratio: float = NOISE_RATIO,
     starts: Sequence[PitchPilot] | None = None,
+    adapted: Sequence[str] = ADAPTED,
 ) -> Adapted:
-    """Choose the equalisation (:data:`ADAPTED`) that minimises the cost on ``task``.
+    """Choose the parameters ``adapted`` (:data:`ADAPTED`) that minimise the cost on ``task``.
 
     Parameters
     ----------
@@ -285,31 +302,41 @@ def adapt(
         The pitch task through a motion configuration (a configuration name or object is the
         Chapter 6 pitch task through it).
     limitations : PitchPilot, optional
-        The pilot whose delays and neuromuscular system are kept (Eq 6.5-6.7 defaults).
+        The pilot whose delays (and every parameter not in ``adapted``) are kept, and whose
+        neuromuscular tuning starts the search (Eq 6.5-6.7 defaults).
     weight : float
         r in J = var(e) + r var(u) (> 0).
     noise_ratio : float
         Observation-noise ratio of the remnant (> 0; :func:`predict`).
     starts : sequence of PitchPilot, optional
-        Starting points (the ``limitations`` pilot and two others by default).
+        Starting points (:data:`STARTS` on the ``limitations`` pilot by default).
+    adapted : sequence of str
+        The parameters the pilot adapts, among :data:`ADAPTED` (``EQUALISATION`` keeps the
+        neuromuscular system fixed, as a pilot model with fixed limitations).
 
     Raises
     ------
     SignalError
-        A weight or ratio out of range, or no stable equalisation found.
+        A weight or ratio out of range, an unknown adapted parameter, or no stable
+        equalisation found.
 
     """
     if not np.isfinite(weight) or weight <= 0:
         raise SignalError(f"control weight r must be > 0; got {weight}")
     if not np.isfinite(noise_ratio) or noise_ratio <= 0:
         raise SignalError(f"observation-noise ratio must be > 0; got {noise_ratio}")
+    names = tuple(adapted)
+    unknown = sorted(set(names) - set(ADAPTED))
+    if unknown or not names:
+        raise SignalError(f"adapted parameters must be among {', '.join(ADAPTED)}; got "
+                          f"{', '.join(unknown) or 'none'}")  # fmt: skip
     t = task if isinstance(task, Task) else Task.pitch(task)
     base = limitations or PitchPilot()
-    lo = np.array([BOUNDS[k][0] for k in ADAPTED])
-    hi = np.array([BOUNDS[k][1] for k in ADAPTED])
+    lo = np.array([BOUNDS[k][0] for k in names])
+    hi = np.array([BOUNDS[k][1] for k in names])
 
     def pilot_of(x: FloatArray) -> PitchPilot:
-        return dataclasses.replace(base, **dict(zip(ADAPTED, np.clip(x, lo, hi), strict=True)))
+        return dataclasses.replace(base, **dict(zip(names, np.clip(x, lo, hi), strict=True)))
 
     def cost(x: FloatArray) -> float:
         p = pilot_of(x)
@@ -321,18 +348,19 @@ def adapt(
     scale = predict(base, t, weight, noise_ratio).cost
     scale = scale if np.isfinite(scale) and scale > 0 else 1.0
     firsts = list(starts) if starts else [
-        dataclasses.replace(base, **dict(zip(ADAPTED, x, strict=True))) for x in STARTS
+        dataclasses.replace(base, **dict(zip(EQUALISATION, x, strict=True))) for x in STARTS
     ]  # fmt: skip
     best = None
     for s in firsts:
-        x0 = np.clip([getattr(s, k) for k in ADAPTED], lo, hi)
+        x0 = np.clip([getattr(s, k) for k in names], lo, hi)
         if cost(x0) >= UNSTABLE_COST:
             continue
-        r = optimize.minimize(cost, x0, method="Nelder-Mead",
-                              options={"xatol": 1e-3, "fatol": 1e-6, "maxiter": 800})  # fmt: skip
+        options = {"xatol": 1e-3, "fatol": 1e-6, "maxiter": 300 * len(names)}
+        r = optimize.minimize(cost, x0, method="Nelder-Mead", options=options)
         if r.fun < UNSTABLE_COST and (best is None or r.fun < best.fun):
             best = r
     if best is None:
         raise SignalError(f"no stable equalisation found for {t.config.name}")
     p = pilot_of(best.x)
-    return Adapted(p, predict(p, t, weight, noise_ratio), open_loops(p, t.config), t.config.name)
+    perf = predict(p, t, weight, noise_ratio)
+    return Adapted(p, perf, open_loops(p, t.config), t.config.name, names)

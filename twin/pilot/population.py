@@ -1,10 +1,12 @@
 """Chapter 6's experiment flown by a population of adaptive simulated subjects, with its ANOVA.
 
-Each subject (seeded) has its own limitations - visual and motion delays, neuromuscular
-frequency and damping - and its own priorities (control weight r, observation-noise ratio),
-drawn around the values of :mod:`twin.pilot.adapt`. In every Table 6.3 condition the subject
-adapts its equalisation (K_v, t_lead, t_lag, K_m) to the motion system
-(:func:`twin.pilot.adapt.adapt`, from the standard starts and its previous condition's) and
+Each subject (seeded) has its own limitations - visual and motion delays, and a resting
+neuromuscular frequency and damping - and its own priorities (control weight r,
+observation-noise ratio), drawn around the values of :mod:`twin.pilot.adapt`. In every Table 6.3
+condition the subject adapts its equalisation (K_v, t_lead, t_lag, K_m) and its neuromuscular
+tuning (omega_nm, zeta_nm; the resting one is where the search starts, and what is flown when
+only the equalisation adapts) to the motion system (:func:`twin.pilot.adapt.adapt`, from the
+standard starts and its previous condition's) and
 then flies it ``REPETITIONS`` times (the thesis recorded five per condition, §6.3.4) with an
 imperfect adaptation: in each repetition every adapted parameter is off by a log-normal factor
 (``ADAPTATION_SD``), as a person's control behaviour varies from run to run; a repetition whose
@@ -14,10 +16,11 @@ thesis' procedure: var(e) and var(u) are the repetitions' own (frequency domain,
 :func:`twin.pilot.adapt.predict`), averaged; the pilot model identified on the averaged data is
 approximated by the repetitions' average pilot (geometric mean of each parameter), and
 its crossover frequencies and phase margins (:func:`twin.pilot.pitch.open_loops`), K_v, K_m,
-t_lead and t_lag are the measures. (Each repetition flown as its own measure, a single
-near-unstable draw dominated a subject's cell and the 1 Hz filter's effect on var(e) was lost
-in some populations.) Both the redraw and its fallback (after ``MAX_REDRAWS`` failed draws
-the adapted pilot itself) narrow the spread within a subject, which can raise the F values.
+t_lead, t_lag, omega_nm and zeta_nm are the measures. (Each repetition flown as its own
+measure, a single near-unstable draw dominated a subject's cell and the 1 Hz filter's effect
+on var(e) was lost in some populations.) Both the redraw and its fallback (after
+``MAX_REDRAWS`` failed draws the adapted pilot itself) narrow the spread within a subject,
+which can raise the F values.
 
 The statistics are the thesis' (§6.4, Tables 6.4-6.7): a repeated-measures ANOVA per measure
 (statsmodels ``AnovaRM``, within-subject factors filter x delay x noise), F, p and the
@@ -30,9 +33,11 @@ adaptation noise; the cost J = var(e) + r var(u) and the observation-noise remna
 Eq 5.10 changes the predicted var(e) by parts per million, so the noise factor is nearly inert
 in this model (its "no effect" agrees with the thesis by construction); behind the filter the
 adapted loop's gain falls slowly through 0 dB (about -0.5 in log-log between 1 and 3 rad/s),
-so the target crossover moves much with small parameter changes: its filter effect has the
-thesis' direction for the adapted pilot (1.28 -> 1.12 rad/s for the default subject) but the
-run-to-run variation hides it (with K_m = 0 the target and disturbance loops coincide).
+so the target crossover moves much with small parameter changes (with K_m = 0 the target and
+disturbance loops coincide). With only the equalisation adapted (``adapted=EQUALISATION``,
+the model before the neuromuscular tuning adapted) the filter's effects on var(u) and the
+target crossover were small and turned for subjects who weigh control little, so the
+populations did not show them; ``bench/pilot_adaptive.py`` prints both models side by side.
 """
 
 from __future__ import annotations
@@ -47,6 +52,7 @@ from twin.errors import SignalError
 from twin.pilot.adapt import (
     ADAPTED,
     CONTROL_WEIGHT,
+    EQUALISATION,
     NOISE_RATIO,
     STARTS,
     Adapted,
@@ -74,8 +80,11 @@ MEASURES = (
     "k_m",
     "k_v",
 )
-#: Measures compared with the thesis: the contract's and the lead-lag pair (Table 6.6).
-COMPARED = (*MEASURES, "t_lead", "t_lag")
+#: Measures compared with the thesis: the contract's, the lead-lag pair (Table 6.6) and the
+#: neuromuscular tuning (Table 6.7; compared where it is adapted).
+COMPARED = (*MEASURES, "t_lead", "t_lag", "omega_nm", "zeta_nm")
+#: Measures of a pilot whose neuromuscular system does not adapt (constant per subject).
+NEUROMUSCULAR = ("omega_nm", "zeta_nm")
 #: Subject spread: parameter -> (mean, sd) for limitations; log-normal sd for the priorities.
 SUBJECT_SPREAD = {
     "tau_v": (0.30, 0.03),
@@ -138,23 +147,33 @@ def levels(condition: int) -> dict[str, int]:
     return {"filter": int(fb is not None), "delay": int(delay > 0.03), "noise": int(noise)}
 
 
-def fly_subject(subject: Subject, seed: int = 0) -> list[dict[str, float]]:
-    """Adapt ``subject`` to every condition and return its measures (one row per condition)."""
+def fly_subject(
+    subject: Subject,
+    seed: int = 0,
+    adapted: tuple[str, ...] = ADAPTED,
+    run_to_run_sd: float = ADAPTATION_SD,
+) -> list[dict[str, float]]:
+    """Adapt ``subject`` to every condition and return its measures (one row per condition).
+
+    ``adapted`` names the parameters the subject adapts (:func:`twin.pilot.adapt.adapt`);
+    ``run_to_run_sd`` is their run-to-run variation (log-normal sd, :data:`ADAPTATION_SD`).
+    """
     rng = np.random.default_rng(np.random.SeedSequence([seed, 15, subject.number]))
     rows, previous = [], None
     for n in TABLE_6_3:
         task = Task.pitch(f"condition-{n}")
-        starts = [dataclasses.replace(subject.limitations, **dict(zip(ADAPTED, x, strict=True)))
+        starts = [dataclasses.replace(subject.limitations,
+                                      **dict(zip(EQUALISATION, x, strict=True)))
                   for x in STARTS] + ([previous] if previous is not None else [])  # fmt: skip
-        a = adapt(task, subject.limitations, subject.weight, subject.noise_ratio, starts)
+        a = adapt(task, subject.limitations, subject.weight, subject.noise_ratio, starts, adapted)
         previous = a.pilot
-        flown = [_repetition(a, subject, task, rng) for _ in range(REPETITIONS)]
+        flown = [_repetition(a, subject, task, rng, run_to_run_sd) for _ in range(REPETITIONS)]
         perf = [x for _, x in flown]
         # the thesis identified its model on the repetitions' average: the average pilot (its
         # log-parameters' mean); var(e) and var(u) are the runs' own, averaged
         pilot = dataclasses.replace(a.pilot, **{
             k: float(np.exp(np.mean([np.log(getattr(r, k)) for r, _ in flown])))
-            if getattr(a.pilot, k) > 0 else 0.0 for k in ADAPTED})  # fmt: skip
+            if getattr(a.pilot, k) > 0 else 0.0 for k in a.adapted})  # fmt: skip
         loops = open_loops(pilot, task.config)
         deg2 = (180 / np.pi) ** 2
         rows.append({
@@ -167,12 +186,13 @@ def fly_subject(subject: Subject, seed: int = 0) -> list[dict[str, float]]:
             "var_e": float(np.mean([x.var_e for x in perf])) * deg2,
             "k_m": pilot.k_m, "k_v": pilot.k_v,
             "t_lead": pilot.t_lead, "t_lag": pilot.t_lag,
+            "omega_nm": pilot.omega_nm, "zeta_nm": pilot.zeta_nm,
         })  # fmt: skip
     return rows
 
 
 def _repetition(
-    adapted: Adapted, subject: Subject, task: Task, rng: np.random.Generator
+    adapted: Adapted, subject: Subject, task: Task, rng: np.random.Generator, sd: float
 ) -> tuple[PitchPilot, Performance]:
     """One repetition: the adapted pilot off by the run-to-run variation, and its performance.
 
@@ -181,8 +201,8 @@ def _repetition(
     """
     best = adapted.performance.cost
     for _ in range(MAX_REDRAWS):
-        noisy = {k: getattr(adapted.pilot, k) * float(np.exp(rng.normal(0, ADAPTATION_SD)))
-                 for k in ADAPTED}  # fmt: skip
+        noisy = {k: getattr(adapted.pilot, k) * float(np.exp(rng.normal(0, sd)))
+                 for k in adapted.adapted}  # fmt: skip
         pilot = dataclasses.replace(adapted.pilot, **noisy)
         if stable(pilot, task):
             perf = predict(pilot, task, subject.weight, subject.noise_ratio)
@@ -191,7 +211,35 @@ def _repetition(
     return adapted.pilot, adapted.performance
 
 
-def anova(rows: list[dict[str, float]]) -> dict[str, dict[str, dict[str, object]]]:
+def filter_effect(
+    subject: Subject, adapted: tuple[str, ...] = ADAPTED
+) -> dict[str, tuple[float, float]]:
+    """Adapt ``subject`` to conditions 1 and 5: the 1 Hz filter's effect, no run-to-run variation.
+
+    Returns
+    -------
+    dict
+        measure -> (value in condition 1, SRS; value in condition 5, 1 Hz filter), for var(e)
+        and var(u) [deg^2], both crossovers and phase margins and the adapted parameters.
+
+    """
+    out: dict[str, list[float]] = {}
+    deg2 = (180 / np.pi) ** 2
+    for n in (1, 5):
+        a = adapt(Task.pitch(f"condition-{n}"), subject.limitations, subject.weight,
+                  subject.noise_ratio, adapted=adapted)  # fmt: skip
+        d = a.to_dict()
+        values = {"var_e": a.performance.var_e * deg2, "var_u": a.performance.var_u * deg2,
+                  **{m: d[m] for m in MEASURES if m in d},
+                  **{k: getattr(a.pilot, k) for k in a.adapted}}  # fmt: skip
+        for m, v in values.items():
+            out.setdefault(m, []).append(float(v))
+    return {m: (v[0], v[1]) for m, v in out.items()}
+
+
+def anova(
+    rows: list[dict[str, float]], measures: tuple[str, ...] = COMPARED
+) -> dict[str, dict[str, dict[str, object]]]:
     """Repeated-measures ANOVA (statsmodels ``AnovaRM``) of every measure's main effects.
 
     Returns
@@ -205,7 +253,7 @@ def anova(rows: list[dict[str, float]]) -> dict[str, dict[str, dict[str, object]
 
     df = pd.DataFrame(rows)
     out: dict[str, dict[str, dict[str, object]]] = {}
-    for m in COMPARED:
+    for m in measures:
         if df[m].std() == 0:
             raise SignalError(f"{m} does not vary over subjects and conditions: no ANOVA")
         table = AnovaRM(df, m, "subject", within=list(FACTORS)).fit().anova_table
@@ -249,9 +297,9 @@ class PopulationResult:
         p < 0.05; where it found none: p >= 0.05.
         """
         out: dict[str, dict[str, bool]] = {}
-        for m, by_factor in TABLES_6_4_TO_6_7.items():
+        for m in self.anova:
             out[m] = {}
-            for f, (_, direction) in by_factor.items():
+            for f, (_, direction) in TABLES_6_4_TO_6_7[m].items():
                 got = self.anova[m][f]
                 if direction is None:
                     out[m][f] = bool(got["p"] >= 0.05)
@@ -262,7 +310,7 @@ class PopulationResult:
     def to_dict(self) -> dict[str, object]:
         """JSON-ready: ``anova`` (the contract), ``thesis``, ``agreement``, ``rows``."""
         thesis = {m: {f: {"F": v[0], "direction": v[1]} for f, v in by.items()}
-                  for m, by in TABLES_6_4_TO_6_7.items()}  # fmt: skip
+                  for m, by in TABLES_6_4_TO_6_7.items() if m in self.anova}  # fmt: skip
         return {"anova": self.anova, "thesis": thesis, "agreement": self.agreement(),
                 "subjects": len({r["subject"] for r in self.rows}), "seed": self.seed,
                 "rows": self.rows}  # fmt: skip
@@ -275,7 +323,7 @@ class PopulationResult:
             f"subjects (seed {self.seed}); repeated-measures ANOVA, main effects",
             f"{'measure':30s} {'factor':6s} {'F':>8s} {'p':>7s} dir | thesis F  dir  agrees",
         ]
-        for m in COMPARED:
+        for m in self.anova:
             for f in FACTORS:
                 a = self.anova[m][f]
                 tf, td = TABLES_6_4_TO_6_7[m][f]
@@ -302,22 +350,23 @@ class PopulationResult:
 
         plt = pyplot()
         fig, axes = plt.subplots(1, 3, figsize=(13, 4.5), sharey=True)
-        y = np.arange(len(COMPARED))
+        measures = list(self.anova)
+        y = np.arange(len(measures))
         for ax, f in zip(axes, FACTORS, strict=True):
             pred = [np.sign(1 if self.anova[m][f]["direction"] == "+" else -1)
-                    * self.anova[m][f]["F"] for m in COMPARED]  # fmt: skip
+                    * self.anova[m][f]["F"] for m in measures]  # fmt: skip
             th = [(-1 if TABLES_6_4_TO_6_7[m][f][1] == "-" else 1) * TABLES_6_4_TO_6_7[m][f][0]
-                  for m in COMPARED]  # fmt: skip
+                  for m in measures]  # fmt: skip
             ax.barh(y + 0.2, np.sign(pred) * np.log10(1 + np.abs(pred)), 0.4, label="twin")
             ax.barh(y - 0.2, np.sign(th) * np.log10(1 + np.abs(th)), 0.4, label="thesis")
             ax.axvline(0, color="k", lw=0.5)
             ax.set_title(f"{f} ({FACTORS[f][1]} vs {FACTORS[f][0]})", fontsize=9)
             ax.set_xlabel("sign(effect) log10(1 + F)", fontsize=8)
-        axes[0].set_yticks(y, COMPARED, fontsize=8)
+        axes[0].set_yticks(y, measures, fontsize=8)
         axes[0].legend(fontsize=8)
-        den = self.anova[COMPARED[0]]["filter"]["df"][1]
+        den = self.anova[measures[0]]["filter"]["df"][1]
         fig.suptitle(f"Chapter 6 main effects: adaptive simulated subjects (F(1,{den}) = "
-                     f"{stats.f.ppf(0.95, 1, den):.2f} is p = 0.05) vs Tables 6.4-6.6 (F(1,8) = "
+                     f"{stats.f.ppf(0.95, 1, den):.2f} is p = 0.05) vs Tables 6.4-6.7 (F(1,8) = "
                      f"5.32 is p = 0.05; thesis directions only where significant)",
                      fontsize=9)  # fmt: skip
         return finish(fig, path, dpi=110)
@@ -334,6 +383,7 @@ class PopulationResult:
             ("phase_margin_target_deg", "target phase margin (Fig 6.7)", "deg"),
             ("k_v", "K_v (Fig 6.8)", "-"), ("k_m", "K_m (Fig 6.9)", "-"),
             ("t_lead", "T_lead (Fig 6.8)", "s"), ("t_lag", "T_lag (Fig 6.8)", "s"),
+            ("omega_nm", "omega_nm (Fig 6.9)", "rad/s"), ("zeta_nm", "zeta_nm (Fig 6.9)", "-"),
         )  # fmt: skip
         panels = [Panel(title, f"{title.split(' (')[0]} [{unit}]",
                         samples_by_condition(self.rows, key))
@@ -352,26 +402,37 @@ def run_population(
     seed: int = 0,
     progress: ProgressFn | None = None,
     scheduler: Engine | str | None = None,
+    adapted: tuple[str, ...] = ADAPTED,
+    run_to_run_sd: float = ADAPTATION_SD,
 ) -> PopulationResult:
     """Fly the eight conditions with ``n_subjects`` adaptive subjects and run the ANOVA.
 
     Each subject is a task (:mod:`twin.tasks`): its randomness comes from its own seed, so the
     result is the same whatever runs the subjects (``scheduler``; default this process).
+    ``adapted`` names the parameters the subjects adapt (:data:`twin.pilot.adapt.ADAPTED`;
+    ``EQUALISATION`` keeps each subject's neuromuscular system, and its measures out of the
+    ANOVA); ``run_to_run_sd`` is their run-to-run variation (log-normal sd, 0 to 1).
 
     Raises
     ------
+    SignalError
+        A run-to-run variation out of range.
     TaskError
         When a subject failed (named with its number and seed).
 
     """
+    if not 0 <= run_to_run_sd <= 1:  # also refuses NaN
+        raise SignalError(f"run-to-run variation must be a log-normal sd in [0, 1]; "
+                          f"got {run_to_run_sd}")  # fmt: skip
     subs = subjects(n_subjects, seed)
     with using(scheduler) as engine:
         flown = engine.map(
             fly_subject,
-            [(s, seed) for s in subs],
+            [(s, seed, tuple(adapted), run_to_run_sd) for s in subs],
             [{"subject": k, "seed": seed} for k in range(len(subs))],
             "subjects",
             progress,
         ).values()
     rows = [row for r in flown for row in r]
-    return PopulationResult(rows, anova(rows), seed)
+    measures = tuple(m for m in COMPARED if m not in NEUROMUSCULAR or m in adapted)
+    return PopulationResult(rows, anova(rows, measures), seed)
