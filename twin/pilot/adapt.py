@@ -276,8 +276,9 @@ class Adapted:
             f"pilot adapted to {self.config} (minimises var(e) + r var(u))",
             f"  K_v {p.k_v:.3f}  t_lead {p.t_lead:.3f} s  t_lag {p.t_lag:.3f} s  "
             f"K_m {p.k_m:.3f} s",
-            f"  neuromuscular: omega_nm {p.omega_nm:.2f} rad/s  zeta_nm {p.zeta_nm:.2f}  "
-            f"(delays, its own: tau_v {p.tau_v:.3f} s  tau_m {p.tau_m:.3f} s)",
+            f"  neuromuscular ({'adapted' if 'omega_nm' in self.adapted else 'its own'}): "
+            f"omega_nm {p.omega_nm:.2f} rad/s  zeta_nm {p.zeta_nm:.2f}",
+            f"  delays (its own): tau_v {p.tau_v:.3f} s  tau_m {p.tau_m:.3f} s",
             f"  var(e) {d['var_e_deg2']:.3f} deg^2  var(u) {d['var_u_deg2']:.3f} deg^2",
             f"  disturbance loop: crossover {self.loops.crossover_d:.2f} rad/s, "
             f"phase margin {self.loops.phase_margin_d:.1f} deg",
