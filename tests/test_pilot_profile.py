@@ -66,7 +66,9 @@ def test_a_side_the_data_do_not_bound_is_open_at_the_range():
 def test_the_pilot_fit_interval_covers_omega_nm_where_the_bound_misses():
     """Seeded run 4 of the coverage bench (condition 8, 15 % remnant): the fit lands on the
     single-lead minimum (t_lead = t_lag) with omega_nm 2.9 bounds above the truth; the
-    likelihood-ratio interval, fitted from every minimum, holds the truth."""
+    likelihood-ratio interval, fitted from every minimum, holds the truth; it reaches more than
+    twice two bounds below the estimate, so omega_nm is reported not identifiable by its
+    bound."""
     from twin.chain.config import motion_system
     from twin.pilot.experiment import pitch_remnant_scale
     from twin.pilot.mle import fit_pitch_pilot
@@ -79,6 +81,9 @@ def test_the_pilot_fit_interval_covers_omega_nm_where_the_bound_misses():
     z = (fit.pilot.omega_nm - truth.omega_nm) / fit.crlb["omega_nm"]
     assert z > 2.0  # the bound misses here ...
     assert fit.covers("omega_nm", truth.omega_nm)  # ... the interval does not
+    lo, _ = fit.intervals["omega_nm"]
+    assert fit.pilot.omega_nm - lo > 2 * 2 * fit.crlb["omega_nm"]
+    assert "omega_nm" in fit.unidentifiable  # reported: the bound is not its uncertainty
     assert {"t_lead", "t_lag"} <= set(fit.unidentifiable)  # bound infinite at t_lead = t_lag
     assert fit.covers("t_lead", truth.t_lead)  # the profile still bounds it
     for name, (lo, hi) in fit.intervals.items():

@@ -6,8 +6,9 @@ rose, both crossover frequencies fell and the neuromuscular frequency and dampin
 6.7). A fixed pilot model cannot show that. Here the pilot *chooses* its equalisation - visual
 gain K_v, lead and lag t_lead, t_lag (Eq 6.5) and motion gain K_m (Eq 6.7) - and the tuning of
 its neuromuscular system - omega_nm and zeta_nm (Eq 6.6), which a pilot sets by how stiffly
-it holds the stick (McRuer and Jex 1967 list the neuromuscular system among the adjustable
-parts of the pilot) - to minimise
+it holds the stick (in the optimal-control model the neuromuscular lag is itself an outcome of
+the optimisation, through its control-rate weighting, Kleinman, Baron and Levison 1970; the
+thesis found both changed with the filter, Table 6.7) - to minimise
 
     J = var(e) + r var(u)
 

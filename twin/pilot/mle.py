@@ -81,8 +81,9 @@ class PilotFit:
     residual_sd : float
         Standard deviation of the output error.
     unidentifiable : tuple of str
-        Parameters whose Cramer-Rao bound exceeds ``IDENTIFIABLE_REL_SD`` of their value or
-        that another, equally good minimum puts elsewhere (reported, not hidden).
+        Parameters whose Cramer-Rao bound exceeds ``IDENTIFIABLE_REL_SD`` of their value, that
+        another, equally good minimum puts elsewhere, or (with intervals) whose likelihood-ratio
+        interval reaches much farther than two bounds (reported, not hidden).
     intervals : dict of str to (float, float), or None
         Likelihood-ratio interval of each parameter (two standard deviations where the
         likelihood is a parabola; :mod:`twin.pilot.profile`), when asked for: honest where the
@@ -165,6 +166,12 @@ START_KM = (None, 0.0)
 COMPETING_CHI2 = 3.84
 #: Minima within this chi-square of the best start the profile fits of the intervals.
 PROFILE_CHI2 = 10.0
+#: Farthest either end of the likelihood-ratio interval may lie from the estimate, relative to
+#: two bounds, for the likelihood to count as a parabola and the bound as the parameter's
+#: uncertainty. Where the data are informative the interval's width is within about 1.4x of
+#: four bounds (median, 50 seeded fits); a side reaching farther means a second minimum or a
+#: flat side the bound cannot see.
+QUADRATIC_SIDE_RATIO = 2.0
 
 
 def _closed_loop_u(
@@ -274,6 +281,9 @@ def fit_pitch_pilot(
     (chi-square within ``COMPETING_CHI2`` of the best) with that parameter more than two bounds
     away: the bound describes one minimum's curvature and says nothing of the other (the
     lead-lag pair at the thesis' remnant level has a second minimum near t_lead 0.4-0.6 s).
+    With ``intervals``, a parameter whose likelihood-ratio interval reaches on either side more
+    than ``QUADRATIC_SIDE_RATIO`` times two bounds from the estimate is reported too: the
+    profile found what the starts did not, and the interval, not the bound, is its uncertainty.
 
     Parameters
     ----------
@@ -361,6 +371,10 @@ def fit_pitch_pilot(
             ranges[name] = likelihood_interval(residual, minima, k, LOWER, UPPER, step)
             if progress:
                 progress("likelihood intervals", k + 1, len(PARAMETERS))
+        reach = QUADRATIC_SIDE_RATIO * 2 * crlb
+        wide = {name for k, (name, (lo, hi)) in enumerate(ranges.items())
+                if not max(hi - best.x[k], best.x[k] - lo) <= reach[k]}  # fmt: skip
+        weak = tuple(name for name in PARAMETERS if name in weak or name in wide)
     return PilotFit(fitted, bounds, vaf(mean_u, u_hat), float(np.std(mean_u - u_hat)), weak,
                     ranges)  # fmt: skip
 
