@@ -80,7 +80,10 @@ def subject_effects() -> None:
         for m, by in TABLES_6_4_TO_6_7.items():
             if m not in effects[0]:
                 continue
-            ratio = np.array([e[m][1] / e[m][0] if e[m][0] else np.inf for e in effects])
+            # a measure at zero in both conditions (K_m off in both) has no direction
+            both = np.array([e[m] for e in effects])
+            ratio = np.divide(both[:, 1], both[:, 0], out=np.ones(len(both)), where=both[:, 0] != 0)
+            ratio[(both[:, 0] == 0) & (both[:, 1] > 0)] = np.inf
             way = np.sum(ratio < 1) if by["filter"][1] == "-" else np.sum(ratio > 1)
             print(
                 f"  {m:30s} thesis {by['filter'][1]}: {way:2d} of {len(subs)} "

@@ -68,10 +68,10 @@ def test_the_pilot_fit_interval_covers_omega_nm_where_the_bound_misses():
     single-lead minimum (t_lead = t_lag) with omega_nm 2.9 bounds above the truth; the
     likelihood-ratio interval, fitted from every minimum, holds the truth; it reaches more than
     twice two bounds below the estimate, so omega_nm is reported not identifiable by its
-    bound."""
+    bound (QUADRATIC_SIDE_RATIO)."""
     from twin.chain.config import motion_system
     from twin.pilot.experiment import pitch_remnant_scale
-    from twin.pilot.mle import fit_pitch_pilot
+    from twin.pilot.mle import QUADRATIC_SIDE_RATIO, fit_pitch_pilot
     from twin.pilot.pitch import PitchPilot, simulate_pitch
 
     truth = PitchPilot(tau_v=0.275)
@@ -82,7 +82,7 @@ def test_the_pilot_fit_interval_covers_omega_nm_where_the_bound_misses():
     assert z > 2.0  # the bound misses here ...
     assert fit.covers("omega_nm", truth.omega_nm)  # ... the interval does not
     lo, _ = fit.intervals["omega_nm"]
-    assert fit.pilot.omega_nm - lo > 2 * 2 * fit.crlb["omega_nm"]
+    assert fit.pilot.omega_nm - lo > QUADRATIC_SIDE_RATIO * 2 * fit.crlb["omega_nm"]
     assert "omega_nm" in fit.unidentifiable  # reported: the bound is not its uncertainty
     assert {"t_lead", "t_lag"} <= set(fit.unidentifiable)  # bound infinite at t_lead = t_lag
     assert fit.covers("t_lead", truth.t_lead)  # the profile still bounds it

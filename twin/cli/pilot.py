@@ -224,7 +224,8 @@ def _fixed_neuromuscular_option(parser: argparse.ArgumentParser) -> None:
         "--fixed-neuromuscular",
         action="store_true",
         help="adapt only the equalisation (K_v, t_lead, t_lag, K_m) and keep the pilot's "
-        "neuromuscular system (omega_nm, zeta_nm), as a pilot model with fixed limitations",
+        "neuromuscular system (omega_nm, zeta_nm), as a pilot model with fixed limitations "
+        "(pilot experiment: with --pilot adaptive)",
     )
 
 

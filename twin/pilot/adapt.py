@@ -1,4 +1,4 @@
-"""A pilot who adapts: the multi-modal pilot's equalisation chosen for each motion system.
+"""A pilot who adapts: its equalisation and neuromuscular tuning chosen per motion system.
 
 Chapter 6's pilots changed their control behaviour with the motion system (§6.4.2): behind the
 1 Hz platform filter the motion gain fell to about zero, the visual gain fell, the visual lead
@@ -18,8 +18,8 @@ rules, McRuer and Jex 1967, as the outcome), restricted to the structure of Eq 6
 Hess (1990) and Zaal et al. (2009). A stiffer, faster neuromuscular system passes more of the
 remnant to the stick (var(u) rises), a slower one costs phase at crossover, so the optimum is
 inside the physiological range: without the filter, where motion gives lead and the crossover
-is high, the pilot tunes it faster than behind the filter, and its control activity - mostly
-remnant, as the thesis found (Fig 6.5b) - is larger.
+is high, the pilot tunes it faster than behind the filter, and its control activity is larger,
+mainly through the remnant (as the thesis found, §6.4.1).
 
 Everything is computed in the frequency domain, so one evaluation takes about a millisecond:
 
@@ -66,8 +66,10 @@ ComplexArray = NDArray[np.complex128]
 
 #: Equalisation the pilot adapts (Eq 6.5, 6.7).
 EQUALISATION = ("k_v", "t_lead", "t_lag", "k_m")
-#: Parameters the pilot adapts: the equalisation and the neuromuscular tuning (Eq 6.6); the
-#: delays are the pilot's own.
+#: Neuromuscular tuning the pilot adapts (Eq 6.6).
+NEUROMUSCULAR = frozenset({"omega_nm", "zeta_nm"})
+#: Parameters the pilot adapts: the equalisation and the neuromuscular tuning; the delays are
+#: the pilot's own.
 ADAPTED = (*EQUALISATION, "omega_nm", "zeta_nm")
 #: Bounds of the adapted parameters (the neuromuscular ones a physiological range, about
 #: twice either side of the 6-16 rad/s and 0.1-0.5 that pilot models identify).
@@ -277,7 +279,7 @@ class Adapted:
             f"pilot adapted to {self.config} (minimises var(e) + r var(u))",
             f"  K_v {p.k_v:.3f}  t_lead {p.t_lead:.3f} s  t_lag {p.t_lag:.3f} s  "
             f"K_m {p.k_m:.3f} s",
-            f"  neuromuscular ({'adapted' if 'omega_nm' in self.adapted else 'its own'}): "
+            f"  neuromuscular ({'adapted' if NEUROMUSCULAR & set(self.adapted) else 'its own'}): "
             f"omega_nm {p.omega_nm:.2f} rad/s  zeta_nm {p.zeta_nm:.2f}",
             f"  delays (its own): tau_v {p.tau_v:.3f} s  tau_m {p.tau_m:.3f} s",
             f"  var(e) {d['var_e_deg2']:.3f} deg^2  var(u) {d['var_u_deg2']:.3f} deg^2",
@@ -286,6 +288,25 @@ class Adapted:
             f"  target loop: crossover {self.loops.crossover_t:.2f} rad/s, "
             f"phase margin {self.loops.phase_margin_t:.1f} deg",
         ])  # fmt: skip
+
+
+def adapted_names(adapted: Sequence[str]) -> tuple[str, ...]:
+    """Check a choice of adapted parameters and return it in :data:`ADAPTED`'s order.
+
+    Raises
+    ------
+    SignalError
+        None given, a bare string, or a name not among :data:`ADAPTED`.
+
+    """
+    if isinstance(adapted, str):
+        raise SignalError(f"adapted parameters must be a sequence of names; got the string "
+                          f"{adapted!r}")  # fmt: skip
+    unknown = sorted(set(adapted) - set(ADAPTED))
+    if unknown or not adapted:
+        raise SignalError(f"adapted parameters must be among {', '.join(ADAPTED)}; got "
+                          f"{', '.join(map(str, unknown)) or 'none'}")  # fmt: skip
+    return tuple(k for k in ADAPTED if k in adapted)
 
 
 def adapt(
@@ -327,11 +348,7 @@ def adapt(
         raise SignalError(f"control weight r must be > 0; got {weight}")
     if not np.isfinite(noise_ratio) or noise_ratio <= 0:
         raise SignalError(f"observation-noise ratio must be > 0; got {noise_ratio}")
-    names = tuple(adapted)
-    unknown = sorted(set(names) - set(ADAPTED))
-    if unknown or not names:
-        raise SignalError(f"adapted parameters must be among {', '.join(ADAPTED)}; got "
-                          f"{', '.join(unknown) or 'none'}")  # fmt: skip
+    names = adapted_names(adapted)
     t = task if isinstance(task, Task) else Task.pitch(task)
     base = limitations or PitchPilot()
     lo = np.array([BOUNDS[k][0] for k in names])

@@ -60,6 +60,7 @@ from twin.pilot.adapt import (
     Performance,
     Task,
     adapt,
+    adapted_names,
     predict,
     stable,
 )
@@ -84,8 +85,6 @@ MEASURES = (
 #: Measures compared with the thesis: the contract's, the lead-lag pair (Table 6.6) and the
 #: neuromuscular tuning (Table 6.7; compared where it is adapted).
 COMPARED = (*MEASURES, "t_lead", "t_lag", "omega_nm", "zeta_nm")
-#: Measures of a pilot whose neuromuscular system does not adapt (constant per subject).
-NEUROMUSCULAR = ("omega_nm", "zeta_nm")
 #: Subject spread: parameter -> (mean, sd) for limitations; log-normal sd for the priorities.
 SUBJECT_SPREAD = {
     "tau_v": (0.30, 0.03),
@@ -115,7 +114,8 @@ class Subject:
     number : int
         Subject number (from 1).
     limitations : PitchPilot
-        Delays and neuromuscular system (the equalisation here is only a start).
+        Delays and resting neuromuscular system (the equalisation, and the neuromuscular
+        tuning where it adapts, are only where the search starts).
     weight, noise_ratio : float
         r of the cost and observation-noise ratio of the remnant.
 
@@ -255,8 +255,9 @@ def anova(
     df = pd.DataFrame(rows)
     out: dict[str, dict[str, dict[str, object]]] = {}
     for m in measures:
-        if df[m].std() == 0:
-            raise SignalError(f"{m} does not vary over subjects and conditions: no ANOVA")
+        if df.groupby("subject")[m].std().max() == 0:
+            raise SignalError(f"{m} does not vary over the conditions within any subject: "
+                              "no ANOVA (was it adapted?)")  # fmt: skip
         table = AnovaRM(df, m, "subject", within=list(FACTORS)).fit().anova_table
         out[m] = {}
         for f in FACTORS:
@@ -284,12 +285,18 @@ class PopulationResult:
         :func:`anova`'s result.
     seed : int
         The seed.
+    adapted : tuple of str
+        The parameters the subjects adapted.
+    run_to_run_sd : float
+        Their run-to-run variation (log-normal sd).
 
     """
 
     rows: list[dict[str, float]]
     anova: dict[str, dict[str, dict[str, object]]]
     seed: int
+    adapted: tuple[str, ...] = ADAPTED
+    run_to_run_sd: float = ADAPTATION_SD
 
     def agreement(self) -> dict[str, dict[str, bool]]:
         """Per measure and factor, whether the prediction agrees with the thesis.
@@ -314,6 +321,7 @@ class PopulationResult:
                   for m, by in TABLES_6_4_TO_6_7.items() if m in self.anova}  # fmt: skip
         return {"anova": self.anova, "thesis": thesis, "agreement": self.agreement(),
                 "subjects": len({r["subject"] for r in self.rows}), "seed": self.seed,
+                "adapted": list(self.adapted), "run_to_run_sd": self.run_to_run_sd,
                 "rows": self.rows}  # fmt: skip
 
     def format_table(self) -> str:
@@ -321,7 +329,8 @@ class PopulationResult:
         agree = self.agreement()
         lines = [
             f"Chapter 6 predicted by {len({r['subject'] for r in self.rows})} adaptive "
-            f"subjects (seed {self.seed}); repeated-measures ANOVA, main effects",
+            f"subjects (seed {self.seed}; adapting {', '.join(self.adapted)}; run-to-run "
+            f"variation {self.run_to_run_sd:.0%}); repeated-measures ANOVA, main effects",
             f"{'measure':30s} {'factor':6s} {'F':>8s} {'p':>7s} dir | thesis F  dir  agrees",
         ]
         for m in self.anova:
@@ -425,15 +434,16 @@ def run_population(
     if not 0 <= run_to_run_sd <= 1:  # also refuses NaN
         raise SignalError(f"run-to-run variation must be a log-normal sd in [0, 1]; "
                           f"got {run_to_run_sd}")  # fmt: skip
+    adapted = adapted_names(adapted)
     subs = subjects(n_subjects, seed)
     with using(scheduler) as engine:
         flown = engine.map(
             fly_subject,
-            [(s, seed, tuple(adapted), run_to_run_sd) for s in subs],
+            [(s, seed, adapted, run_to_run_sd) for s in subs],
             [{"subject": k, "seed": seed} for k in range(len(subs))],
             "subjects",
             progress,
         ).values()
     rows = [row for r in flown for row in r]
-    measures = tuple(m for m in COMPARED if m not in NEUROMUSCULAR or m in adapted)
-    return PopulationResult(rows, anova(rows, measures), seed)
+    measures = tuple(m for m in COMPARED if m not in ADAPTED or m in adapted)
+    return PopulationResult(rows, anova(rows, measures), seed, adapted, run_to_run_sd)
