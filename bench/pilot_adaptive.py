@@ -1,15 +1,18 @@
 """Chapter 6 with adaptive subjects and the MLE's honesty, measured in one run.
 
 1. ``twin pilot experiment --pilot adaptive --subjects 6`` wall time on both cores (goal
-   <= 60 s on this 2-core machine); over five seeded populations of nine subjects (the
+   <= 60 s on this 2-core machine); over 20 seeded populations of nine subjects (the
    thesis' participants), how often each main effect of Tables 6.4-6.7 agrees with the thesis
-   (direction and p < 0.05 where it found an effect, p >= 0.05 where not); once with the
-   default run-to-run variation of the adapted parameters (10 %), once with half of it, as
-   the variation is an assumption and the ANOVA's power depends on it.
-2. The 1 Hz filter's effect on each of those 45 subjects adapted without run-to-run
-   variation (condition 5 against condition 1), for the pilot who adapts its equalisation
-   and neuromuscular tuning and for one whose neuromuscular system is fixed (the model
-   before): how many subjects go the thesis' way per measure.
+   (direction and p < 0.05 where it found an effect, p >= 0.05 where not), beside how often
+   it would if the true effect were the thesis' own F (:mod:`twin.pilot.replication`), and
+   the twin's F over populations (median, 5-95 %; figure ``bench-chapter6-replication.png``);
+   once with the default run-to-run variation of the adapted parameters (10 %), once (10
+   populations) with half of it, as the variation is an assumption and the ANOVA's power
+   depends on it.
+2. The 1 Hz filter's effect on each of the first five populations' 45 subjects adapted
+   without run-to-run variation (condition 5 against condition 1), for the pilot who adapts
+   its equalisation and neuromuscular tuning and for one whose neuromuscular system is fixed
+   (the model before): how many subjects go the thesis' way per measure.
 3. Closed-loop MLE coverage: 50 seeded runs of a known pilot (condition 8, 15 % remnant, the
    thesis' level) fitted one by one (two workers); per parameter the fraction within 2
    Cramer-Rao sd of the truth among the estimates where it counted as identifiable, and the
@@ -28,10 +31,13 @@ from twin.pilot.experiment import pitch_remnant_scale
 from twin.pilot.mle import PARAMETERS, fit_pitch_pilot
 from twin.pilot.pitch import PitchPilot, simulate_pitch
 from twin.pilot.population import ADAPTATION_SD, filter_effect, run_population, subjects
+from twin.pilot.replication import run_populations
 from twin.tasks.engine import Engine
 from twin.thesis import TABLES_6_4_TO_6_7
 
-REPETITIONS, POPULATIONS, SUBJECTS = 5, 5, 9
+REPETITIONS, POPULATIONS, SUBJECTS = 5, 20, 9
+#: Populations whose subjects are adapted without run-to-run variation (section 2).
+EFFECT_POPULATIONS = 5
 
 
 def main(runs: int = 50) -> None:
@@ -39,32 +45,29 @@ def main(runs: int = 50) -> None:
     run_population(6, 0, scheduler="local:2")
     wall = time.perf_counter() - t0
     print(f"adaptive experiment, 6 subjects, 2 workers: {wall:.1f} s (goal <= 60 s)")
-    for sd in (ADAPTATION_SD, ADAPTATION_SD / 2):
-        populations(sd)
+    populations(ADAPTATION_SD, POPULATIONS)
+    populations(ADAPTATION_SD / 2, POPULATIONS // 2)
     subject_effects()
     coverage(runs)
 
 
-def populations(sd: float) -> None:
-    """Section 1: agreement with Tables 6.4-6.7 over seeded populations."""
-    hits: dict[str, int] = {}
-    for seed in range(POPULATIONS):
-        result = run_population(SUBJECTS, seed, scheduler="local:2", run_to_run_sd=sd)
-        for measure, by in result.agreement().items():
-            for factor, ok in by.items():
-                hits[f"{measure}/{factor}"] = hits.get(f"{measure}/{factor}", 0) + ok
-    full = sum(v == POPULATIONS for v in hits.values())
-    print(f"{POPULATIONS} populations of {SUBJECTS} subjects (the thesis' nine), run-to-run "
-          f"variation {sd:.0%}: {full} of {len(hits)} main effects agree with Tables 6.4-6.7 "
-          f"in every population; the others:")  # fmt: skip
-    for name, v in hits.items():
-        if v < POPULATIONS:
-            print(f"  {name:40s} agrees in {v} of {POPULATIONS}")
+def populations(sd: float, n: int) -> None:
+    """Section 1: agreement with Tables 6.4-6.7 over seeded populations, beside the agreement
+    the thesis' own F predicts (:mod:`twin.pilot.replication`)."""
+    rep, _ = run_populations(n, SUBJECTS, 0, scheduler="local:2", run_to_run_sd=sd)
+    full = sum(e.agreed == e.populations for e in rep.effects)
+    print(f"{n} populations of {SUBJECTS} subjects (the thesis' nine), run-to-run variation "
+          f"{sd:.0%}: {full} of {len(rep.effects)} main effects agree with Tables 6.4-6.7 in "
+          "every population")  # fmt: skip
+    print(rep.format_table())
+    if sd == ADAPTATION_SD:
+        rep.plot("bench-chapter6-replication.png")
+        print("figure: bench-chapter6-replication.png")
 
 
 def subject_effects() -> None:
     """Section 2: the filter's effect per adapted subject, both models."""
-    subs = [s for seed in range(POPULATIONS) for s in subjects(SUBJECTS, seed)]
+    subs = [s for seed in range(EFFECT_POPULATIONS) for s in subjects(SUBJECTS, seed)]
     for name, adapted in (
         ("equalisation and neuromuscular tuning", ADAPTED),
         ("equalisation only (neuromuscular system fixed)", EQUALISATION),

@@ -17,6 +17,8 @@ DEG2 = (180 / np.pi) ** 2
 MAX_RUNS = 1000
 #: Most simulated subjects of ``pilot experiment --pilot adaptive``.
 MAX_SUBJECTS = 1000
+#: Most populations of ``pilot experiment --pilot adaptive --populations``.
+MAX_POPULATIONS = 1000
 #: Runs per task of ``pilot montecarlo`` (:func:`twin.pilot.montecarlo.monte_carlo`'s batch).
 MC_BATCH = 500
 #: Most runs of ``pilot montecarlo`` (:data:`twin.pilot.montecarlo.MAX_RUNS`, not imported
@@ -74,7 +76,8 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
         type=common.figure_file,
         help="save the measures per condition as Fig 6.5-6.9 (fixed pilot); with --pilot "
         "adaptive, the ANOVA's effects beside the thesis' here and the measures per condition "
-        "over subjects in PNG's name + '-conditions.png'",
+        "over subjects in PNG's name + '-conditions.png'; with --populations, the F "
+        "distribution per effect beside the thesis'",
     )
     exp.add_argument(
         "--pilot",
@@ -90,6 +93,14 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
         type=common.count(2, MAX_SUBJECTS),
         default=9,
         help="simulated subjects with --pilot adaptive (default 9, the thesis' participants)",
+    )
+    exp.add_argument(
+        "--populations",
+        type=common.count(1, MAX_POPULATIONS),
+        default=1,
+        help="with --pilot adaptive: seeded populations (seeds SEED, SEED + 1, ...); from 2 on, "
+        "each effect's F over populations (median, 5-95 %%) beside the thesis', and its "
+        "agreements beside those the thesis' own F predicts (default 1; 20 for a distribution)",
     )
     exp.set_defaults(func=_cmd_experiment)
     ada = cmds.add_parser(
@@ -253,6 +264,11 @@ def _cmd_experiment(args: argparse.Namespace) -> int:
     if args.fixed_neuromuscular and args.pilot != "adaptive":
         raise UsageError("--fixed-neuromuscular chooses what adaptive subjects adapt: give it "
                          "with --pilot adaptive")  # fmt: skip
+    if args.populations > 1:
+        if args.pilot != "adaptive":
+            raise UsageError("--populations counts populations of adaptive subjects: give it "
+                             "with --pilot adaptive")  # fmt: skip
+        return _replication(args)
     if args.pilot == "adaptive":
         from twin.pilot.population import run_population
 
@@ -276,6 +292,18 @@ def _cmd_experiment(args: argparse.Namespace) -> int:
         print(json.dumps(r.to_dict(), indent=2))
     else:
         print(r.format_table())
+    return 0
+
+
+def _replication(args: argparse.Namespace) -> int:
+    from twin.pilot.replication import run_populations
+
+    with common.engine(args) as engine:
+        rep, _ = run_populations(args.populations, args.subjects, args.seed,
+                                 common.progress(args), engine, _adapted(args))  # fmt: skip
+    if args.plot:
+        pyplot().close(rep.plot(args.plot))
+    print(json.dumps(rep.to_dict(), indent=2) if args.json else rep.format_table())
     return 0
 
 

@@ -45,8 +45,10 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 from scipy import stats
 
 from twin.errors import SignalError
@@ -68,6 +70,8 @@ from twin.pilot.pitch import PitchPilot, open_loops
 from twin.progress import ProgressFn
 from twin.tasks.engine import Engine, using
 from twin.thesis import TABLE_6_3, TABLES_6_4_TO_6_7
+
+FloatArray = NDArray[np.float64]
 
 #: Factors of Table 6.3 and their levels (first, second).
 FACTORS = {"filter": ("none", "1 Hz"), "delay": ("25 ms", "35 ms"), "noise": ("off", "on")}
@@ -349,30 +353,25 @@ class PopulationResult:
         Parameters
         ----------
         path : str, optional
-            Save the figure here.
+            Where to save the figure.
 
         Returns
         -------
         matplotlib.figure.Figure
 
         """
-        from twin.plotting import finish, pyplot
+        from twin.plotting import finish
 
-        plt = pyplot()
-        fig, axes = plt.subplots(1, 3, figsize=(13, 4.5), sharey=True)
         measures = list(self.anova)
+        fig, axes = effect_axes(measures, 4.5)
         y = np.arange(len(measures))
         for ax, f in zip(axes, FACTORS, strict=True):
             pred = [np.sign(1 if self.anova[m][f]["direction"] == "+" else -1)
                     * self.anova[m][f]["F"] for m in measures]  # fmt: skip
             th = [(-1 if TABLES_6_4_TO_6_7[m][f][1] == "-" else 1) * TABLES_6_4_TO_6_7[m][f][0]
                   for m in measures]  # fmt: skip
-            ax.barh(y + 0.2, np.sign(pred) * np.log10(1 + np.abs(pred)), 0.4, label="twin")
-            ax.barh(y - 0.2, np.sign(th) * np.log10(1 + np.abs(th)), 0.4, label="thesis")
-            ax.axvline(0, color="k", lw=0.5)
-            ax.set_title(f"{f} ({FACTORS[f][1]} vs {FACTORS[f][0]})", fontsize=9)
-            ax.set_xlabel("sign(effect) log10(1 + F)", fontsize=8)
-        axes[0].set_yticks(y, measures, fontsize=8)
+            ax.barh(y + 0.2, signed_log(pred), 0.4, label="twin")
+            ax.barh(y - 0.2, signed_log(th), 0.4, label="thesis")
         axes[0].legend(fontsize=8)
         den = self.anova[measures[0]]["filter"]["df"][1]
         fig.suptitle(f"Chapter 6 main effects: adaptive simulated subjects (F(1,{den}) = "
@@ -407,6 +406,28 @@ class PopulationResult:
         )
 
 
+def signed_log(f: ArrayLike) -> FloatArray:
+    """sign(F) log10(1 + |F|): F values from 0.1 to 500 of either sign on one axis."""
+    a = np.asarray(f, dtype=float)
+    return np.sign(a) * np.log10(1 + np.abs(a))
+
+
+def effect_axes(measures: list[str], height: float) -> tuple[Any, Any]:
+    """Return a figure with one axis per factor of :data:`FACTORS`, measures down the side.
+
+    The x axis is :func:`signed_log` of F; returns the figure and its axes.
+    """
+    from twin.plotting import pyplot
+
+    fig, axes = pyplot().subplots(1, len(FACTORS), figsize=(13, height), sharey=True)
+    for ax, f in zip(axes, FACTORS, strict=True):
+        ax.axvline(0, color="k", lw=0.5)
+        ax.set_title(f"{f} ({FACTORS[f][1]} vs {FACTORS[f][0]})", fontsize=9)
+        ax.set_xlabel("sign(effect) log10(1 + F)", fontsize=8)
+    axes[0].set_yticks(np.arange(len(measures)), measures, fontsize=8)
+    return fig, axes
+
+
 def run_population(
     n_subjects: int = 6,
     seed: int = 0,
@@ -431,19 +452,41 @@ def run_population(
         When a subject failed (named with its number and seed).
 
     """
+    adapted = checked_settings(adapted, run_to_run_sd)
+    with using(scheduler) as engine:
+        flown = engine.map(fly_subject, *population_tasks(n_subjects, seed, adapted, run_to_run_sd),
+                           "subjects", progress).values()  # fmt: skip
+    return population_result(flown, seed, adapted, run_to_run_sd)
+
+
+def checked_settings(adapted: tuple[str, ...], run_to_run_sd: float) -> tuple[str, ...]:
+    """Check a population's settings before any subject flies; return the adapted names.
+
+    Raises
+    ------
+    SignalError
+        A run-to-run variation out of [0, 1] (or NaN), or a bad choice of adapted names.
+
+    """
     if not 0 <= run_to_run_sd <= 1:  # also refuses NaN
         raise SignalError(f"run-to-run variation must be a log-normal sd in [0, 1]; "
                           f"got {run_to_run_sd}")  # fmt: skip
-    adapted = adapted_names(adapted)
+    return adapted_names(adapted)
+
+
+def population_tasks(
+    n_subjects: int, seed: int, adapted: tuple[str, ...], run_to_run_sd: float
+) -> tuple[list[tuple], list[dict[str, int]]]:
+    """Arguments of :func:`fly_subject` per subject of population ``seed``, and their names."""
     subs = subjects(n_subjects, seed)
-    with using(scheduler) as engine:
-        flown = engine.map(
-            fly_subject,
-            [(s, seed, adapted, run_to_run_sd) for s in subs],
-            [{"subject": k, "seed": seed} for k in range(len(subs))],
-            "subjects",
-            progress,
-        ).values()
+    return ([(s, seed, adapted, run_to_run_sd) for s in subs],
+            [{"subject": s.number, "seed": seed} for s in subs])  # fmt: skip
+
+
+def population_result(
+    flown: list[list[dict[str, float]]], seed: int, adapted: tuple[str, ...], run_to_run_sd: float
+) -> PopulationResult:
+    """Assemble the subjects' rows (:func:`fly_subject`'s, in subject order) and their ANOVA."""
     rows = [row for r in flown for row in r]
     measures = tuple(m for m in COMPARED if m not in ADAPTED or m in adapted)
     return PopulationResult(rows, anova(rows, measures), seed, adapted, run_to_run_sd)
