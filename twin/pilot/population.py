@@ -34,7 +34,9 @@ Eq 5.10 changes the predicted var(e) by parts per million, so the noise factor i
 in this model (its "no effect" agrees with the thesis by construction); behind the filter the
 adapted loop's gain falls slowly through 0 dB (about -0.5 in log-log between 1 and 3 rad/s),
 so the target crossover moves much with small parameter changes (with K_m = 0 the target and
-disturbance loops coincide), and a few subjects cross over higher behind the filter. With
+disturbance loops coincide), and a few subjects cross over higher behind the filter; a
+population finds the effect about as often as the thesis' own F predicts (a replication over
+populations: :mod:`twin.pilot.replication`). With
 only the equalisation adapted (``adapted=EQUALISATION``, the model before the neuromuscular
 tuning adapted) the filter's effect on var(u) went either way (24 of 45 subjects lower), so
 no population showed it; with the tuning adapted it is lower for 43 of 45.

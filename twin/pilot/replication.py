@@ -14,6 +14,8 @@ and main effect:
   probability* :func:`agreement_probability`;
 - whether so few agreements are plausible: the binomial probability of at most that many
   (below 0.05: the twin is farther from the thesis than the thesis' own sampling explains).
+  Each effect is tested on its own: of 36 effects, about two are marked by chance even if
+  the twin were the thesis' subjects.
 
 The replication probability (an "observed power", Cohen 1988; stated as an assumption): a
 factor of two levels within subjects has F(1, n - 1) = t^2, with t the paired t statistic of
