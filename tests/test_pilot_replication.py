@@ -107,14 +107,15 @@ def test_a_replication_refuses_one_population_and_mixed_settings():
         run_populations(2, run_to_run_sd=float("nan"))
 
 
+def fake_fly(subject, seed, adapted, sd):
+    """Planted rows for one subject, seeded by population and subject, in place of flying."""
+    rows = planted_rows(1000 * seed + subject.number, subjects=1)
+    return [{**r, "subject": subject.number} for r in rows]
+
+
 def test_run_populations_flies_each_population_as_run_population_does(monkeypatch):
     """All subjects of all populations are one map: each population must still be the one
     ``run_population`` gives for its seed (a subject's rows stand in for flying it)."""
-
-    def fake_fly(subject, seed, adapted, sd):
-        rows = planted_rows(1000 * seed + subject.number, subjects=1)
-        return [{**r, "subject": subject.number} for r in rows]
-
     monkeypatch.setattr(population, "fly_subject", fake_fly)
     monkeypatch.setattr(replication, "fly_subject", fake_fly)
     rep, results = run_populations(2, 3, seed=5)
@@ -144,3 +145,20 @@ def test_the_thesis_f_within_the_twins_spread_is_signed_only_where_the_thesis_ga
     assert not effect(43.36, "-", spread).thesis_within
     assert effect(5.0, None, spread).thesis_within  # no sign: against |F| in [2.4, 9.6]
     assert not effect(0.5, None, spread).thesis_within
+
+
+def test_cli_populations_json_and_figure(monkeypatch, tmp_path, capsys):
+    """``--populations 2 --json --plot``: the summary, each population's ANOVA, the figure
+    (a subject's rows stand in for flying it)."""
+    monkeypatch.setattr(replication, "fly_subject", fake_fly)
+    png = tmp_path / "rep.png"
+    code = main(["pilot", "experiment", "--pilot", "adaptive", "--populations", "2",
+                 "--subjects", "3", "--seed", "4", "--scheduler", "inline", "--json",
+                 "--plot", str(png)])  # fmt: skip
+    assert code == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["seeds"] == [4, 5] and doc["subjects"] == 3
+    assert [p["seed"] for p in doc["populations"]] == [4, 5]
+    assert set(doc["populations"][0]["anova"]) == set(doc["replication"]) == set(COMPARED)
+    assert doc["replication"]["k_v"]["filter"]["populations"] == 2
+    assert png.stat().st_size > 10_000

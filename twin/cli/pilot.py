@@ -299,11 +299,15 @@ def _replication(args: argparse.Namespace) -> int:
     from twin.pilot.replication import run_populations
 
     with common.engine(args) as engine:
-        rep, _ = run_populations(args.populations, args.subjects, args.seed,
-                                 common.progress(args), engine, _adapted(args))  # fmt: skip
+        rep, results = run_populations(args.populations, args.subjects, args.seed,
+                                       common.progress(args), engine, _adapted(args))  # fmt: skip
     if args.plot:
         pyplot().close(rep.plot(args.plot))
-    print(json.dumps(rep.to_dict(), indent=2) if args.json else rep.format_table())
+    if args.json:  # the summary, and each population's ANOVA as a single one prints it
+        per = [{"seed": r.seed, "anova": r.anova, "agreement": r.agreement()} for r in results]
+        print(json.dumps({**rep.to_dict(), "populations": per}, indent=2))
+    else:
+        print(rep.format_table())
     return 0
 
 
