@@ -4,8 +4,9 @@
    <= 60 s on this 2-core machine); over 20 seeded populations of nine subjects (the
    thesis' participants), how often each main effect of Tables 6.4-6.7 agrees with the thesis
    (direction and p < 0.05 where it found an effect, p >= 0.05 where not), beside how often
-   it would if the true effect were the thesis' own F (:mod:`twin.pilot.replication`), and
-   the twin's F over populations (median, 5-95 %; figure ``bench-chapter6-replication.png``);
+   it would if the true effect were the thesis' own F, the twin's standardised effects over
+   populations (median, 5-95 %) and whether the thesis is a plausible draw of them
+   (:mod:`twin.pilot.replication`; figure ``out/bench-chapter6-replication.png``);
    once with the default run-to-run variation of the adapted parameters (10 %), once (10
    populations) with half of it, as the variation is an assumption and the ANOVA's power
    depends on it.
@@ -22,6 +23,7 @@
 """
 
 import time
+from pathlib import Path
 
 import numpy as np
 
@@ -36,6 +38,8 @@ from twin.tasks.engine import Engine
 from twin.thesis import TABLES_6_4_TO_6_7
 
 REPETITIONS, POPULATIONS, SUBJECTS = 5, 20, 9
+#: Where section 1 draws the replication (``out/`` is not tracked).
+FIGURE = "out/bench-chapter6-replication.png"
 #: Populations whose subjects are adapted without run-to-run variation (section 2).
 EFFECT_POPULATIONS = 5
 
@@ -61,8 +65,9 @@ def populations(sd: float, n: int) -> None:
           "every population")  # fmt: skip
     print(rep.format_table())
     if sd == ADAPTATION_SD:
-        rep.plot("bench-chapter6-replication.png")
-        print("figure: bench-chapter6-replication.png")
+        Path("out").mkdir(exist_ok=True)
+        rep.plot(FIGURE)
+        print(f"figure: {FIGURE}")
 
 
 def subject_effects() -> None:

@@ -42,9 +42,15 @@ def test_the_agreement_probability_grows_with_the_subjects_and_refuses_bad_input
         agreement_probability(5.0, True, 1)
 
 
+#: Noise per cell of the planted rows; a factor's marginal means (four cells each) then differ
+#: by noise of sd NOISE * sqrt(1 / 2) per subject.
+NOISE = 0.3
+
+
 def planted_rows(seed: int, subjects: int = 9, reversed_measure: str = "k_v") -> list[dict]:
-    """Rows with the thesis' filter directions planted (effect 1, noise sd 0.3, subject
-    offsets sd 1), no delay or noise effect, and ``reversed_measure``'s filter effect reversed."""
+    """Rows with every filter effect planted at the thesis' own standardised size and direction
+    (d_z = sqrt(F / 9): the effect is d_z times the marginal difference's noise sd), no delay
+    or noise effect, and ``reversed_measure``'s filter effect reversed; subject offsets sd 1."""
     rng = np.random.default_rng(seed)
     rows = []
     for s in range(1, subjects + 1):
@@ -53,44 +59,72 @@ def planted_rows(seed: int, subjects: int = 9, reversed_measure: str = "k_v") ->
             lv = levels(n)
             values = {}
             for m in COMPARED:
-                sign = -1.0 if TABLES_6_4_TO_6_7[m]["filter"][1] == "-" else 1.0
-                sign *= -1.0 if m == reversed_measure else 1.0
-                values[m] = offset + sign * lv["filter"] + rng.normal(0, 0.3)
+                f, direction = TABLES_6_4_TO_6_7[m]["filter"]
+                size = np.sqrt(f / 9) * NOISE * np.sqrt(0.5) * (-1.0 if direction == "-" else 1.0)
+                size *= -1.0 if m == reversed_measure else 1.0
+                values[m] = offset + size * lv["filter"] + rng.normal(0, NOISE)
             rows.append({"subject": s, "condition": n, **lv, **values})
     return rows
 
 
-def test_a_replication_summarises_planted_populations_and_flags_a_reversed_effect(tmp_path):
-    """Five populations with the filter effects planted in the thesis' direction except
-    K_v's (reversed): var(u)'s and t_lead's agree in 5 of 5 and are plausible; K_v's agrees in
-    none, and with the thesis' F 43.36 (almost certain to agree) that is flagged as the
-    twin's; the signed F carry the planted directions; JSON, table and figure."""
+def test_a_replication_of_planted_populations_flags_only_a_reversed_effect(tmp_path):
+    """Eight populations with the filter effects planted at the thesis' own size and direction
+    (Tables 6.4-6.7), K_v's reversed: the thesis is a plausible draw (p >= 0.05) for var(u)'s
+    and t_lead's filter effects and for every delay and noise effect of the three; for K_v's
+    it is not (p < 0.001): the populations' K_v rose. Agreements with the thesis: t_lead's
+    (thesis F 60.96) 8 of 8, K_v's none. JSON, table and figure."""
     measures = ("var_u", "k_v", "t_lead")
     results = [PopulationResult(rows, anova(rows, measures), seed)
-               for seed in range(5) for rows in [planted_rows(seed)]]  # fmt: skip
+               for seed in range(8) for rows in [planted_rows(seed)]]  # fmt: skip
     rep = replicate(results)
-    for m in measures:
-        e = rep.effect(m, "filter")
-        planted = TABLES_6_4_TO_6_7[m]["filter"][1]
-        if m == "k_v":
-            assert e.agreed == 0 and not e.plausible and e.p_so_few < 1e-6
-            assert all(f > 0 for f in e.signed_f)  # reversed: K_v rose
-        else:
-            assert e.agreed == 5 and e.plausible, m
-            assert all((f < 0) == (planted == "-") for f in e.signed_f), m
-    flagged = [f"{e.measure}/{e.factor}" for e in rep.implausible()]
-    assert [f for f in flagged if f.endswith("/filter")] == ["k_v/filter"]
+    k_v = rep.effect("k_v", "filter")
+    assert k_v.p_draw < 1e-3 and not k_v.plausible and k_v.agreed == 0
+    assert all(d > 0 for d in k_v.d_z)  # reversed: K_v rose
+    assert rep.effect("t_lead", "filter").agreed == 8
+    for e in rep.effects:
+        if e.measure != "k_v" or e.factor != "filter":
+            assert e.plausible, (e.measure, e.factor, e.p_draw)
     doc = json.loads(json.dumps(rep.to_dict()))
-    k_v = doc["replication"]["k_v"]["filter"]
-    assert k_v["thesis_F"] == 43.36 and k_v["agreed"] == 0 and k_v["populations"] == 5
-    assert k_v["signed_F_5_95"][0] <= k_v["signed_F_median"] <= k_v["signed_F_5_95"][1]
-    assert doc["seeds"] == list(range(5)) and doc["implausible"] == flagged
+    d = doc["replication"]["k_v"]["filter"]
+    assert d["thesis_F"] == 43.36 and d["thesis_d_z"] == [-np.sqrt(43.36 / 9)]
+    assert d["agreed"] == 0 and d["populations"] == 8
+    assert d["d_z_5_95"][0] <= d["d_z_median"] <= d["d_z_5_95"][1]
+    assert doc["seeds"] == list(range(8)) and doc["implausible"] == ["k_v/filter"]
     table = rep.format_table()
-    assert "<- the twin's" in table.splitlines()[2 + measures.index("k_v") * 3]
+    assert table.splitlines()[2 + measures.index("k_v") * 3].endswith("<- differs")
     assert rep.plot(str(tmp_path / "rep.png")) is not None
     assert (tmp_path / "rep.png").stat().st_size > 10_000
     with pytest.raises(SignalError, match="no effect 'k_x' x 'filter'; measures: "):
         rep.effect("k_x", "filter")
+
+
+@pytest.mark.parametrize("scale", [1.0, 1.5])
+def test_the_predictive_p_is_uniform_when_the_new_draw_comes_from_the_same_distribution(scale):
+    """4000 sets of 20 normal draws and one more (sd ``scale`` times theirs): the fraction
+    with p < 0.05 is 0.05 and with p < 0.5 is 0.5, within 4 binomial sd."""
+    from twin.pilot.replication import predictive_p
+
+    rng = np.random.default_rng(5)
+    p = np.array([predictive_p(rng.normal(3, 1, 20), rng.normal(3, scale), scale)
+                  for _ in range(4000)])  # fmt: skip
+    for level in (0.05, 0.5):
+        assert abs(np.mean(p < level) - level) < 4 * np.sqrt(level * (1 - level) / 4000)
+    with pytest.raises(SignalError, match="at least 2 finite draws"):
+        predictive_p([1.0, float("nan")], 0.0)
+
+
+def test_the_thesis_standardised_effect_has_its_direction_or_both_signs():
+    from twin.pilot.replication import EffectReplication
+
+    def effect(f, direction):
+        return EffectReplication("m", "filter", f, direction, (-9.0, -16.0), 9, 0, 0.5)
+
+    assert effect(9.0, "-").thesis_d_z == (-1.0,)
+    assert effect(9.0, "+").thesis_d_z == (1.0,)
+    assert effect(9.0, None).thesis_d_z == (-1.0, 1.0)
+    assert effect(9.0, "-").d_z.tolist() == [-1.0, -4 / 3]
+    # +1 is far from the draws at -1 and -1.33; -1 is among them, so "either sign" is plausible
+    assert effect(9.0, "+").p_draw < effect(9.0, None).p_draw == effect(9.0, "-").p_draw
 
 
 def test_a_replication_refuses_one_population_and_mixed_settings():
@@ -101,6 +135,11 @@ def test_a_replication_refuses_one_population_and_mixed_settings():
     other = PopulationResult(rows, anova(rows), 1, run_to_run_sd=0.05)
     with pytest.raises(SignalError, match="populations differ"):
         replicate([one, other])
+    with pytest.raises(SignalError, match=r"distinct populations; seeds \[0, 0\] repeat"):
+        replicate([one, one])
+    fewer = PopulationResult(rows, anova(rows, ("k_v",)), 1)
+    with pytest.raises(SignalError, match="or measures"):
+        replicate([one, fewer])
     with pytest.raises(SignalError, match="at least 2 populations"):
         run_populations(1)
     with pytest.raises(SignalError, match="run-to-run variation must be"):
@@ -133,20 +172,6 @@ def test_cli_populations_only_with_adaptive_subjects(capsys):
     assert "--populations: must be an integer in [1, 1,000]" in capsys.readouterr().err
 
 
-def test_the_thesis_f_within_the_twins_spread_is_signed_only_where_the_thesis_gave_a_sign():
-    from twin.pilot.replication import EffectReplication
-
-    def effect(f, direction, signed):
-        return EffectReplication("m", "filter", f, direction, signed, 0, 0.5)
-
-    spread = (-10.0, -8.0, -6.0, -4.0, -2.0)
-    assert effect(5.98, "-", spread).thesis_within  # -5.98 within [-9.6, -2.4]
-    assert not effect(5.98, "+", spread).thesis_within  # +5.98 is not
-    assert not effect(43.36, "-", spread).thesis_within
-    assert effect(5.0, None, spread).thesis_within  # no sign: against |F| in [2.4, 9.6]
-    assert not effect(0.5, None, spread).thesis_within
-
-
 def test_cli_populations_json_and_figure(monkeypatch, tmp_path, capsys):
     """``--populations 2 --json --plot``: the summary, each population's ANOVA, the figure
     (a subject's rows stand in for flying it)."""
@@ -158,7 +183,7 @@ def test_cli_populations_json_and_figure(monkeypatch, tmp_path, capsys):
     assert code == 0
     doc = json.loads(capsys.readouterr().out)
     assert doc["seeds"] == [4, 5] and doc["subjects"] == 3
-    assert [p["seed"] for p in doc["populations"]] == [4, 5]
-    assert set(doc["populations"][0]["anova"]) == set(doc["replication"]) == set(COMPARED)
+    assert [p["seed"] for p in doc["per_population"]] == [4, 5]
+    assert set(doc["per_population"][0]["anova"]) == set(doc["replication"]) == set(COMPARED)
     assert doc["replication"]["k_v"]["filter"]["populations"] == 2
     assert png.stat().st_size > 10_000

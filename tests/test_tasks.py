@@ -99,8 +99,8 @@ def test_a_failing_task_is_named_and_the_others_kept(where, cluster):
 
 
 def test_monte_carlo_on_the_cluster_equals_one_process(cluster):
-    a = monte_carlo(16, seed=4, batch=8, fit_runs=1)
-    b = monte_carlo(16, seed=4, batch=8, fit_runs=1, scheduler=cluster)
+    a = monte_carlo(8, seed=4, batch=4, fit_runs=1)  # two tasks
+    b = monte_carlo(8, seed=4, batch=4, fit_runs=1, scheduler=cluster)
     for method in ("fc", "arx"):
         for resp in ("pe", "px"):
             assert np.array_equal(getattr(a, method)[resp], getattr(b, method)[resp])

@@ -76,8 +76,8 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
         type=common.figure_file,
         help="save the measures per condition as Fig 6.5-6.9 (fixed pilot); with --pilot "
         "adaptive, the ANOVA's effects beside the thesis' here and the measures per condition "
-        "over subjects in PNG's name + '-conditions.png'; with --populations, the F "
-        "distribution per effect beside the thesis'",
+        "over subjects in PNG's name + '-conditions.png'; with --populations, the standardised "
+        "effects over populations beside the thesis'",
     )
     exp.add_argument(
         "--pilot",
@@ -97,10 +97,10 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
     exp.add_argument(
         "--populations",
         type=common.count(1, MAX_POPULATIONS),
-        default=1,
         help="with --pilot adaptive: seeded populations (seeds SEED, SEED + 1, ...); from 2 on, "
-        "each effect's F over populations (median, 5-95 %%) beside the thesis', and its "
-        "agreements beside those the thesis' own F predicts (default 1; 20 for a distribution)",
+        "each effect's standardised size over populations (median, 5-95 %%) beside the "
+        "thesis', and whether the thesis is a plausible draw of them (default 1; 20 for a "
+        "distribution: about 23 min on two cores)",
     )
     exp.set_defaults(func=_cmd_experiment)
     ada = cmds.add_parser(
@@ -264,11 +264,12 @@ def _cmd_experiment(args: argparse.Namespace) -> int:
     if args.fixed_neuromuscular and args.pilot != "adaptive":
         raise UsageError("--fixed-neuromuscular chooses what adaptive subjects adapt: give it "
                          "with --pilot adaptive")  # fmt: skip
-    if args.populations > 1:
+    if args.populations is not None:
         if args.pilot != "adaptive":
             raise UsageError("--populations counts populations of adaptive subjects: give it "
                              "with --pilot adaptive")  # fmt: skip
-        return _replication(args)
+        if args.populations > 1:
+            return _replication(args)
     if args.pilot == "adaptive":
         from twin.pilot.population import run_population
 
@@ -305,7 +306,7 @@ def _replication(args: argparse.Namespace) -> int:
         pyplot().close(rep.plot(args.plot))
     if args.json:  # the summary, and each population's ANOVA as a single one prints it
         per = [{"seed": r.seed, "anova": r.anova, "agreement": r.agreement()} for r in results]
-        print(json.dumps({**rep.to_dict(), "populations": per}, indent=2))
+        print(json.dumps({**rep.to_dict(), "per_population": per}, indent=2))
     else:
         print(rep.format_table())
     return 0

@@ -414,18 +414,33 @@ def signed_log(f: ArrayLike) -> FloatArray:
     return np.sign(a) * np.log10(1 + np.abs(a))
 
 
-def effect_axes(measures: list[str], height: float) -> tuple[Any, Any]:
+def effect_axes(
+    measures: list[str], height: float, xlabel: str = "sign(effect) log10(1 + F)"
+) -> tuple[Any, Any]:
     """Return a figure with one axis per factor of :data:`FACTORS`, measures down the side.
 
-    The x axis is :func:`signed_log` of F; returns the figure and its axes.
+    Parameters
+    ----------
+    measures : list of str
+        The measures, top to bottom.
+    height : float
+        Figure height [in].
+    xlabel : str
+        What the x axes show (:func:`signed_log` of F by default); they share one scale.
+
+    Returns
+    -------
+    (matplotlib.figure.Figure, array of matplotlib.axes.Axes)
+
     """
     from twin.plotting import pyplot
 
-    fig, axes = pyplot().subplots(1, len(FACTORS), figsize=(13, height), sharey=True)
+    fig, axes = pyplot().subplots(1, len(FACTORS), figsize=(13, height), sharey=True,
+                                  sharex=True)  # fmt: skip
     for ax, f in zip(axes, FACTORS, strict=True):
         ax.axvline(0, color="k", lw=0.5)
         ax.set_title(f"{f} ({FACTORS[f][1]} vs {FACTORS[f][0]})", fontsize=9)
-        ax.set_xlabel("sign(effect) log10(1 + F)", fontsize=8)
+        ax.set_xlabel(xlabel, fontsize=8)
     axes[0].set_yticks(np.arange(len(measures)), measures, fontsize=8)
     return fig, axes
 

@@ -1,30 +1,31 @@
-"""Chapter 6 replicated: how often a population should agree with the thesis, and how often it does.
+"""Chapter 6 replicated: whether the thesis' result is a plausible draw of the twin's.
 
-An ANOVA over nine subjects is a draw. Even the thesis' own participants, flown again, would
-not give p < 0.05 every time for an effect whose F was 5.98 (the 1 Hz filter on the target
-crossover, Table 6.5): F = 5.32 is p = 0.05 at df (1, 8). So one simulated population that
-misses such an effect says little, and one that matches it says as little. This module
-flies several seeded populations (:mod:`twin.pilot.population`) and compares, per measure
-and main effect:
+An ANOVA over nine subjects is a draw, the thesis' too. Even the thesis' own participants,
+flown again, would not give p < 0.05 every time for an effect whose F was 5.98 (the 1 Hz
+filter on the target crossover, Table 6.5): F = 5.32 is p = 0.05 at df (1, 8). So one
+simulated population that misses such an effect says little, and one that matches it says as
+little. This module flies several seeded populations (:mod:`twin.pilot.population`) and
+compares, per measure and main effect, the twin's populations with the thesis' one:
 
-- the distribution of the twin's F over populations (median and 5-95 %, signed by the
-  effect's direction) with the thesis' F;
-- how many populations agree with the thesis (:meth:`PopulationResult.agreement`) with how
-  many would if the true effect were the thesis' own estimate: the *replication
-  probability* :func:`agreement_probability`;
-- whether so few agreements are plausible: the binomial probability of at most that many
-  (below 0.05: the twin is farther from the thesis than the thesis' own sampling explains).
-  Each effect is tested on its own: of 36 effects, about two are marked by chance even if
-  the twin were the thesis' subjects.
-
-The replication probability (an "observed power", Cohen 1988; stated as an assumption): a
-factor of two levels within subjects has F(1, n - 1) = t^2, with t the paired t statistic of
-the subjects' differences between the levels. Its noncentrality for n subjects is estimated
-from the thesis' F as delta = sqrt(F n / 9) (nine participants, §6.3.4). Where the thesis
-found an effect, agreement is t beyond the two-sided 5 % point in the thesis' direction;
-where it found none, |t| within it. The estimate takes the thesis' F at face value; F is
-biased upward as an estimate of delta^2 (E[F] is about 1 + delta^2), so these probabilities
-favour the thesis' effects being found.
+- **effect size**: a factor of two levels within subjects has F(1, n - 1) = t^2, with t the
+  paired t statistic of the subjects' differences between its levels (their marginal means).
+  d_z = t / sqrt(n), signed by the effect's direction, is the standardised effect (Cohen's
+  d_z), comparable across numbers of subjects; the thesis' is sqrt(F / 9) with its direction
+  (nine participants, §6.3.4; where it found no effect it gave no direction, so both signs);
+- **is the thesis a plausible draw of the twin?** If the twin were the thesis' population,
+  the thesis' d_z would be one more draw from the distribution of the twin's d_z over
+  populations. The predictive test (a Student-t prediction interval from the populations'
+  mean and sd, the thesis' draw scaled by its own sample size) gives the probability of a
+  draw at least as far out; below 0.05 the twin differs from the thesis by more than the two
+  samplings explain, in either direction (an effect too weak, or too strong and uniform: the
+  twin's subjects may differ from each other less than people do). Each effect is tested on
+  its own: of 36, about two fall below 0.05 by chance even if the twin were the thesis;
+- **agreements**, descriptive: how many populations agree with the thesis
+  (:meth:`PopulationResult.agreement`: p < 0.05 in its direction where it found the effect,
+  p >= 0.05 where not), beside how many would if the true effect were exactly the thesis'
+  estimate (:func:`agreement_probability`, the power of the paired t-test at the thesis' F).
+  Not a test: the thesis' F is itself a draw (its 95 % interval for var(u)'s F 15.0 allows
+  agreement probabilities from 0.17 to 1).
 
 Examples
 --------
@@ -39,8 +40,10 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 from scipy import stats
 
 from twin.errors import SignalError
@@ -54,17 +57,18 @@ from twin.pilot.population import (
     fly_subject,
     population_result,
     population_tasks,
-    signed_log,
 )
 from twin.progress import ProgressFn
 from twin.tasks.engine import Engine, using
 from twin.thesis import TABLES_6_4_TO_6_7
 
+FloatArray = NDArray[np.float64]
+
 #: Participants of the thesis' experiment (§6.3.4; the ANOVA's df (1, 8)).
 THESIS_SUBJECTS = 9
 #: Significance level of Tables 6.4-6.7.
 ALPHA = 0.05
-#: Below this binomial probability of so few agreements, the difference is the twin's.
+#: Below this probability of a draw as far out, the thesis is not a plausible draw of the twin.
 PLAUSIBLE = 0.05
 
 
@@ -102,6 +106,43 @@ def agreement_probability(
     return float(stats.nct.cdf(t_crit, df, delta) - stats.nct.cdf(-t_crit, df, delta))
 
 
+def predictive_p(draws: ArrayLike, value: float, scale: float = 1.0) -> float:
+    """Two-sided probability that one more draw lies at least as far from the draws' mean.
+
+    Student-t prediction interval: with the draws' mean m, sd s and number N, the new draw
+    ``value`` (whose spread is ``scale`` times the draws') gives
+    t = (value - m) / (s sqrt(1 / N + scale^2)) on N - 1 degrees of freedom.
+
+    Parameters
+    ----------
+    draws : array_like
+        At least 2 draws.
+    value : float
+        The new draw.
+    scale : float
+        Its sd relative to the draws' sd.
+
+    Returns
+    -------
+    float
+
+    Examples
+    --------
+    >>> round(predictive_p([-1.0, 0.0, 1.0], 0.0), 2)
+    1.0
+
+    """
+    x = np.asarray(draws, dtype=float)
+    if x.size < 2 or not np.all(np.isfinite(x)):
+        raise SignalError(f"a predictive test needs at least 2 finite draws; got {x.tolist()}")
+    sd = float(np.std(x, ddof=1))
+    spread = sd * np.sqrt(1.0 / x.size + scale**2)
+    if spread == 0:
+        return 1.0 if value == float(x.mean()) else 0.0
+    t = abs(value - float(x.mean())) / spread
+    return float(2 * stats.t.sf(t, x.size - 1))
+
+
 @dataclass(frozen=True)
 class EffectReplication:
     """One main effect over several populations, beside the thesis.
@@ -111,11 +152,13 @@ class EffectReplication:
     measure, factor : str
         The measure (:data:`twin.pilot.population.COMPARED`) and the factor.
     thesis_f : float
-        The thesis' F (Tables 6.4-6.7).
+        The thesis' F (Tables 6.4-6.7, nine subjects).
     thesis_direction : str or None
         ``"+"``/``"-"`` where the thesis found the effect, None where it found none.
     signed_f : tuple of float
         The twin's F per population, negative where its direction is ``"-"``.
+    subjects : int
+        Subjects per population.
     agreed : int
         Populations that agree with the thesis.
     probability : float
@@ -128,6 +171,7 @@ class EffectReplication:
     thesis_f: float
     thesis_direction: str | None
     signed_f: tuple[float, ...]
+    subjects: int
     agreed: int
     probability: float
 
@@ -138,48 +182,52 @@ class EffectReplication:
 
     @property
     def expected(self) -> float:
-        """Agreements expected if the true effect were the thesis' estimate."""
+        """Agreements expected if the true effect were exactly the thesis' estimate."""
         return self.probability * self.populations
 
     @property
-    def p_so_few(self) -> float:
-        """Binomial probability of at most :attr:`agreed` agreements at :attr:`probability`."""
-        return float(stats.binom.cdf(self.agreed, self.populations, self.probability))
+    def d_z(self) -> FloatArray:
+        """The twin's standardised effect per population: sign(effect) sqrt(F / n)."""
+        f = np.asarray(self.signed_f, dtype=float)
+        return np.sign(f) * np.sqrt(np.abs(f) / self.subjects)
+
+    @property
+    def thesis_d_z(self) -> tuple[float, ...]:
+        """The thesis' standardised effect: one value with its direction, or both signs."""
+        d = float(np.sqrt(self.thesis_f / THESIS_SUBJECTS))
+        if self.thesis_direction is None:
+            return (-d, d)
+        return (-d,) if self.thesis_direction == "-" else (d,)
+
+    @property
+    def p_draw(self) -> float:
+        """Probability of a draw of the twin at least as far out as the thesis'.
+
+        :func:`predictive_p` of the thesis' d_z (either sign where the thesis gave none),
+        whose sampling spread is sqrt(n / 9) times a population's of n subjects.
+        """
+        scale = float(np.sqrt(self.subjects / THESIS_SUBJECTS))
+        return max(predictive_p(self.d_z, d, scale) for d in self.thesis_d_z)
 
     @property
     def plausible(self) -> bool:
-        """Whether the agreements are within the thesis' own sampling (:data:`PLAUSIBLE`)."""
-        return self.p_so_few >= PLAUSIBLE
+        """Whether the thesis' result is a plausible draw of the twin (:data:`PLAUSIBLE`)."""
+        return self.p_draw >= PLAUSIBLE
 
     def quantiles(self) -> tuple[float, float, float]:
-        """5 %, median and 95 % of the signed F over populations."""
-        q = np.percentile(self.signed_f, [5, 50, 95])
+        """5 %, median and 95 % of the twin's d_z over populations."""
+        q = np.percentile(self.d_z, [5, 50, 95])
         return float(q[0]), float(q[1]), float(q[2])
-
-    @property
-    def thesis_within(self) -> bool:
-        """Whether the thesis' F lies within the twin's 5-95 % over populations.
-
-        Signed where the thesis found the effect; where it found none (it gives no direction)
-        its F against the 5-95 % of the twin's unsigned F.
-        """
-        if self.thesis_direction is None:
-            lo, hi = np.percentile(np.abs(self.signed_f), [5, 95])
-            return bool(lo <= self.thesis_f <= hi)
-        lo, _, hi = self.quantiles()
-        signed = -self.thesis_f if self.thesis_direction == "-" else self.thesis_f
-        return bool(lo <= signed <= hi)
 
     def to_dict(self) -> dict[str, object]:
         """JSON-ready."""
         lo, med, hi = self.quantiles()
         return {"thesis_F": self.thesis_f, "thesis_direction": self.thesis_direction,
-                "signed_F": list(self.signed_f), "signed_F_median": med,
-                "signed_F_5_95": [lo, hi], "thesis_within_5_95": self.thesis_within,
-                "agreed": self.agreed,
+                "thesis_d_z": list(self.thesis_d_z), "signed_F": list(self.signed_f),
+                "d_z_median": med, "d_z_5_95": [lo, hi], "p_draw": self.p_draw,
+                "plausible": self.plausible, "agreed": self.agreed,
                 "populations": self.populations, "agreement_probability": self.probability,
-                "expected_agreements": self.expected, "p_so_few": self.p_so_few,
-                "plausible": self.plausible}  # fmt: skip
+                "expected_agreements": self.expected}  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -217,7 +265,7 @@ class Replication:
                           f"factors: {', '.join(FACTORS)}")  # fmt: skip
 
     def implausible(self) -> list[EffectReplication]:
-        """Return the effects with fewer agreements than the thesis' own sampling explains."""
+        """Return the effects where the thesis is not a plausible draw of the twin."""
         return [e for e in self.effects if not e.plausible]
 
     def to_dict(self) -> dict[str, object]:
@@ -230,36 +278,38 @@ class Replication:
                 "implausible": [f"{e.measure}/{e.factor}" for e in self.implausible()]}  # fmt: skip
 
     def format_table(self) -> str:
-        """Plain-text table: the twin's F over populations beside the thesis'."""
+        """Plain-text table: the twin's standardised effects over populations beside the thesis'."""
         n = len(self.seeds)
         lines = [
             f"Chapter 6 replicated by {n} populations of {self.subjects} adaptive subjects "
-            f"(seeds {self.seeds[0]}-{self.seeds[-1]}; run-to-run variation "
-            f"{self.run_to_run_sd:.0%}): signed F (median, 5-95 %) beside the thesis'; "
-            "agreements beside those expected if the thesis' F were the true effect",
-            f"{'measure':30s} {'factor':6s} {'median F':>9s} {'5-95 % F':>17s} | "
-            f"{'thesis F':>9s} within | agree expected  P(so few)",
+            f"(seeds {_seed_list(self.seeds)}; run-to-run variation {self.run_to_run_sd:.0%})",
+            f"{'measure':30s} {'factor':6s} {'twin d_z: median':>16s} {'5-95 %':>13s} | "
+            f"{'thesis d_z':>10s} {'p draw':>7s} | agree expected",
         ]
         for e in self.effects:
             lo, med, hi = e.quantiles()
-            thesis = (("-" if e.thesis_direction == "-" else "+") + f"{e.thesis_f:.2f}"
-                      if e.thesis_direction else f"{e.thesis_f:.2f} ns")  # fmt: skip
+            d = e.thesis_d_z[-1]
+            thesis = f"{d:+.2f}" if e.thesis_direction else f"+-{d:.2f}"
             lines.append(
-                f"{e.measure:30s} {e.factor:6s} {med:+9.2f} {lo:+8.1f} {hi:+8.1f} | "
-                f"{thesis:>9s} {'yes' if e.thesis_within else 'no':>6s} | "
-                f"{e.agreed:2d}/{n:<2d} {e.expected:8.1f}  {e.p_so_few:9.3f}"
-                + ("" if e.plausible else "  <- the twin's")
+                f"{e.measure:30s} {e.factor:6s} {med:+16.2f} {lo:+6.2f} {hi:+6.2f} | "
+                f"{thesis:>10s} {e.p_draw:7.3f} | {e.agreed:2d}/{n:<2d} {e.expected:8.1f}"
+                + ("" if e.plausible else "  <- differs")
             )
         bad = self.implausible()
-        lines.append(f"{len(self.effects) - len(bad)} of {len(self.effects)} main effects "
-                     f"agree as often as the thesis' own F predicts (P(so few) >= "
-                     f"{PLAUSIBLE}); the thesis' F is within the twin's 5-95 % for "
-                     f"{sum(e.thesis_within for e in self.effects)} (signed where it found "
-                     "the effect, unsigned where not)")  # fmt: skip
+        lines += [
+            "d_z: standardised effect, sign(effect) sqrt(F / subjects) (the thesis' F(1, 8) "
+            "with its direction; +- where it found none)",
+            f"p draw: probability that a draw of the twin lies as far from its mean as the "
+            f"thesis' (predictive t); below {PLAUSIBLE}: '<- differs' (of 36, about two by chance)",
+            "agree: populations with p < 0.05 in the thesis' direction where it found the effect, "
+            "p >= 0.05 where not; expected: if the true effect were exactly the thesis' estimate",
+            f"the thesis is a plausible draw of the twin for {len(self.effects) - len(bad)} of "
+            f"{len(self.effects)} main effects",
+        ]
         return "\n".join(lines)
 
-    def plot(self, path: str | None = None):
-        """Signed F per effect over populations (5-95 % and median) beside the thesis' F.
+    def plot(self, path: str | None = None) -> Any:
+        """Standardised effects over populations (5-95 % and median) beside the thesis'.
 
         Parameters
         ----------
@@ -274,44 +324,72 @@ class Replication:
         from twin.plotting import finish
 
         measures = list(dict.fromkeys(e.measure for e in self.effects))
-        fig, axes = effect_axes(measures, 0.35 * len(measures) + 2)
-        crit = float(stats.f.ppf(1 - ALPHA, 1, self.subjects - 1))
+        fig, axes = effect_axes(measures, 0.35 * len(measures) + 2,
+                                "standardised effect d_z = sign sqrt(F / subjects)")  # fmt: skip
+        crit = float(stats.t.ppf(1 - ALPHA / 2, self.subjects - 1) / np.sqrt(self.subjects))
         for ax, factor in zip(axes, FACTORS, strict=True):
             for i, m in enumerate(measures):
                 e = self.effect(m, factor)
-                lo, med, hi = signed_log(e.quantiles())
+                lo, med, hi = e.quantiles()
                 colour = "C0" if e.plausible else "C3"
                 ax.plot([lo, hi], [i, i], color=colour, lw=3, alpha=0.5)
                 ax.plot(med, i, "o", color=colour, ms=5)
-                if e.thesis_direction:
-                    t = e.thesis_f * (-1 if e.thesis_direction == "-" else 1)
-                    ax.plot(signed_log(t), i, "k|", ms=10, mew=2)
-                else:  # no direction given: either side
-                    ax.plot(signed_log([-e.thesis_f, e.thesis_f]), [i, i], "kx", ms=7, mew=1.5)
-            for s in (-1, 1):
-                ax.axvline(signed_log(s * crit), color="0.6", ls=":", lw=1)
+                marker = "k|" if e.thesis_direction else "kx"
+                ax.plot(e.thesis_d_z, [i] * len(e.thesis_d_z), marker, ms=9, mew=2)
+            for sign in (-1, 1):
+                ax.axvline(sign * crit, color="0.6", ls=":", lw=1)
         axes[0].invert_yaxis()
         fig.suptitle(
-            f"{len(self.seeds)} populations of {self.subjects} adaptive subjects: twin's F, "
-            "5-95 % (bar) and median (dot); thesis' F (| significant; x not, either sign); "
-            "dotted: p = 0.05;\nred: fewer agreements than the thesis' own F predicts",
+            f"{len(self.seeds)} populations of {self.subjects} adaptive subjects: twin's d_z, "
+            "5-95 % (bar) and median (dot); thesis' (| found; x not found, either sign); "
+            f"dotted: p = 0.05 for {self.subjects} subjects;\nred: the thesis is not a "
+            f"plausible draw of the twin (predictive p < {PLAUSIBLE})",
             fontsize=9,
         )
         return finish(fig, path, dpi=110)
 
 
+def _seed_list(seeds: Sequence[int]) -> str:
+    """``0-19`` for consecutive seeds, else the list."""
+    s = list(seeds)
+    if s == list(range(s[0], s[0] + len(s))):
+        return f"{s[0]}-{s[-1]}"
+    return ", ".join(map(str, s))
+
+
 def replicate(results: Sequence[PopulationResult]) -> Replication:
-    """Summarise populations flown with the same settings (:func:`run_populations`)."""
+    """Summarise populations flown with the same settings (:func:`run_populations`).
+
+    Parameters
+    ----------
+    results : sequence of PopulationResult
+        At least two populations with distinct seeds, the same number of subjects, adapted
+        parameters, run-to-run variation and measures.
+
+    Returns
+    -------
+    Replication
+
+    Raises
+    ------
+    SignalError
+        Fewer than two populations, repeated seeds, or populations that differ.
+
+    """
     if len(results) < 2:
         raise SignalError(f"a replication needs at least 2 populations; got {len(results)}")
+    seeds = [r.seed for r in results]
+    if len(set(seeds)) != len(seeds):
+        raise SignalError(f"a replication needs distinct populations; seeds {seeds} repeat")
     first = results[0]
     subjects = len({r["subject"] for r in first.rows})
+    want = (subjects, first.adapted, first.run_to_run_sd, tuple(first.anova))
     for r in results[1:]:
-        got = (len({row["subject"] for row in r.rows}), r.adapted, r.run_to_run_sd)
-        want = (subjects, first.adapted, first.run_to_run_sd)
+        got = (len({row["subject"] for row in r.rows}), r.adapted, r.run_to_run_sd,
+               tuple(r.anova))  # fmt: skip
         if got != want:
-            raise SignalError(f"populations differ in subjects, adapted parameters or run-to-run "
-                              f"variation: {got} vs {want}")  # fmt: skip
+            raise SignalError(f"populations differ in subjects, adapted parameters, run-to-run "
+                              f"variation or measures: {got} vs {want}")  # fmt: skip
     effects = []
     for measure in first.anova:
         for factor in FACTORS:
@@ -322,9 +400,9 @@ def replicate(results: Sequence[PopulationResult]) -> Replication:
             agreed = sum(bool(r.agreement()[measure][factor]) for r in results)
             prob = agreement_probability(thesis_f, direction is not None, subjects)
             effects.append(EffectReplication(measure, factor, thesis_f, direction, signed,
-                                             agreed, prob))  # fmt: skip
-    return Replication(tuple(effects), tuple(r.seed for r in results), subjects,
-                       first.adapted, first.run_to_run_sd)  # fmt: skip
+                                             subjects, agreed, prob))  # fmt: skip
+    return Replication(tuple(effects), tuple(seeds), subjects, first.adapted,
+                       first.run_to_run_sd)  # fmt: skip
 
 
 def run_populations(
@@ -340,7 +418,37 @@ def run_populations(
 
     Every subject of every population is one task, so the workers stay busy across
     populations; each population equals :func:`~twin.pilot.population.run_population` with
-    its seed. Returns the summary and the populations.
+    its seed.
+
+    Parameters
+    ----------
+    n_populations : int
+        Populations (at least 2; 20 for a distribution).
+    n_subjects : int
+        Subjects per population (the thesis' nine by default).
+    seed : int
+        The first population's seed.
+    progress : callable, optional
+        Called as subjects finish (:mod:`twin.progress`).
+    scheduler : Engine or str, optional
+        Where the subjects fly (:mod:`twin.tasks.engine`; default this process).
+    adapted : tuple of str
+        What the subjects adapt (:data:`twin.pilot.adapt.ADAPTED`).
+    run_to_run_sd : float
+        Their run-to-run variation (log-normal sd, 0 to 1).
+
+    Returns
+    -------
+    (Replication, list of PopulationResult)
+        The summary and the populations.
+
+    Raises
+    ------
+    SignalError
+        Fewer than two populations or subjects, or a bad setting.
+    TaskError
+        When a subject failed (named with its number and seed).
+
     """
     if n_populations < 2:
         raise SignalError(f"a replication needs at least 2 populations; got {n_populations}")
