@@ -170,6 +170,8 @@ def test_cli_populations_only_with_adaptive_subjects(capsys):
     assert "--populations counts populations of adaptive subjects" in err and "\n" not in err
     assert main(["pilot", "experiment", "--pilot", "adaptive", "--populations", "0"]) == 2
     assert "--populations: must be an integer in [1, 1,000]" in capsys.readouterr().err
+    assert main(["pilot", "experiment", "--pilot", "adaptive", "--runs", "3"]) == 2
+    assert "adaptive subjects fly five repetitions" in capsys.readouterr().err
 
 
 def test_cli_populations_json_and_figure(monkeypatch, tmp_path, capsys):

@@ -60,7 +60,9 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
     exp = cmds.add_parser(
         "experiment",
         parents=[
-            common.seed_parent("seed of the runs"),
+            common.seed_parent(
+                "seed of the runs; with --pilot adaptive, of the subjects (the first population's)"
+            ),
             common.json_parent(),
             common.quiet_parent(),
             common.scheduler_parent(),
@@ -68,8 +70,9 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
         help="the eight Table 6.3 conditions, pilot fixed (their filter, delay and noise are the "
         "experiment's factors: no overrides)",
     )
-    exp.add_argument("--runs", type=common.count(1, MAX_RUNS), default=5,
-                     help=f"runs per condition (default 5; at most {MAX_RUNS})")  # fmt: skip
+    exp.add_argument("--runs", type=common.count(1, MAX_RUNS),
+                     help=f"runs per condition of the fixed pilot (default 5; at most {MAX_RUNS}; "
+                     "adaptive subjects fly the thesis' five repetitions)")  # fmt: skip
     exp.add_argument(
         "--plot",
         metavar="PNG",
@@ -264,6 +267,10 @@ def _cmd_experiment(args: argparse.Namespace) -> int:
     if args.fixed_neuromuscular and args.pilot != "adaptive":
         raise UsageError("--fixed-neuromuscular chooses what adaptive subjects adapt: give it "
                          "with --pilot adaptive")  # fmt: skip
+    if args.runs is not None and args.pilot == "adaptive":
+        raise UsageError("--runs sets the fixed pilot's runs per condition; adaptive subjects "
+                         "fly five repetitions per condition, as the thesis' participants "
+                         "did")  # fmt: skip
     if args.populations is not None:
         if args.pilot != "adaptive":
             raise UsageError("--populations counts populations of adaptive subjects: give it "
@@ -284,8 +291,9 @@ def _cmd_experiment(args: argparse.Namespace) -> int:
         print(json.dumps(p.to_dict(), indent=2) if args.json else p.format_table())
         return 0
     with common.engine(args) as engine:
-        r = run_experiment(runs=args.runs, seed=args.seed, progress=common.progress(args),
-                           fit=True, scheduler=engine)  # fmt: skip
+        runs = 5 if args.runs is None else args.runs
+        r = run_experiment(runs=runs, seed=args.seed, progress=common.progress(args), fit=True,
+                           scheduler=engine)  # fmt: skip
     if args.plot:
         plt = pyplot()
         plt.close(r.plot(args.plot))
