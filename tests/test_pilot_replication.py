@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import copy
 import json
 
 import numpy as np
@@ -111,6 +112,10 @@ def test_the_predictive_p_is_uniform_when_the_new_draw_comes_from_the_same_distr
         assert abs(np.mean(p < level) - level) < 4 * np.sqrt(level * (1 - level) / 4000)
     with pytest.raises(SignalError, match="at least 2 finite draws"):
         predictive_p([1.0, float("nan")], 0.0)
+    with pytest.raises(SignalError, match="the new draw must be finite"):
+        predictive_p([1.0, 2.0], float("nan"))
+    with pytest.raises(SignalError, match="no spread to predict a draw from"):
+        predictive_p([1.0, 1.0, 1.0], 1.0)
 
 
 def test_the_thesis_standardised_effect_has_its_direction_or_both_signs():
@@ -140,6 +145,10 @@ def test_a_replication_refuses_one_population_and_mixed_settings():
     fewer = PopulationResult(rows, anova(rows, ("k_v",)), 1)
     with pytest.raises(SignalError, match="or measures"):
         replicate([one, fewer])
+    flat = copy.deepcopy(one.anova)
+    flat["k_v"]["delay"]["F"] = float("inf")
+    with pytest.raises(SignalError, match=r"k_v x delay: F is not finite in population\(s\) \[1\]"):
+        replicate([one, PopulationResult(rows, flat, 1)])
     with pytest.raises(SignalError, match="at least 2 populations"):
         run_populations(1)
     with pytest.raises(SignalError, match="run-to-run variation must be"):
