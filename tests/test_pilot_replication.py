@@ -198,3 +198,6 @@ def test_cli_populations_json_and_figure(monkeypatch, tmp_path, capsys):
     assert set(doc["per_population"][0]["anova"]) == set(doc["replication"]) == set(COMPARED)
     assert doc["replication"]["k_v"]["filter"]["populations"] == 2
     assert png.stat().st_size > 10_000
+    assert main(["pilot", "experiment", "--pilot", "adaptive", "--populations", "2",
+                 "--subjects", "3", "--scheduler", "inline"]) == 0  # fmt: skip
+    assert "calibrated for populations of 9, the thesis' size; with 3" in capsys.readouterr().out

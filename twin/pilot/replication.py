@@ -316,6 +316,9 @@ class Replication:
             f"the thesis is a plausible draw of the twin for {len(self.effects) - len(bad)} of "
             f"{len(self.effects)} main effects",
         ]
+        if self.subjects != THESIS_SUBJECTS:
+            lines.append(f"(the test is calibrated for populations of {THESIS_SUBJECTS}, the "
+                         f"thesis' size; with {self.subjects} it is approximate)")  # fmt: skip
         return "\n".join(lines)
 
     def plot(self, path: str | None = None) -> Any:
