@@ -368,10 +368,9 @@ class PopulationResult:
         fig, axes = effect_axes(measures, 4.5)
         y = np.arange(len(measures))
         for ax, f in zip(axes, FACTORS, strict=True):
-            pred = [np.sign(1 if self.anova[m][f]["direction"] == "+" else -1)
-                    * self.anova[m][f]["F"] for m in measures]  # fmt: skip
-            th = [(-1 if TABLES_6_4_TO_6_7[m][f][1] == "-" else 1) * TABLES_6_4_TO_6_7[m][f][0]
-                  for m in measures]  # fmt: skip
+            pred = [signed_f(self.anova[m][f]["F"], self.anova[m][f]["direction"])
+                    for m in measures]  # fmt: skip
+            th = [signed_f(*TABLES_6_4_TO_6_7[m][f]) for m in measures]
             ax.barh(y + 0.2, signed_log(pred), 0.4, label="twin")
             ax.barh(y - 0.2, signed_log(th), 0.4, label="thesis")
         axes[0].legend(fontsize=8)
@@ -406,6 +405,11 @@ class PopulationResult:
             "mean and 95 % CI over subjects, as Fig 6.5-6.9",
             path,
         )
+
+
+def signed_f(f: float, direction: str | None) -> float:
+    """F with the sign of its effect's direction (``"-"`` negative; ``"+"`` or None positive)."""
+    return -float(f) if direction == "-" else float(f)
 
 
 def signed_log(f: ArrayLike) -> FloatArray:

@@ -64,6 +64,7 @@ from twin.pilot.population import (
     fly_subject,
     population_result,
     population_tasks,
+    signed_f,
 )
 from twin.progress import ProgressFn
 from twin.tasks.engine import Engine, using
@@ -207,7 +208,7 @@ class EffectReplication:
         d = float(np.sqrt(self.thesis_f / THESIS_SUBJECTS))
         if self.thesis_direction is None:
             return (-d, d)
-        return (-d,) if self.thesis_direction == "-" else (d,)
+        return (signed_f(d, self.thesis_direction),)
 
     @property
     def p_draw(self) -> float:
@@ -404,6 +405,7 @@ def replicate(results: Sequence[PopulationResult]) -> Replication:
         if got != want:
             raise SignalError(f"populations differ in subjects, adapted parameters, run-to-run "
                               f"variation or measures: {got} vs {want}")  # fmt: skip
+    agreements = [r.agreement() for r in results]
     effects = []
     for measure in first.anova:
         for factor in FACTORS:
@@ -412,10 +414,9 @@ def replicate(results: Sequence[PopulationResult]) -> Replication:
                 raise SignalError(f"{measure} x {factor}: F is not finite in population(s) "
                                   f"{bad} (no spread between subjects' differences)")  # fmt: skip
             thesis_f, direction = TABLES_6_4_TO_6_7[measure][factor]
-            signed = tuple(float(r.anova[measure][factor]["F"])
-                           * (-1.0 if r.anova[measure][factor]["direction"] == "-" else 1.0)
-                           for r in results)  # fmt: skip
-            agreed = sum(bool(r.agreement()[measure][factor]) for r in results)
+            cells = [r.anova[measure][factor] for r in results]
+            signed = tuple(signed_f(c["F"], c["direction"]) for c in cells)
+            agreed = sum(bool(a[measure][factor]) for a in agreements)
             prob = agreement_probability(thesis_f, direction is not None, subjects)
             effects.append(EffectReplication(measure, factor, thesis_f, direction, signed,
                                              subjects, agreed, prob))  # fmt: skip
