@@ -137,3 +137,23 @@ def test_fc_analytic_variance_against_monte_carlo():
         bias = np.abs(v[f"bias_{resp}"]).mean(axis=0)
         assert np.all(bias[6:] < 0.01 * np.abs(truth[6:]))
         assert bias[:3].max() > bias[6:].max()
+
+
+def test_remnant_filtered_in_blocks_has_the_bits_of_the_filter_stepped_sample_by_sample():
+    """The loops take their remnant from Remnant (lfilter over blocks of samples): the same
+    bits as the transposed direct form II stepped one sample at a time with one draw each."""
+    from scipy import signal
+
+    from twin.errors import SignalError
+    from twin.pilot.loop import REMNANT_BLOCK, Remnant, _Filter
+    from twin.pilot.model import REMNANT_FILTER
+
+    runs, n = 3, 2 * REMNANT_BLOCK + 17
+    rng = np.random.default_rng(11)
+    stepped = _Filter(*signal.bilinear(*REMNANT_FILTER, fs=100.0), runs)
+    expected = np.array([0.7 * stepped.step(rng.standard_normal(runs)) for _ in range(n)])
+    remnant = Remnant(np.random.default_rng(11), 0.7, runs, 100.0)
+    got = np.array([remnant.sample(k) for k in range(n)])
+    assert np.array_equal(got, expected)
+    with pytest.raises(SignalError, match="in order"):
+        remnant.sample(n + 5)

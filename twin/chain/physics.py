@@ -13,6 +13,8 @@ so results do not depend on how the run is cut into steps.
 
 from __future__ import annotations
 
+import threading
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import mujoco
@@ -105,24 +107,64 @@ class FullPlatform(Platform):
         Each row of the response is the state at the start of a physics step, whose control
         is the reference at that time; the step's end state starts the next row.
         """
+        if state.inner.rolling is not None:  # a submitted step's physics comes first
+            state.inner.rolling.join()
+        return self._response(ref, self._roll(self._controls(ref, state), state.inner))
+
+    def _start(self, ref: Reference, state: PlatformState) -> Callable[[], PlatformResponse]:
+        """Limit the legs now; roll the physics in a thread after the previous step's."""
         phys: _Physics = state.inner
-        runs, m = ref.pose.shape[:2]
+        controls = self._controls(ref, state)
+        before, box = phys.rolling, {}
+
+        def roll() -> None:
+            if before is not None:
+                before.join()
+            try:
+                box["rows"] = self._roll(controls, phys)
+            except BaseException as exc:  # handed to the finisher, raised in the caller
+                box["error"] = exc
+
+        thread = threading.Thread(target=roll, name="mujoco-rollout", daemon=True)
+        phys.rolling = thread
+        thread.start()
+
+        def finish() -> PlatformResponse:
+            thread.join()
+            if "error" in box:
+                raise box["error"]
+            return self._response(ref, box["rows"])
+
+        return finish
+
+    def _controls(self, ref: Reference, state: PlatformState) -> list[FloatArray | None]:
+        """Each run's leg-length and leg-velocity references, limited (None: no samples)."""
+        phys: _Physics = state.inner
+        m = ref.pose.shape[1]
+        if m == 0:
+            return [None] * ref.pose.shape[0]
         lengths, velocities, accelerations = leg_rates(self.geometry, ref.pose, ref.rate, ref.acc)
+        out: list[FloatArray | None] = []
+        for r, limiter in enumerate(phys.limiters):
+            legs, legs_dot = self.limits.apply(
+                ref.t, lengths[r], velocities[r], accelerations[r], limiter, state.report
+            )
+            out.append(np.hstack([legs, legs_dot])[None])
+        return out
+
+    def _roll(self, controls: list[FloatArray | None], phys: _Physics) -> FloatArray:
+        """Sensor rows ``(runs, m + 1, ns)`` of each run's rollout; the states move on."""
         rows = []
-        for r in range(runs):
-            if m == 0:
+        for r, ctrl in enumerate(controls):
+            if ctrl is None:
                 rows.append(np.empty((0, self.model.nsensordata)))
                 continue
-            legs, legs_dot = self.limits.apply(
-                ref.t, lengths[r], velocities[r], accelerations[r], phys.limiters[r], state.report
-            )
-            ctrl = np.hstack([legs, legs_dot])[None]
             states, sens = rollout.rollout(
                 self.model, phys.data, phys.states[r], ctrl, initial_warmstart=phys.warm[r][None]
             )
             phys.states[r], phys.warm[r] = states[0, -1], phys.data.qacc_warmstart
             rows.append(np.vstack([sens[0], self._sensors_at(phys.states[r], phys.scratch)]))
-        return self._response(ref, np.stack(rows))
+        return np.stack(rows)
 
     def _sensors_at(self, state: FloatArray, data: mujoco.MjData) -> FloatArray:
         """Sensor values of a state (the successor row of a step: its velocities)."""
@@ -171,3 +213,4 @@ class _Physics:
     states: FloatArray
     warm: FloatArray
     limiters: list[LimiterState]
+    rolling: threading.Thread | None = None  # the last step's physics, if rolled in a thread

@@ -19,7 +19,7 @@ interface, several runs at once where they want (``runs`` axis first).
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -165,6 +165,19 @@ class Platform(ABC):
         ref = self._reference(jets, state)
         return self._advance(ref, state)
 
+    def submit(self, jets: FloatArray, state: PlatformState) -> Callable[[], PlatformResponse]:
+        """Start :meth:`step` through ``jets``; return a call that finishes it.
+
+        The same arithmetic as :meth:`step`, in the same order (the same bits), but the caller
+        may prepare the next step, or use the previous one, before it calls the finisher:
+        the full platform rolls its physics in a background thread meanwhile (MuJoCo releases
+        the GIL), so an open-loop run's Python work overlaps the physics. Steps are finished
+        in the order they were submitted; submitting the next before finishing this one is
+        allowed (the physics of the next waits for this one's).
+        """
+        ref = self._reference(jets, state)
+        return self._start(ref, state)
+
     def run(
         self,
         signal: JetSignal,
@@ -188,8 +201,8 @@ class Platform(ABC):
         """
         state = self.reset(signal.jets[:, 0], signal.t0, signal.rate_hz, noise, report)
         step = max(1, round(chunk_s * signal.rate_hz))
-        for k in range(0, signal.n, step):
-            resp = self.step(signal.jets[:, k : k + step], state)
+        pieces = (signal.jets[:, k : k + step] for k in range(0, signal.n, step))
+        for resp in overlapped(pieces, lambda jets: self.submit(jets, state)):
             yield resp.run(0) if signal.runs == 1 else resp
 
     # --- shared by both platforms -------------------------------------------------------------
@@ -223,6 +236,32 @@ class Platform(ABC):
         """Return the subclass's own state at rest."""
         return None
 
+    def _start(self, ref: Reference, state: PlatformState) -> Callable[[], PlatformResponse]:
+        """Begin turning the reference into motion; the finisher returns it (subclass).
+
+        By default the motion is computed at once.
+        """
+        resp = self._advance(ref, state)
+        return lambda: resp
+
     @abstractmethod
     def _advance(self, ref: Reference, state: PlatformState) -> PlatformResponse:
         """Turn the reference into motion (subclass)."""
+
+
+def overlapped(
+    items: Iterable[Any], submit: Callable[[Any], Callable[[], PlatformResponse]]
+) -> Iterator[PlatformResponse]:
+    """Submit each item, finishing the previous one only once the next is submitted.
+
+    With the full platform the physics of step k + 1 then rolls while the caller handles the
+    response of step k (the IMU, a recording): one step of look-ahead, the same results.
+    """
+    pending = None
+    for item in items:
+        nxt = submit(item)
+        if pending is not None:
+            yield pending()
+        pending = nxt
+    if pending is not None:
+        yield pending()

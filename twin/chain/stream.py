@@ -20,7 +20,7 @@ Examples
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
@@ -107,6 +107,20 @@ class ChainStream:
         The response covers the platform's samples up to the last command sample (arrays
         ``(runs, m, ...)``); its ``command`` is the platform's input before the heave noise.
         """
+        x = self._through_blocks(jets)
+        return self.platform.step(x, self._platform)  # type: ignore[arg-type]
+
+    def submit(self, jets: FloatArray) -> Callable[[], PlatformResponse]:
+        """Start :meth:`step`; the returned call finishes it and returns the motion.
+
+        The full platform's physics then rolls in a thread while the caller goes on
+        (:meth:`twin.chain.stepping.Platform.submit`).
+        """
+        x = self._through_blocks(jets)
+        return self.platform.submit(x, self._platform)  # type: ignore[arg-type]
+
+    def _through_blocks(self, jets: FloatArray) -> FloatArray:
+        """Check the samples, stream them through the blocks; reset the platform at the first."""
         if jets.ndim != 4 or jets.shape[0] != self.runs or jets.shape[2:] != (6, 3):
             raise SignalError(
                 f"commands must be jets of shape ({self.runs}, n, 6, 3); got {jets.shape}"
@@ -123,4 +137,4 @@ class ChainStream:
                 self.config, self.seeds, self.noise_rate_hz
             )
             self._platform = self.platform.reset(x[:, 0], self.t0, self.rate_hz, noise, self.report)
-        return self.platform.step(x, self._platform)
+        return x

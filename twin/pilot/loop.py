@@ -153,7 +153,7 @@ def _simulate(
     pe = _Filter(*_bilinear(*parts["pe"][:2], rate_hz), runs)
     px = _Filter(*_bilinear(*parts["px"][:2], rate_hz), runs)
     d_pe, d_px = round(parts["pe"][2] * rate_hz), round(parts["px"][2] * rate_hz)
-    nf = _Filter(*_bilinear(*REMNANT_FILTER, rate_hz), runs)
+    remnant = Remnant(rng, remnant_scale, runs, rate_hz) if rng is not None else None
     pos, vel = np.zeros(runs), np.zeros(runs)  # H_c = 4 / s^2 by zero-order hold
     n_keep = f_t.size - start
     out = {k: np.empty((runs, n_keep)) for k in ("e", "u", "x", "n")}
@@ -166,7 +166,7 @@ def _simulate(
         e_hist[k % hist], x_hist[k % hist] = e, x
         ye = pe.step(e_hist[(k - d_pe) % hist] if k >= d_pe else zeros)
         yx = px.step(x_hist[(k - d_px) % hist] if k >= d_px else zeros)
-        n = remnant_scale * nf.step(rng.standard_normal(runs)) if rng is not None else zeros
+        n = remnant.sample(k) if remnant is not None else zeros
         u = ye - yx + n
         acc = 4.0 * (u + f_d[k])
         pos = pos + vel * dt + 0.5 * acc * dt**2
@@ -175,6 +175,51 @@ def _simulate(
             j = k - start
             out["e"][:, j], out["u"][:, j], out["x"][:, j], out["n"][:, j] = e, u, x, n
     return out
+
+
+#: Samples of remnant drawn and filtered at once (memory: 8 bytes x runs x this, twice).
+REMNANT_BLOCK = 1000
+
+
+class Remnant:
+    """The Eq 2.21 remnant of many runs, sample by sample, filtered ahead in blocks.
+
+    The remnant is open loop, so it need not be stepped with the loop:
+    :func:`scipy.signal.lfilter` does the transposed direct form II with the same products and
+    sums in the same order as :class:`_Filter` stepped sample by sample, and the white noise
+    is drawn in the same order, so the samples have the same bits (tested), at a fraction of
+    the cost. The filter's state carries from block to block.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        Draws the unit white noise (``runs`` values per sample, in order).
+    scale : float
+        Gain on the filtered noise.
+    runs : int
+        Runs.
+    rate_hz : float
+        Sample rate [Hz].
+
+    """
+
+    def __init__(self, rng: np.random.Generator, scale: float, runs: int, rate_hz: float):
+        self._rng, self._scale, self._runs = rng, scale, runs
+        f = _Filter(*_bilinear(*REMNANT_FILTER, rate_hz), runs)
+        self._b, self._a, self._z = f.b, f.a, f.z
+        self._block = np.empty((0, runs))
+        self._next = 0
+
+    def sample(self, k: int) -> FloatArray:
+        """Return sample ``k`` of every run, shape (runs,); samples are asked for in order."""
+        if k != self._next:
+            raise SignalError(f"remnant samples are drawn in order: asked {k}, next {self._next}")
+        self._next += 1
+        if k % REMNANT_BLOCK == 0:
+            white = self._rng.standard_normal((REMNANT_BLOCK, self._runs))
+            y, self._z = signal.lfilter(self._b, self._a, white, axis=0, zi=self._z)
+            self._block = self._scale * y
+        return self._block[k % REMNANT_BLOCK]
 
 
 def remnant_scale_for(

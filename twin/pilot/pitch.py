@@ -25,7 +25,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import control
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy import signal
@@ -39,8 +38,8 @@ from twin.chain.stream import ChainStream
 from twin.errors import SignalError
 from twin.frames import DOF_NAMES
 from twin.pilot.forcing import MEASUREMENT_S, RATE_HZ, RUN_IN_S, ForcingFunction, pitch_task
-from twin.pilot.loop import _Filter
-from twin.pilot.model import REMNANT_FILTER, neuromuscular
+from twin.pilot.loop import Remnant, _Filter
+from twin.pilot.model import neuromuscular
 from twin.progress import ProgressFn
 
 FloatArray = NDArray[np.float64]
@@ -154,6 +153,8 @@ def open_loop_responses(
 
 def open_loops(pilot: PitchPilot, config: MotionSystem) -> OpenLoops:
     """Crossovers and phase margins of the disturbance and target open loops."""
+    import control  # here, not at the top: it imports matplotlib.pyplot (0.4 s per process)
+
     # python-control interpolates the response between the points for its crossings: 500 give
     # the margins of 4000 to 1e-7 in an eighth of the time
     w = np.geomspace(0.1, 50.0, MARGIN_POINTS)
@@ -256,7 +257,7 @@ def simulate_pitch(
     # a pilot who does not use the motion (K_m = 0, as behind the 1 Hz filter) has no channel
     pm = _Filter(*signal.bilinear(pilot.k_m * w2 * np.array([1.0, 0.0]), nm_den, fs=rate_hz),
                  runs) if pilot.k_m else None  # fmt: skip
-    nf = _Filter(*signal.bilinear(*REMNANT_FILTER, fs=rate_hz), runs)
+    remnant = Remnant(rng, remnant_scale, runs, rate_hz) if remnant_scale else None
     chain = pitch_chain(cfg, model, rate_hz, runs, seed)
     a_c, b_c, c_c, _ = signal.tf2ss(STICK_GAIN * AIRCRAFT[0], AIRCRAFT[1])
     # attitude jets from the aircraft state; the input held over the last interval (ZOH)
@@ -286,7 +287,7 @@ def simulate_pitch(
         e_hist[k % hist] = e
         ye = pe.step(e_hist[(k - d_v) % hist] if k >= d_v else zeros)
         ym = pm.step(felt[:, k - d_m] if k >= d_m else zeros) if pm is not None else zeros
-        n = remnant_scale * nf.step(rng.standard_normal(runs)) if remnant_scale else zeros
+        n = remnant.sample(k) if remnant is not None else zeros
         u = ye - ym + n
         held_u = u + f_d[k]
         state = ad @ state + bd @ held_u[None, :]
