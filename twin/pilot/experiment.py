@@ -150,8 +150,8 @@ def run_experiment(
     the result is the same whatever runs them (``scheduler``; default this process).
     """
     p = pilot or PitchPilot()
-    scale = pitch_remnant_scale(p, remnant_ratio, seed)
-    with using(scheduler) as engine:
+    with using(scheduler) as engine:  # a remote scheduler is reached (or refused) first
+        scale = pitch_remnant_scale(p, remnant_ratio, seed)
         flown = engine.map(
             fly_condition,
             [(p, n, runs, seed + n, scale, fit) for n in conditions],

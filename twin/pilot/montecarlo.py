@@ -209,16 +209,16 @@ def monte_carlo(
         raise SignalError(f"fit_runs (fits per batch) must be in [0, {batch}]; got {fit_runs}")
     p = pilot or RollPilot()
     fd, ft = roll_task()
-    scale = remnant_scale_for(p, fd, ft, remnant_ratio)
-    first = simulate_loop(p, fd, ft, 1, seed + 10_000, scale)
-    orders = select_orders(
-        *(decimate(s[0], first.rate_hz) for s in (first.u, first.e, first.x))
-    ).orders
-    sizes = [min(batch, runs - b0) for b0 in range(0, runs, batch)]
-    args = [(p, fd, ft, n, seed + b, scale, orders, fit_runs) for b, n in enumerate(sizes)]
-    inputs = [{"batch": b, "runs": n, "seed": seed + b} for b, n in enumerate(sizes)]
-    counted = _RunCounter(progress, sizes) if progress else None
-    with using(scheduler) as engine:
+    with using(scheduler) as engine:  # a remote scheduler is reached (or refused) first
+        scale = remnant_scale_for(p, fd, ft, remnant_ratio)
+        first = simulate_loop(p, fd, ft, 1, seed + 10_000, scale)
+        orders = select_orders(
+            *(decimate(s[0], first.rate_hz) for s in (first.u, first.e, first.x))
+        ).orders
+        sizes = [min(batch, runs - b0) for b0 in range(0, runs, batch)]
+        args = [(p, fd, ft, n, seed + b, scale, orders, fit_runs) for b, n in enumerate(sizes)]
+        inputs = [{"batch": b, "runs": n, "seed": seed + b} for b, n in enumerate(sizes)]
+        counted = _RunCounter(progress, sizes) if progress else None
         parts = engine.map(_batch, args, inputs, "Monte-Carlo batches", counted).values()
     w = parts[0][0]
     fc = {"pe": np.vstack([q[1] for q in parts]), "px": np.vstack([q[2] for q in parts])}

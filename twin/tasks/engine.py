@@ -180,7 +180,13 @@ class Engine:
         self._cluster: Any = None
 
     def __enter__(self) -> Self:
-        """Enter the context."""
+        """Enter the context; a remote scheduler is reached (or refused) now.
+
+        So a command given an unreachable ``--scheduler`` says so before its own set-up, not
+        after it; a local cluster still starts at the first :meth:`map`.
+        """
+        if self.spec.kind == "remote":
+            self.client()
         return self
 
     def __exit__(self, *exc: object) -> None:
