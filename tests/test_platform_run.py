@@ -90,6 +90,22 @@ def test_physics_rolled_in_a_thread_gives_the_same_bits_as_step_by_step(monkeypa
     assert np.array_equal(out[0].imu.accel, out[1].imu.accel)
 
 
+def test_blas_keeps_to_one_thread_while_the_physics_rolls_and_is_restored_after():
+    """A process whose BLAS has two threads (the test workers have one: set it here)."""
+    from threadpoolctl import threadpool_info, threadpool_limits
+
+    def blas_threads():
+        return {i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"}
+
+    run = prepare("mpi", Trajectory(100.0, np.zeros((101, 6))), "full")
+    run.chunk_s = 0.5
+    with threadpool_limits(limits=2, user_api="blas"):
+        assert blas_threads() == {2}
+        during = [blas_threads() for _ in run.chunks()]
+        assert blas_threads() == {2}
+    assert len(during) == 3 and all(n == {1} for n in during)
+
+
 def test_an_error_in_the_physics_thread_reaches_the_caller(monkeypatch):
     import twin.chain.physics as physics
 

@@ -13,7 +13,10 @@ starts uses one BLAS thread, set where the process starts, before NumPy loads it
 * the test suite's workers (``conftest.py``).
 
 A value the user has set already is kept (``OPENBLAS_NUM_THREADS=4 twin ...``). In a notebook,
-set the variables before the first ``import numpy``, or use ``threadpoolctl``.
+set the variables before the first ``import numpy``, or use ``threadpoolctl``. An open-loop
+run's chunks (:func:`twin.chain.stepping.overlapped`, where the full model's physics rolls in
+a thread of its own) keep BLAS to one thread with ``threadpoolctl`` whatever the process set,
+and restore it after.
 ``bench/blas_threads.py`` counts the threads of each kind of process and times a run both ways.
 """
 

@@ -256,12 +256,19 @@ def overlapped(
 
     With the full platform the physics of step k + 1 then rolls while the caller handles the
     response of step k (the IMU, a recording): one step of look-ahead, the same results.
+    Meanwhile BLAS keeps to one thread (:mod:`twin.threads`; restored after the last step):
+    a BLAS pool of one thread per core would take the physics thread's core, and make the run
+    slower than without the look-ahead (bench/twin_throughput.py, in a process that has not
+    set its threads as the ``twin`` command does).
     """
-    pending = None
-    for item in items:
-        nxt = submit(item)
+    from threadpoolctl import threadpool_limits
+
+    with threadpool_limits(limits=1, user_api="blas"):
+        pending = None
+        for item in items:
+            nxt = submit(item)
+            if pending is not None:
+                yield pending()
+            pending = nxt
         if pending is not None:
             yield pending()
-        pending = nxt
-    if pending is not None:
-        yield pending()
