@@ -206,3 +206,29 @@ def test_the_full_platform_takes_another_integration_step():
     for bad in (0.0, float("nan"), 0.01):
         with pytest.raises(SignalError, match="timestep"):
             FullPlatform("mpi", timestep_s=bad)
+
+
+@pytest.mark.parametrize("model", ["reduced", "full"])
+def test_motion_read_by_several_imus_equals_a_simulation_per_imu(model):
+    """Without heave noise the motion is simulated once and read by each (seed, IMU): the bits
+    of one simulation per pair (the diagnosis' IMU-noise realisations and its prediction)."""
+    sig = describing_signal(2, "pitch").commands
+    cmd = Trajectory(sig.rate_hz, sig.values[:301])  # 3 s
+    spec = ImuSpec()
+    readings = [(4, spec.ideal()), (5, spec), (6, spec.with_noise(2.0))]
+    run = prepare("srs", cmd, model, 4)
+    run.chunk_s = 1.0  # several chunks
+    shared = run.read_by_imus(readings)
+    for (seed, imu), got in zip(readings, shared, strict=True):
+        alone = prepare("srs", cmd, model, seed, imu)
+        alone.chunk_s = 1.0
+        want = alone.collect()
+        assert got.seed == seed and got.imu_spec == imu
+        assert np.array_equal(got.imu.accel, want.imu.accel)
+        assert np.array_equal(got.imu.gyro, want.imu.gyro)
+        assert np.array_equal(got.response.pose, want.response.pose)
+    assert not np.array_equal(shared[1].imu.accel, shared[2].imu.accel)
+    with pytest.raises(SignalError, match="heave noise"):
+        prepare("mpi", cmd, model, 1).read_by_imus(readings)
+    with pytest.raises(SignalError, match="at least one"):
+        prepare("srs", cmd, model, 1).read_by_imus([])

@@ -12,7 +12,7 @@ Examples
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -137,11 +137,41 @@ class Run:
 
     def chunks(self) -> Iterator[tuple[PlatformResponse, ImuRecord]]:
         """Yield (response, IMU) chunk pairs; memory stays bounded for any duration."""
-        imu_seed = np.random.default_rng(np.random.SeedSequence([self.seed, 1]))
-        imu = VirtualImu(self.imu_spec, imu_seed)
-        filters = [
-            SensorFilterStream(e, self.imu_spec.rate_hz) for e in self.config.of("sensor_filter")
-        ]
+        return self._read(self._responses(), self.seed, self.imu_spec)
+
+    def read_by_imus(self, readings: Sequence[tuple[int, ImuSpec]]) -> list[Simulation]:
+        """Simulate the motion once and return it read by each (seed, IMU) pair.
+
+        Each result has the bits of ``prepare(config, commands, model, seed, imu).collect()``
+        (tested): without heave noise the motion does not depend on the seed or the IMU, only
+        the IMU's noise and bias do, so a set of noise realisations, or an ideal IMU beside a
+        real one, costs one platform simulation (the diagnosis' sensor-noise realisations).
+        The motion is held whole meanwhile.
+
+        Raises
+        ------
+        SignalError
+            When the configuration has heave noise (each seed then moves the platform
+            differently: simulate each), or ``readings`` is empty.
+
+        """
+        if self.noise is not None:
+            raise SignalError(
+                f"{self.config.name} has heave noise, so each seed moves the platform "
+                "differently; simulate each seed (prepare(...).collect())"
+            )
+        if not readings:
+            raise SignalError("give at least one (seed, IMU) pair to read the motion with")
+        motion = list(self._responses())
+        out = []
+        for seed, spec in readings:
+            pairs = list(self._read(motion, seed, spec))
+            run = dataclasses.replace(self, seed=int(seed), imu_spec=spec)
+            out.append(run.simulation([r for r, _ in pairs], [rec for _, rec in pairs]))
+        return out
+
+    def _responses(self) -> Iterator[PlatformResponse]:
+        """Yield the platform's motion chunk by chunk (one run)."""
         cmd = self.commands
         chain = ChainStream(self.config, self.platform, cmd.rate_hz, cmd.t0, self.seed,
                             self.imu_spec.rate_hz, self.limits)  # fmt: skip
@@ -150,8 +180,16 @@ class Run:
         # while chunk k's IMU is computed (the same results; twin_throughput bench)
         for response in overlapped(self._command_jets(step), chain.submit):
             chunk = response.run(0)
-            if chunk.t.size == 0:
-                continue
+            if chunk.t.size:
+                yield chunk
+
+    def _read(
+        self, motion: Iterable[PlatformResponse], seed: int, spec: ImuSpec
+    ) -> Iterator[tuple[PlatformResponse, ImuRecord]]:
+        """Yield each chunk of motion with the IMU's reading of it (its noise from ``seed``)."""
+        imu = VirtualImu(spec, np.random.default_rng(np.random.SeedSequence([seed, 1])))
+        filters = [SensorFilterStream(e, spec.rate_hz) for e in self.config.of("sensor_filter")]
+        for chunk in motion:
             rec = imu.feed(chunk)
             chunk = dataclasses.replace(chunk, rotation=None)  # the IMU's only: not kept
             if filters:

@@ -211,11 +211,34 @@ def simulate_measurement(
         simulated IMU's grid differs (a recorded IMU may start elsewhere on the clock).
 
     """
-    sim = prepare(config, commands, model, seed, imu).collect()
-    out = from_imu(sim.commands, sim.imu, f"{config.name} ({model})", config, {})
-    if out.t.shape == t.shape and np.allclose(out.t, t, atol=1e-9):
-        return out.measured
-    return interp_columns(t, out.t, out.measured)
+    return simulate_measurements(config, commands, t, model, [(seed, imu)])[0]
+
+
+def simulate_measurements(
+    config: MotionSystem,
+    commands: Trajectory,
+    t: FloatArray,
+    model: str,
+    readings: Sequence[tuple[int, ImuSpec]],
+) -> list[FloatArray]:
+    """:func:`simulate_measurement` for each (seed, IMU) pair, the platform simulated once.
+
+    Without heave noise the motion is the same for every pair (only the IMU's noise differs:
+    :meth:`twin.chain.simulate.Run.read_by_imus`, the same bits); with it each pair is its
+    own simulation.
+    """
+    run = prepare(config, commands, model, *readings[0])
+    if run.noise is None:
+        sims = run.read_by_imus(readings)
+    else:
+        sims = [run.collect()] + [prepare(config, commands, model, s, i).collect()
+                                  for s, i in readings[1:]]  # fmt: skip
+    out = []
+    for sim in sims:
+        m = from_imu(sim.commands, sim.imu, f"{config.name} ({model})", config, {})
+        same = m.t.shape == t.shape and np.allclose(m.t, t, atol=1e-9)
+        out.append(m.measured if same else interp_columns(t, m.t, m.measured))
+    return out
 
 
 def measurement_channels(
@@ -233,18 +256,20 @@ def measurement_channels(
     Realisation ``i`` of each source is simulated with seed ``seed + offset + i + 1``.
     """
     clean = clean_config(nominal)
-    pred = simulate_measurement(clean, m.commands, m.t, model, seed, imu.ideal())
     driven = driven_dofs(m, dofs)
     if nominal.noise and dof_index("heave") in driven:  # the motion noise (heave only) is told
         realisations *= MOTION_NOISE_FACTOR  # from the IMU's by the two spectra's shapes
     seeds = [seed + offset + i + 1 for i in range(realisations)]
+    # the prediction (ideal IMU) and the IMU's realisations share one noise-free motion
+    readings = [(seed, imu.ideal()), *((s, imu) for s in seeds)]
+    pred, *read = simulate_measurements(clean, m.commands, m.t, model, readings)
     motion = [
         simulate_measurement(nominal, m.commands, m.t, model, s, imu.ideal()) - pred
         if nominal.noise
         else np.zeros_like(pred)
         for s in seeds
     ]
-    sensor = [simulate_measurement(clean, m.commands, m.t, model, s, imu) - pred for s in seeds]
+    sensor = [r - pred for r in read]
     out = []
     for k in driven:
         lines, window = periodic_design(m, k)
