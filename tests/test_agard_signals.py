@@ -71,3 +71,20 @@ def test_bad_signals_are_rejected():
         square_steps("heave", -0.1, 1.0)
     with pytest.raises(SignalError, match=r"step length \[s\] must be a number > 0; got nan"):
         square_steps("heave", 0.1, float("nan"))
+
+
+@pytest.mark.parametrize("tau", [1e-6, 0.004, 0.08, 0.6])
+def test_the_step_fits_lag_response_is_lsims_to_the_bit(tau):
+    """The threshold fit's first-order lag (Eq 3.7) runs lsim's first-order-hold recursion by
+    lfilter: the same values as scipy.signal.lsim, bit for bit, on steps and noise."""
+    from scipy import signal
+
+    from twin.agard.threshold import lag_response
+
+    rng = np.random.default_rng(3)
+    t = 2.0 + np.arange(3001) * 0.001
+    u = np.where(rng.random(t.size) < 0.7, np.sign(np.sin(3 * t)), rng.standard_normal(t.size))
+    _, expected, _ = signal.lsim(([1.0], [tau, 1.0]), u, t - t[0])
+    assert lag_response(t, u, tau).tobytes() == expected.tobytes()
+    with pytest.raises(SignalError, match="uniform times"):
+        lag_response(t[[0, 1, 3]], u[:3], tau)

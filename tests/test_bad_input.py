@@ -217,12 +217,12 @@ def test_error_line_maps_every_kind_of_failure(monkeypatch):
 
 
 def test_twin_debug_shows_the_traceback_of_a_bug(monkeypatch):
-    import twin.cli.main as cli
+    import twin.platform.kinematics as kinematics
 
-    def broken(args):
+    def broken(geometry):
         raise ZeroDivisionError("a bug")
 
-    monkeypatch.setattr(cli, "_cmd_workspace", broken)
+    monkeypatch.setattr(kinematics, "workspace", broken)  # a bug under the command
     assert main(["workspace", "srs"]) == EXIT_BUG
     monkeypatch.setenv("TWIN_DEBUG", "1")
     with pytest.raises(ZeroDivisionError):

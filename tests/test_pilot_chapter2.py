@@ -157,3 +157,38 @@ def test_remnant_filtered_in_blocks_has_the_bits_of_the_filter_stepped_sample_by
     assert np.array_equal(got, expected)
     with pytest.raises(SignalError, match="in order"):
         remnant.sample(n + 5)
+    chunked = Remnant(np.random.default_rng(11), 0.7, runs, 100.0)
+    sizes = [5, REMNANT_BLOCK - 5, 2, REMNANT_BLOCK + 3, n - 2 * REMNANT_BLOCK - 5]
+    starts = np.cumsum([0, *sizes[:-1]])
+    got = [chunked.samples(k, m) for k, m in zip(starts, sizes, strict=True)]
+    assert np.array_equal(np.concatenate(got), expected)
+
+
+@pytest.mark.parametrize(
+    ("tau_v", "tau_m", "runs", "scale"),
+    [(0.32, 0.29, 1, 0.0), (0.32, 0.29, 4, 0.6), (0.255, 0.064, 3, 1.3), (0.3, 0.004, 2, 0.5)],
+)
+def test_the_loop_in_blocks_has_the_bits_of_the_loop_stepped_sample_by_sample(
+    tau_v, tau_m, runs, scale
+):
+    """The loop is simulated in blocks of the shorter pilot delay (filters and H_c's hold as
+    running sums): the bits of stepping it one sample at a time, over remnant blocks and a
+    last short block; a pilot whose delay rounds to no sample is stepped (the last case)."""
+    from dataclasses import replace
+
+    from twin.pilot import loop
+
+    pilot = replace(PILOT, tau_v=tau_v, tau_m=tau_m)
+    t = np.arange(2 * loop.REMNANT_BLOCK + 37) / 100.0
+    args = (pilot, FT(t), FD(t), runs, scale)
+
+    def rng():
+        return np.random.default_rng(8) if scale else None
+
+    stepped = loop._stepped(*args, rng(), 100.0, 300)
+    simulated = loop._simulate(*args, rng(), 100.0, 300)
+    assert set(simulated) == {"e", "u", "x", "n"}
+    for name, values in stepped.items():
+        assert values.shape == (runs, t.size - 300)
+        assert values.tobytes() == simulated[name].tobytes(), name
+    assert np.ptp(stepped["x"]) > 0.01  # the loop moved

@@ -168,3 +168,42 @@ def test_conditions_are_grouped_as_the_thesis_figures_with_confidence_intervals(
     _, h = mean_ci(x)
     assert h == pytest.approx(stats.t.ppf(0.975, 4) * x.std(ddof=1) / np.sqrt(5))
     assert mean_ci([0.3]) == (0.3, 0.0)
+
+
+@pytest.mark.parametrize(
+    ("change", "model", "scale"),
+    [
+        ({}, "reduced", 1.0),  # motion delay shorter than the visual one
+        ({"tau_m": 0.41}, "reduced", 0.7),  # longer
+        ({"tau_m": 0.06, "tau_v": 0.5}, "reduced", 0.0),  # short blocks, no remnant
+        ({"k_m": 0.0}, "reduced", 1.0),  # no motion channel
+        ({"tau_m": 0.003}, "reduced", 1.0),  # under half a sample: stepped
+        ({"tau_m": 0.13}, "full", 1.0),  # the MuJoCo platform in the loop
+    ],
+)
+def test_the_pitch_loop_in_blocks_has_the_bits_of_the_loop_stepped(change, model, scale):
+    """The pitch loop is flown in blocks of the shorter pilot delay (the pilot's channels
+    filtered at once, the aircraft stepped): the bits of flying it one sample at a time, over
+    remnant blocks, chain steps and a last short block, through every block of the chain."""
+    from dataclasses import replace
+
+    from configurations import everything
+
+    from twin.pilot.pitch import pitch_loop
+    from twin.pilot.pitch_loop import fly, fly_stepped
+
+    pilot = replace(PitchPilot(), **change)
+    # past a remnant block (1000 samples); fewer where the chain is stepped every sample
+    size = 157 if model == "full" else 1203 if pilot.tau_m > 0.005 else 300
+
+    def loop():
+        whole = pitch_loop(pilot, everything(), 2, 6, scale, 100.0, model)
+        return replace(whole, t=whole.t[:size], f_t=whole.f_t[:size], f_d=whole.f_d[:size],
+                       start=40)  # fmt: skip
+
+    stepped, flown = fly_stepped(loop()), fly(loop())
+    assert sorted(flown) == ["e", "n", "theta", "theta_felt", "u"]
+    for name, values in stepped.items():
+        assert values.shape == (2, size - 40)
+        assert values.tobytes() == flown[name].tobytes(), name
+    assert np.ptp(stepped["theta_felt"]) > 0.0

@@ -1,10 +1,10 @@
 """Speed work must not change a single bit: seeded runs against stored figures.
 
 Each case below runs a seeded piece of the twin (open-loop runs on both platforms, with every
-block and extension; the pilot in the loop; a describing-function sweep) and reduces its
-outputs to SHA-256 digests of the float64 bytes, stored in ``tests/data/stored_figures.json``
-together with a few values of every array. A change that is only about speed must leave every
-digest as it is.
+block and extension; the pilot in the loop of Chapter 6 and the loop of Chapter 2; a
+describing-function sweep) and reduces its outputs to SHA-256 digests of the float64 bytes,
+stored in ``tests/data/stored_figures.json`` together with a few values of every array. A
+change that is only about speed must leave every digest as it is.
 
 Bit-identity holds for one numerical environment: the stored file names the NumPy, SciPy and
 MuJoCo versions, the machine and NumPy's CPU features it was made with. Elsewhere (another
@@ -72,6 +72,17 @@ def _pilot() -> dict[str, np.ndarray]:
     return {"e": runs.e, "u": runs.u, "theta": runs.theta, "theta_felt": runs.theta_felt}
 
 
+def _chapter_2() -> dict[str, np.ndarray]:
+    from twin.pilot.forcing import roll_task
+    from twin.pilot.loop import remnant_scale_for, simulate_loop
+    from twin.pilot.model import RollPilot
+
+    fd, ft = roll_task()
+    scale = remnant_scale_for(RollPilot(), fd, ft, 0.1)
+    loop = simulate_loop(RollPilot(), fd, ft, runs=3, seed=5, remnant_scale=scale)
+    return {"scale": np.array([scale]), "e": loop.e, "u": loop.u, "x": loop.x, "n": loop.n}
+
+
 def _describing_function() -> dict[str, np.ndarray]:
     from twin.agard.df import sweep
     from twin.measurement.measure import Bench, configure
@@ -88,6 +99,7 @@ CASES: dict[str, Callable[[], dict[str, np.ndarray]]] = {
     "full-mpi-3s": lambda: _open_loop("mpi", 3.0, "full", 2),
     "full-everything-srs-3s": lambda: _open_loop(everything(), 3.0, "full", 4),
     "pilot-condition-8": _pilot,
+    "chapter-2-loop": _chapter_2,
     "df-mpi-heave-reduced": _describing_function,
 }
 

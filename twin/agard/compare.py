@@ -12,8 +12,10 @@ Two questions a motion-system engineer asks first:
 
 Examples
 --------
->>> cmp = compare("mpi", dofs=("heave",), signals=(1,))  # doctest: +SKIP
->>> print(cmp.format_table())  # doctest: +SKIP
+Not run as a doctest (it takes some seconds; ``tests/test_compare.py`` runs it)::
+
+    cmp = compare("mpi", dofs=("heave",), signals=(1,))
+    print(cmp.format_table())
 
 """
 

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy import signal
+from scipy import linalg, signal
 from scipy.optimize import brentq, least_squares
 
 from twin.agard.session import Session
@@ -34,8 +34,31 @@ FloatArray = NDArray[np.float64]
 
 def lag_delay_response(t: FloatArray, u: FloatArray, tau: float, delay: float) -> FloatArray:
     """Response of e^{-delay s} / (tau s + 1) to ``u`` (linear between samples), from rest."""
-    _, y, _ = signal.lsim(([1.0], [max(tau, 1e-6), 1.0]), u, t - t[0])
-    return np.interp(t - delay, t, y, left=0.0)
+    return np.interp(t - delay, t, lag_response(t, u, max(tau, 1e-6)), left=0.0)
+
+
+def lag_response(t: FloatArray, u: FloatArray, tau: float) -> FloatArray:
+    """Response of 1 / (tau s + 1) to ``u`` (linear between uniform samples ``t``), from rest.
+
+    :func:`scipy.signal.lsim`'s first-order-hold recursion, ``x[i] = x[i-1] Ad + u[i-1] Bd0 +
+    u[i] Bd1`` from its own discretisation, run by :func:`scipy.signal.lfilter` instead of a
+    Python loop: the same products and sums in the same order (lfilter's transposed direct
+    form II adds ``u[i-1] Bd0 - x[i-1] (-Ad)`` first), so the same values (tested), 100 times
+    faster; the threshold fit evaluates it some 100 times a fit.
+    """
+    if t.size < 2 or not np.allclose(np.diff(t), t[1] - t[0]):
+        raise SignalError(f"the lag response needs two or more uniform times; got {t.size}")
+    a, b, c, d = signal.tf2ss([1.0], [tau, 1.0])
+    dt = t[1] - t[0]
+    m = np.vstack([np.hstack([a * dt, b * dt, np.zeros((1, 1))]),
+                   np.hstack([np.zeros((1, 2)), np.identity(1)]),
+                   np.zeros((1, 3))])  # fmt: skip
+    exp_mt = linalg.expm(m.T)
+    ad, bd1 = exp_mt[0, 0], exp_mt[2, 0]
+    bd0 = exp_mt[1:2, :1] - exp_mt[2:, :1]
+    x = np.zeros(u.size)
+    x[1:], _ = signal.lfilter([bd1, bd0[0, 0]], [1.0, -ad], u[1:], zi=u[:1] * bd0[0])
+    return np.squeeze(x[:, None] @ c.T) + np.squeeze(u[:, None] @ d.T)
 
 
 @dataclass(frozen=True)

@@ -2,10 +2,12 @@
 
 Examples
 --------
->>> d = diagnose(["out/run1", "out/run2"])  # doctest: +SKIP
->>> [f.extension.describe() for f in d.findings]  # doctest: +SKIP
-['delay: extra_delay_s 0.065 (heave)']
->>> d.extended_config.save("mpi-measured.json")  # doctest: +SKIP
+On two recorded run folders (``twin simulate --out`` or ``twin import`` writes them; not run
+here, as it needs them)::
+
+    d = diagnose(["out/run1", "out/run2"])
+    [f.extension.describe() for f in d.findings]   # ['delay: extra_delay_s 0.065 (heave)']
+    d.extended_config.save("mpi-measured.json")
 
 """
 

@@ -34,11 +34,23 @@ class _Filter:
         self.z = np.zeros((n - 1, runs))
 
     def step(self, x: FloatArray) -> FloatArray:
+        """Return the output for one input sample of every run, shape (runs,)."""
         y = self.b[0] * x + (self.z[0] if len(self.z) else 0.0)
         for i in range(len(self.z) - 1):
             self.z[i] = self.z[i + 1] + self.b[i + 1] * x - self.a[i + 1] * y
         if len(self.z):
             self.z[-1] = self.b[-1] * x - self.a[-1] * y
+        return y
+
+    def block(self, x: FloatArray) -> FloatArray:
+        """Return the outputs for samples ``x``, shape (samples, runs), the state carried on.
+
+        :func:`scipy.signal.lfilter` does the products and sums of :meth:`step` in the same
+        order, so the outputs have the same bits as stepping sample by sample (tested).
+        """
+        if not len(self.z):  # a gain: step's "+ 0.0" turns -0.0 into 0.0, as here
+            return self.b[0] * x + 0.0
+        y, self.z = signal.lfilter(self.b, self.a, x, axis=0, zi=self.z)
         return y
 
 
@@ -147,13 +159,47 @@ def _simulate(
     rate_hz: float,
     start: int,
 ) -> dict[str, FloatArray]:
-    """Step the loop over the samples of ``f_t``/``f_d``; keep the samples from ``start``."""
-    dt = 1.0 / rate_hz
+    """Step the loop over the samples of ``f_t``/``f_d``; keep the samples from ``start``.
+
+    The pilot acts on e and x at least one delay late, so the samples of a block as long as
+    the shorter delay need nothing of the block itself: its pilot outputs are filtered at
+    once (:meth:`_Filter.block`) and H_c's zero-order hold is a running sum
+    (:func:`_hold_blocks`), with the products and sums of stepping sample by sample in the
+    same order, so the same bits (tested against :func:`_stepped`, which a pilot with a
+    delay under half a sample still takes).
+    """
+    parts = pilot.rational_parts()
+    d_pe, d_px = round(parts["pe"][2] * rate_hz), round(parts["px"][2] * rate_hz)
+    args = (pilot, f_t, f_d, runs, remnant_scale, rng, rate_hz, start)
+    return _stepped(*args) if min(d_pe, d_px) < 1 else _in_blocks(*args)
+
+
+def _loop_parts(
+    pilot: RollPilot, runs: int, remnant_scale: float, rng: np.random.Generator | None,
+    rate_hz: float,
+) -> tuple[_Filter, _Filter, int, int, Remnant | None]:  # fmt: skip
+    """Return the pilot's filters and delays [samples] and the remnant of :func:`_simulate`."""
     parts = pilot.rational_parts()
     pe = _Filter(*_bilinear(*parts["pe"][:2], rate_hz), runs)
     px = _Filter(*_bilinear(*parts["px"][:2], rate_hz), runs)
     d_pe, d_px = round(parts["pe"][2] * rate_hz), round(parts["px"][2] * rate_hz)
     remnant = Remnant(rng, remnant_scale, runs, rate_hz) if rng is not None else None
+    return pe, px, d_pe, d_px, remnant
+
+
+def _stepped(
+    pilot: RollPilot,
+    f_t: FloatArray,
+    f_d: FloatArray,
+    runs: int,
+    remnant_scale: float,
+    rng: np.random.Generator | None,
+    rate_hz: float,
+    start: int,
+) -> dict[str, FloatArray]:
+    """:func:`_simulate` one sample at a time (the reference of :func:`_in_blocks`)."""
+    dt = 1.0 / rate_hz
+    pe, px, d_pe, d_px, remnant = _loop_parts(pilot, runs, remnant_scale, rng, rate_hz)
     pos, vel = np.zeros(runs), np.zeros(runs)  # H_c = 4 / s^2 by zero-order hold
     n_keep = f_t.size - start
     out = {k: np.empty((runs, n_keep)) for k in ("e", "u", "x", "n")}
@@ -175,6 +221,58 @@ def _simulate(
             j = k - start
             out["e"][:, j], out["u"][:, j], out["x"][:, j], out["n"][:, j] = e, u, x, n
     return out
+
+
+def _in_blocks(
+    pilot: RollPilot,
+    f_t: FloatArray,
+    f_d: FloatArray,
+    runs: int,
+    remnant_scale: float,
+    rng: np.random.Generator | None,
+    rate_hz: float,
+    start: int,
+) -> dict[str, FloatArray]:
+    """:func:`_simulate` in blocks of the shorter pilot delay (both delays >= 1 sample)."""
+    dt = 1.0 / rate_hz
+    pe, px, d_pe, d_px, remnant = _loop_parts(pilot, runs, remnant_scale, rng, rate_hz)
+    size = min(d_pe, d_px)
+    # time-major histories, with zeros before the run for the delayed inputs
+    lead = max(d_pe, d_px)
+    e_all, x_all = np.zeros((lead + f_t.size, runs)), np.zeros((lead + f_t.size, runs))
+    u_all, n_all = np.empty((f_t.size, runs)), np.empty((f_t.size, runs))
+    pos, vel = np.zeros(runs), np.zeros(runs)
+    for k in range(0, f_t.size, size):
+        m = min(size, f_t.size - k)
+        ye = pe.block(e_all[lead + k - d_pe : lead + k - d_pe + m])
+        yx = px.block(x_all[lead + k - d_px : lead + k - d_px + m])
+        n = remnant.samples(k, m) if remnant is not None else np.zeros((m, runs))
+        u = ye - yx + n
+        acc = 4.0 * (u + f_d[k : k + m, None])
+        x, pos, vel = _hold_blocks(pos, vel, acc, dt)
+        x_all[lead + k : lead + k + m] = x
+        e_all[lead + k : lead + k + m] = f_t[k : k + m, None] - x
+        u_all[k : k + m], n_all[k : k + m] = u, n
+    kept = {"e": e_all[lead:], "u": u_all, "x": x_all[lead:], "n": n_all}
+    return {k: np.ascontiguousarray(v[start:].T) for k, v in kept.items()}
+
+
+def _hold_blocks(
+    pos: FloatArray, vel: FloatArray, acc: FloatArray, dt: float
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """Run H_c's zero-order hold over accelerations ``acc`` (samples, runs).
+
+    Returns the positions at the samples (before each update) and the position and velocity
+    after the last. The recursion ``pos + vel * dt + 0.5 * acc * dt**2``, ``vel + acc * dt``
+    is summed left to right, so running sums (:func:`numpy.cumsum`, which adds in order) over
+    the interleaved terms give its bits.
+    """
+    m = acc.shape[0]
+    v = np.cumsum(np.concatenate([vel[None], acc * dt]), axis=0)
+    terms = np.empty((2 * m + 1, acc.shape[1]))
+    terms[0], terms[1::2], terms[2::2] = pos, v[:-1] * dt, 0.5 * acc * dt**2
+    p = np.cumsum(terms, axis=0)
+    return p[0 : 2 * m : 2], p[2 * m], v[m]
 
 
 #: Samples of remnant drawn and filtered at once (memory: 8 bytes x runs x this, twice).
@@ -220,6 +318,16 @@ class Remnant:
             y, self._z = signal.lfilter(self._b, self._a, white, axis=0, zi=self._z)
             self._block = self._scale * y
         return self._block[k % REMNANT_BLOCK]
+
+    def samples(self, k: int, m: int) -> FloatArray:
+        """Return samples ``k`` to ``k + m - 1`` of every run, shape (m, runs), in order."""
+        parts, end = [], k + m
+        while k < end:
+            self.sample(k)  # checks the order; draws the next block where one begins
+            i, stop = k % REMNANT_BLOCK, min(end, (k // REMNANT_BLOCK + 1) * REMNANT_BLOCK)
+            parts.append(self._block[i : i + stop - k])
+            self._next = k = stop
+        return parts[0] if len(parts) == 1 else np.concatenate(parts)
 
 
 def remnant_scale_for(

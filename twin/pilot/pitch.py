@@ -36,10 +36,10 @@ from twin.chain.response import PlatformResponse
 from twin.chain.stepping import Platform
 from twin.chain.stream import ChainStream
 from twin.errors import SignalError
-from twin.frames import DOF_NAMES
 from twin.pilot.forcing import MEASUREMENT_S, RATE_HZ, RUN_IN_S, ForcingFunction, pitch_task
 from twin.pilot.loop import Remnant, _Filter
 from twin.pilot.model import neuromuscular
+from twin.pilot.pitch_loop import HEAVE, PITCH, PitchLoop, fly
 from twin.progress import ProgressFn
 
 FloatArray = NDArray[np.float64]
@@ -49,7 +49,6 @@ ComplexArray = NDArray[np.complex128]
 AIRCRAFT = (-10.6189 * np.array([1.0, 0.9906]), np.array([1.0, 2.756, 7.612, 0.0]))
 #: Stick gain K_de,u (§6.3.1), pilot station ahead of the c.g. [m], display latency [s].
 STICK_GAIN, PILOT_STATION_M, DISPLAY_DELAY_S = -0.2865, 3.2, 0.025
-PITCH, HEAVE = DOF_NAMES.index("pitch"), DOF_NAMES.index("heave")
 #: Frequency points (0.1-50 rad/s, log-spaced) of the open loops whose margins are computed.
 MARGIN_POINTS = 500
 #: Most runs one call flies (about 0.3 MB and 0.02 s a run on the reduced platform).
@@ -233,6 +232,24 @@ def simulate_pitch(
 
     """
     cfg = motion_system(config) if isinstance(config, str) else config
+    loop = pitch_loop(pilot, cfg, runs, seed, remnant_scale, rate_hz, model, progress)
+    out, start, t = fly(loop), loop.start, loop.t
+    window = slice(start, t.size)
+    return PitchRuns(t[window] - t[start], out["e"], out["u"], out["theta"], out["theta_felt"],
+                     out["n"], loop.f_t[window], loop.f_d[window], cfg)  # fmt: skip
+
+
+def pitch_loop(
+    pilot: PitchPilot,
+    cfg: MotionSystem,
+    runs: int,
+    seed: int,
+    remnant_scale: float,
+    rate_hz: float,
+    model: str,
+    progress: ProgressFn | None = None,
+) -> PitchLoop:
+    """Return what :func:`simulate_pitch` flies (the arguments are its own), ready to fly."""
     if model not in ("reduced", "full"):
         raise SignalError(f"model must be 'reduced' or 'full'; got {model!r}")
     if not 1 <= runs <= MAX_RUNS:
@@ -248,7 +265,6 @@ def simulate_pitch(
     ad, bd, _, _, _ = signal.cont2discrete(
         signal.tf2ss(STICK_GAIN * AIRCRAFT[0], AIRCRAFT[1]), dt, method="zoh"
     )
-    state = np.zeros((ad.shape[0], runs))
     w2 = pilot.omega_nm**2
     nm_den = [1.0, 2 * pilot.zeta_nm * pilot.omega_nm, w2]
     pe_num = pilot.k_v * w2 * np.polymul([pilot.t_lead, 1.0], [pilot.t_lead, 1.0])
@@ -263,44 +279,9 @@ def simulate_pitch(
     # attitude jets from the aircraft state; the input held over the last interval (ZOH)
     jet_x = np.stack([c_c[0], c_c[0] @ a_c, c_c[0] @ a_c @ a_c])  # (3, nx)
     jet_u = np.array([0.0, float(c_c[0] @ b_c[:, 0]), float(c_c[0] @ a_c @ b_c[:, 0])])
-    held_u = np.zeros(runs)
     d_v, d_m = round((pilot.tau_v + DISPLAY_DELAY_S) * rate_hz), round(pilot.tau_m * rate_hz)
-    # the pilot feels the motion d_m samples late, so the chain can be stepped d_m samples at
-    # a time (the same arithmetic as one at a time; far fewer calls)
-    block = max(1, d_m)
-    jets = np.zeros((runs, block, 6, 3))
-    hist = d_v + 1
-    e_hist, felt = np.zeros((hist, runs)), np.zeros((runs, t.size))
-    zeros = np.zeros(runs)
-    out = {k: np.empty((runs, n_keep)) for k in ("e", "u", "theta", "n")}
-    every = max(1, t.size // 50)
-    for k in range(t.size):
-        theta_jet = (jet_x @ state).T + held_u[:, None] * jet_u  # (runs, 3)
-        theta = theta_jet[:, 0]
-        e = f_t[k] - theta
-        jets[:, k % block, PITCH] = theta_jet
-        jets[:, k % block, HEAVE] = -PILOT_STATION_M * theta_jet
-        if k % block == block - 1 or k == t.size - 1:
-            first = k - k % block
-            motion = chain.step(jets[:, : k - first + 1])
-            felt[:, first : k + 1] = felt_attitude(motion, PILOT_STATION_M, t[first : k + 1])
-        e_hist[k % hist] = e
-        ye = pe.step(e_hist[(k - d_v) % hist] if k >= d_v else zeros)
-        ym = pm.step(felt[:, k - d_m] if k >= d_m else zeros) if pm is not None else zeros
-        n = remnant.sample(k) if remnant is not None else zeros
-        u = ye - ym + n
-        held_u = u + f_d[k]
-        state = ad @ state + bd @ held_u[None, :]
-        if k >= start:
-            j = k - start
-            for name, v in (("e", e), ("u", u), ("theta", theta), ("n", n)):
-                out[name][:, j] = v
-        if progress and ((k + 1) % every == 0 or k == t.size - 1):
-            progress("pilot in the loop [s]", round((k + 1) * dt, 2), round(t.size * dt, 2))
-    out["theta_felt"] = felt[:, start:]
-    window = slice(start, start + n_keep)
-    return PitchRuns(t[window] - t[start], out["e"], out["u"], out["theta"], out["theta_felt"],
-                     out["n"], f_t[window], f_d[window], cfg)  # fmt: skip
+    return PitchLoop(pe, pm, d_v, d_m, remnant, chain, felt_attitude, ad, bd, jet_x, jet_u,
+                     PILOT_STATION_M, t, f_t, f_d, dt, start, progress)  # fmt: skip
 
 
 def pitch_chain(
