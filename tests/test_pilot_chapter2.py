@@ -180,13 +180,13 @@ def test_the_loop_in_blocks_has_the_bits_of_the_loop_stepped_sample_by_sample(
 
     pilot = replace(PILOT, tau_v=tau_v, tau_m=tau_m)
     t = np.arange(2 * loop.REMNANT_BLOCK + 37) / 100.0
-    args = (pilot, FT(t), FD(t), runs, scale)
 
     def rng():
         return np.random.default_rng(8) if scale else None
 
-    stepped = loop._stepped(*args, rng(), 100.0, 300)
-    simulated = loop._simulate(*args, rng(), 100.0, 300)
+    parts = loop._LoopParts.of(pilot, runs, scale, rng(), 100.0)
+    stepped = loop._stepped(parts, FT(t), FD(t), 1.0 / 100.0, 300)
+    simulated = loop._simulate(pilot, FT(t), FD(t), runs, scale, rng(), 100.0, 300)
     assert set(simulated) == {"e", "u", "x", "n"}
     for name, values in stepped.items():
         assert values.shape == (runs, t.size - 300)

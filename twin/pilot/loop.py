@@ -5,7 +5,9 @@
 simulated at 100 Hz: H_c by zero-order hold, the pilot's rational parts by the bilinear
 transform with their delays as whole samples, and the remnant of Eq 2.21 driven by seeded
 unit white noise and scaled so that its power is a chosen fraction of the power of u (10 % in
-§2.5.1). Runs are vectorised: every time step updates all runs together.
+§2.5.1). Runs are vectorised: every time step updates all runs together, and the steps go in
+blocks as long as the pilot's shorter delay (the pilot acts on samples of earlier blocks), with
+the bits of stepping one sample at a time.
 """
 
 from __future__ import annotations
@@ -168,38 +170,41 @@ def _simulate(
     same order, so the same bits (tested against :func:`_stepped`, which a pilot with a
     delay under half a sample still takes).
     """
-    parts = pilot.rational_parts()
-    d_pe, d_px = round(parts["pe"][2] * rate_hz), round(parts["px"][2] * rate_hz)
-    args = (pilot, f_t, f_d, runs, remnant_scale, rng, rate_hz, start)
-    return _stepped(*args) if min(d_pe, d_px) < 1 else _in_blocks(*args)
+    parts = _LoopParts.of(pilot, runs, remnant_scale, rng, rate_hz)
+    run = _stepped if min(parts.d_pe, parts.d_px) < 1 else _in_blocks
+    return run(parts, f_t, f_d, 1.0 / rate_hz, start)
 
 
-def _loop_parts(
-    pilot: RollPilot, runs: int, remnant_scale: float, rng: np.random.Generator | None,
-    rate_hz: float,
-) -> tuple[_Filter, _Filter, int, int, Remnant | None]:  # fmt: skip
-    """Return the pilot's filters and delays [samples] and the remnant of :func:`_simulate`."""
-    parts = pilot.rational_parts()
-    pe = _Filter(*_bilinear(*parts["pe"][:2], rate_hz), runs)
-    px = _Filter(*_bilinear(*parts["px"][:2], rate_hz), runs)
-    d_pe, d_px = round(parts["pe"][2] * rate_hz), round(parts["px"][2] * rate_hz)
-    remnant = Remnant(rng, remnant_scale, runs, rate_hz) if rng is not None else None
-    return pe, px, d_pe, d_px, remnant
+@dataclass
+class _LoopParts:
+    """The pilot's filters and delays [samples] and the remnant of :func:`_simulate`."""
+
+    pe: _Filter
+    px: _Filter
+    d_pe: int
+    d_px: int
+    remnant: Remnant | None
+    runs: int
+
+    @classmethod
+    def of(
+        cls, pilot: RollPilot, runs: int, remnant_scale: float, rng: np.random.Generator | None,
+        rate_hz: float,
+    ) -> _LoopParts:  # fmt: skip
+        """Return the parts of ``pilot``'s loop (no remnant without ``rng``)."""
+        parts = pilot.rational_parts()
+        pe = _Filter(*_bilinear(*parts["pe"][:2], rate_hz), runs)
+        px = _Filter(*_bilinear(*parts["px"][:2], rate_hz), runs)
+        d_pe, d_px = round(parts["pe"][2] * rate_hz), round(parts["px"][2] * rate_hz)
+        remnant = Remnant(rng, remnant_scale, runs, rate_hz) if rng is not None else None
+        return cls(pe, px, d_pe, d_px, remnant, runs)
 
 
 def _stepped(
-    pilot: RollPilot,
-    f_t: FloatArray,
-    f_d: FloatArray,
-    runs: int,
-    remnant_scale: float,
-    rng: np.random.Generator | None,
-    rate_hz: float,
-    start: int,
+    parts: _LoopParts, f_t: FloatArray, f_d: FloatArray, dt: float, start: int
 ) -> dict[str, FloatArray]:
     """:func:`_simulate` one sample at a time (the reference of :func:`_in_blocks`)."""
-    dt = 1.0 / rate_hz
-    pe, px, d_pe, d_px, remnant = _loop_parts(pilot, runs, remnant_scale, rng, rate_hz)
+    pe, px, d_pe, d_px, remnant, runs = (getattr(parts, f) for f in _PARTS)
     pos, vel = np.zeros(runs), np.zeros(runs)  # H_c = 4 / s^2 by zero-order hold
     n_keep = f_t.size - start
     out = {k: np.empty((runs, n_keep)) for k in ("e", "u", "x", "n")}
@@ -224,18 +229,10 @@ def _stepped(
 
 
 def _in_blocks(
-    pilot: RollPilot,
-    f_t: FloatArray,
-    f_d: FloatArray,
-    runs: int,
-    remnant_scale: float,
-    rng: np.random.Generator | None,
-    rate_hz: float,
-    start: int,
+    parts: _LoopParts, f_t: FloatArray, f_d: FloatArray, dt: float, start: int
 ) -> dict[str, FloatArray]:
     """:func:`_simulate` in blocks of the shorter pilot delay (both delays >= 1 sample)."""
-    dt = 1.0 / rate_hz
-    pe, px, d_pe, d_px, remnant = _loop_parts(pilot, runs, remnant_scale, rng, rate_hz)
+    pe, px, d_pe, d_px, remnant, runs = (getattr(parts, f) for f in _PARTS)
     size = min(d_pe, d_px)
     # time-major histories, with zeros before the run for the delayed inputs
     lead = max(d_pe, d_px)
@@ -255,6 +252,9 @@ def _in_blocks(
         u_all[k : k + m], n_all[k : k + m] = u, n
     kept = {"e": e_all[lead:], "u": u_all, "x": x_all[lead:], "n": n_all}
     return {k: np.ascontiguousarray(v[start:].T) for k, v in kept.items()}
+
+
+_PARTS = ("pe", "px", "d_pe", "d_px", "remnant", "runs")
 
 
 def _hold_blocks(

@@ -13,7 +13,8 @@ and pitch-heave, §6.3.5):
 
     u = H_pe e_display - H_ptheta theta_felt + n,   theta = K H_theta,de (u + f_d)
 
-Runs are simulated at 100 Hz, vectorised over runs (as :mod:`twin.pilot.loop`). Crossover
+Runs are simulated at 100 Hz, vectorised over runs and in blocks of the pilot's shorter delay
+(:mod:`twin.pilot.pitch_loop`, as :mod:`twin.pilot.loop`). Crossover
 frequencies and phase margins of the disturbance and target open loops come from
 python-control's ``stability_margins`` on the analytic open loops (Eq 5.11 motion).
 
