@@ -86,5 +86,5 @@ def test_the_step_fits_lag_response_is_lsims_to_the_bit(tau):
     u = np.where(rng.random(t.size) < 0.7, np.sign(np.sin(3 * t)), rng.standard_normal(t.size))
     _, expected, _ = signal.lsim(([1.0], [tau, 1.0]), u, t - t[0])
     assert lag_response(t, u, tau).tobytes() == expected.tobytes()
-    with pytest.raises(SignalError, match="uniform times"):
+    with pytest.raises(SignalError, match="equally spaced times; got 3 times unequally"):
         lag_response(t[[0, 1, 3]], u[:3], tau)

@@ -21,14 +21,16 @@ def test_forcing_functions_are_table_2_2_on_the_81_92_s_grid():
     assert FT.omega_rad_s[-1] == pytest.approx(16.336, abs=1e-3)  # Table 2.2: k = 213
 
 
-def test_the_simulated_loop_is_the_pilot_model():
-    """Noise-free loop: U = E H_pe - X H_px at all 24 input lines within 1 % (Eq 2.2)."""
-    d = simulate_loop(PILOT, FD, FT)
+@pytest.mark.parametrize("pilot", [PILOT, RollPilot(k_m=0.0)], ids=["pilot", "no-motion"])
+def test_the_simulated_loop_is_the_pilot_model(pilot):
+    """Noise-free loop: U = E H_pe - X H_px at all 24 input lines within 1 % (Eq 2.2), also
+    for a pilot without the motion channel (K_m = 0)."""
+    d = simulate_loop(pilot, FD, FT)
     n = d.e.shape[1]
     E, U, X = (np.fft.rfft(s[0]) * 2 / n for s in (d.e, d.u, d.x))
     k = np.concatenate([FD.bins(), FT.bins()])
     w = 2 * np.pi * k / 81.92
-    residual = U[k] - (E[k] * PILOT.h_pe(w) - X[k] * PILOT.h_px(w))
+    residual = U[k] - (E[k] * pilot.h_pe(w) - X[k] * pilot.h_px(w))
     assert np.abs(residual / U[k]).max() < 0.01
 
 

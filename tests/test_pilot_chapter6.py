@@ -189,6 +189,7 @@ def test_the_pitch_loop_in_blocks_has_the_bits_of_the_loop_stepped(change, model
 
     from configurations import everything
 
+    from twin.errors import SignalError
     from twin.pilot.pitch import pitch_loop
     from twin.pilot.pitch_loop import fly, fly_stepped
 
@@ -196,14 +197,21 @@ def test_the_pitch_loop_in_blocks_has_the_bits_of_the_loop_stepped(change, model
     # past a remnant block (1000 samples); fewer where the chain is stepped every sample
     size = 157 if model == "full" else 1203 if pilot.tau_m > 0.005 else 300
 
-    def loop():
-        whole = pitch_loop(pilot, everything(), 2, 6, scale, 100.0, model)
+    reports = {"stepped": [], "flown": []}
+
+    def loop(name):
+        whole = pitch_loop(pilot, everything(), 2, 6, scale, 100.0, model,
+                           lambda *a: reports[name].append(a))  # fmt: skip
         return replace(whole, t=whole.t[:size], f_t=whole.f_t[:size], f_d=whole.f_d[:size],
                        start=40)  # fmt: skip
 
-    stepped, flown = fly_stepped(loop()), fly(loop())
+    once = loop("flown")
+    stepped, flown = fly_stepped(loop("stepped")), fly(once)
     assert sorted(flown) == ["e", "n", "theta", "theta_felt", "u"]
     for name, values in stepped.items():
         assert values.shape == (2, size - 40)
         assert values.tobytes() == flown[name].tobytes(), name
     assert np.ptp(stepped["theta_felt"]) > 0.0
+    assert reports["flown"] == reports["stepped"] and len(reports["flown"]) >= 50
+    with pytest.raises(SignalError, match="flown once"):
+        fly(once)

@@ -43,11 +43,12 @@ def lag_response(t: FloatArray, u: FloatArray, tau: float) -> FloatArray:
     :func:`scipy.signal.lsim`'s first-order-hold recursion, ``x[i] = x[i-1] Ad + u[i-1] Bd0 +
     u[i] Bd1`` from its own discretisation, run by :func:`scipy.signal.lfilter` instead of a
     Python loop: the same products and sums in the same order (lfilter's transposed direct
-    form II adds ``u[i-1] Bd0 - x[i-1] (-Ad)`` first), so the same values (tested), 100 times
+    form II adds ``u[i-1] Bd0 - x[i-1] (-Ad)`` first), so the same values (tested), some 50 times
     faster; the threshold fit evaluates it some 100 times a fit.
     """
     if t.size < 2 or not np.allclose(np.diff(t), t[1] - t[0]):
-        raise SignalError(f"the lag response needs two or more uniform times; got {t.size}")
+        raise SignalError(f"the lag response needs two or more equally spaced times; got {t.size}"
+                          " times" + (" unequally spaced" if t.size >= 2 else ""))  # fmt: skip
     a, b, c, d = signal.tf2ss([1.0], [tau, 1.0])
     dt = t[1] - t[0]
     m = np.vstack([np.hstack([a * dt, b * dt, np.zeros((1, 1))]),

@@ -183,7 +183,8 @@ def _parser() -> argparse.ArgumentParser:
     """Return the parser :func:`main` uses, built once per process.
 
     Building it reads nothing of the environment and parsing leaves it as it was; a build
-    costs 20-40 ms, which a test suite calling :func:`main` hundreds of times notices.
+    costs 20-40 ms, which a test suite calling :func:`main` hundreds of times notices. The
+    commands' functions are bound when it is built (patch what they call, not them).
     """
     return build_parser()
 

@@ -57,6 +57,12 @@ class _Filter:
 
 
 def _bilinear(num: FloatArray, den: FloatArray, rate: float) -> tuple[FloatArray, FloatArray]:
+    """Return the bilinear transform of num/den at ``rate``.
+
+    A zero numerator (K_m = 0: no motion channel) is a zero gain, which scipy cannot transform.
+    """
+    if not np.any(num):
+        return np.zeros(1), np.ones(1)
     b, a = signal.bilinear(num, den, fs=rate)
     return b, a
 
@@ -168,7 +174,7 @@ def _simulate(
     once (:meth:`_Filter.block`) and H_c's zero-order hold is a running sum
     (:func:`_hold_blocks`), with the products and sums of stepping sample by sample in the
     same order, so the same bits (tested against :func:`_stepped`, which a pilot with a
-    delay under half a sample still takes).
+    delay that rounds to no sample still takes).
     """
     parts = _LoopParts.of(pilot, runs, remnant_scale, rng, rate_hz)
     run = _stepped if min(parts.d_pe, parts.d_px) < 1 else _in_blocks
@@ -204,7 +210,8 @@ def _stepped(
     parts: _LoopParts, f_t: FloatArray, f_d: FloatArray, dt: float, start: int
 ) -> dict[str, FloatArray]:
     """:func:`_simulate` one sample at a time (the reference of :func:`_in_blocks`)."""
-    pe, px, d_pe, d_px, remnant, runs = (getattr(parts, f) for f in _PARTS)
+    pe, px, remnant, runs = parts.pe, parts.px, parts.remnant, parts.runs
+    d_pe, d_px = parts.d_pe, parts.d_px
     pos, vel = np.zeros(runs), np.zeros(runs)  # H_c = 4 / s^2 by zero-order hold
     n_keep = f_t.size - start
     out = {k: np.empty((runs, n_keep)) for k in ("e", "u", "x", "n")}
@@ -232,15 +239,16 @@ def _in_blocks(
     parts: _LoopParts, f_t: FloatArray, f_d: FloatArray, dt: float, start: int
 ) -> dict[str, FloatArray]:
     """:func:`_simulate` in blocks of the shorter pilot delay (both delays >= 1 sample)."""
-    pe, px, d_pe, d_px, remnant, runs = (getattr(parts, f) for f in _PARTS)
-    size = min(d_pe, d_px)
+    pe, px, remnant, runs = parts.pe, parts.px, parts.remnant, parts.runs
+    d_pe, d_px = parts.d_pe, parts.d_px
+    block = min(d_pe, d_px)
     # time-major histories, with zeros before the run for the delayed inputs
     lead = max(d_pe, d_px)
     e_all, x_all = np.zeros((lead + f_t.size, runs)), np.zeros((lead + f_t.size, runs))
     u_all, n_all = np.empty((f_t.size, runs)), np.empty((f_t.size, runs))
     pos, vel = np.zeros(runs), np.zeros(runs)
-    for k in range(0, f_t.size, size):
-        m = min(size, f_t.size - k)
+    for k in range(0, f_t.size, block):
+        m = min(block, f_t.size - k)
         ye = pe.block(e_all[lead + k - d_pe : lead + k - d_pe + m])
         yx = px.block(x_all[lead + k - d_px : lead + k - d_px + m])
         n = remnant.samples(k, m) if remnant is not None else np.zeros((m, runs))
@@ -252,9 +260,6 @@ def _in_blocks(
         u_all[k : k + m], n_all[k : k + m] = u, n
     kept = {"e": e_all[lead:], "u": u_all, "x": x_all[lead:], "n": n_all}
     return {k: np.ascontiguousarray(v[start:].T) for k, v in kept.items()}
-
-
-_PARTS = ("pe", "px", "d_pe", "d_px", "remnant", "runs")
 
 
 def _hold_blocks(

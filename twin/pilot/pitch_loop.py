@@ -10,7 +10,8 @@ the motion ``d_m`` samples late, so the block's felt attitude is needed only aft
 block the pilot's channels act on samples of earlier blocks, so they are filtered at once
 (:meth:`twin.pilot.loop._Filter.block`) and only the aircraft is stepped sample by sample.
 The products and sums are those of :func:`fly_stepped`, in the same order: the same bits
-(tested). A pilot whose delay rounds to no sample is stepped one sample at a time.
+(tested). A pilot whose delay rounds to no sample is stepped one sample at a time. A
+loop is flown once: flying moves its filters, remnant and chain on.
 """
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ from numpy.typing import NDArray
 
 from twin.chain.response import PlatformResponse
 from twin.chain.stream import ChainStream
+from twin.errors import SignalError
 from twin.frames import DOF_NAMES
 from twin.pilot.loop import Remnant, _Filter
 from twin.progress import ProgressFn
@@ -83,6 +85,7 @@ class PitchLoop:
     dt: float
     start: int
     progress: ProgressFn | None
+    flown: bool = False
 
     @property
     def runs(self) -> int:
@@ -117,8 +120,16 @@ def fly(loop: PitchLoop) -> dict[str, FloatArray]:
     return _fly_in_blocks(loop)
 
 
+def _take_off(loop: PitchLoop) -> None:
+    """Mark ``loop`` flown; refuse a second flight (its filters and chain have moved on)."""
+    if loop.flown:
+        raise SignalError("a pitch loop is flown once; build another with pitch_loop()")
+    loop.flown = True
+
+
 def fly_stepped(loop: PitchLoop) -> dict[str, FloatArray]:
     """Fly ``loop`` one sample at a time (the reference of :func:`fly`'s blocks)."""
+    _take_off(loop)
     size, runs, block = loop.f_t.size, loop.runs, loop.chain_block
     state, held_u = np.zeros((loop.ad.shape[0], runs)), np.zeros(runs)
     jets = np.zeros((runs, block, 6, 3))
@@ -150,6 +161,7 @@ def fly_stepped(loop: PitchLoop) -> dict[str, FloatArray]:
 
 def _fly_in_blocks(loop: PitchLoop) -> dict[str, FloatArray]:
     """:func:`fly` in blocks of at most the shorter delay, none across a chain step."""
+    _take_off(loop)
     size, runs, block = loop.f_t.size, loop.runs, loop.chain_block
     state, held_u = np.zeros((loop.ad.shape[0], runs)), np.zeros(runs)
     jets = np.zeros((runs, block, 6, 3))
@@ -184,6 +196,8 @@ def _fly_in_blocks(loop: PitchLoop) -> dict[str, FloatArray]:
             begin = k - first - m
             motion = loop.chain.step(jets[:, : k - begin])
             felt_all[lead + begin : lead + k] = loop._felt(motion, begin, k)
-        if k == size or k // every > (k - m) // every:  # a reporting sample passed
-            loop._report(k if k == size else k - k % every, every)
+        for done in range((k - m) // every * every + every, k + 1, every):
+            loop._report(done, every)  # the reports stepping makes, at the block's end
+        if k % every:
+            loop._report(k, every)  # the last sample
     return loop._outputs(e_all[lead:], series["u"], series["theta"], series["n"], felt_all[lead:])
