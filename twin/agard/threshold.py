@@ -56,9 +56,10 @@ def lag_response(t: FloatArray, u: FloatArray, tau: float) -> FloatArray:
                    np.zeros((1, 3))])  # fmt: skip
     exp_mt = linalg.expm(m.T)
     ad, bd1 = exp_mt[0, 0], exp_mt[2, 0]
-    bd0 = exp_mt[1:2, :1] - exp_mt[2:, :1]
+    bd0 = exp_mt[1, 0] - bd1
     x = np.zeros(u.size)
-    x[1:], _ = signal.lfilter([bd1, bd0[0, 0]], [1.0, -ad], u[1:], zi=u[:1] * bd0[0])
+    x[1:], _ = signal.lfilter([bd1, bd0], [1.0, -ad], u[1:], zi=u[:1] * bd0)
+    # lsim's output, y = x C^T + u D^T, as it computes it
     return np.squeeze(x[:, None] @ c.T) + np.squeeze(u[:, None] @ d.T)
 
 

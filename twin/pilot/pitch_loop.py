@@ -97,6 +97,11 @@ class PitchLoop:
         """Samples per motion-chain step: the motion delay (at least one)."""
         return max(1, self.d_m)
 
+    @property
+    def report_every(self) -> int:
+        """Samples between progress reports (about 2 % of the flight)."""
+        return max(1, self.f_t.size // 50)
+
     def _felt(self, motion: PlatformResponse, begin: int, end: int) -> FloatArray:
         """Return the attitude felt at samples ``begin`` to ``end - 1``, (samples, runs)."""
         return self.feel(motion, self.station_m, self.t[begin:end]).T
@@ -135,7 +140,7 @@ def fly_stepped(loop: PitchLoop) -> dict[str, FloatArray]:
     jets = np.zeros((runs, block, 6, 3))
     series = {k: np.empty((size, runs)) for k in ("e", "u", "theta", "n", "felt")}
     zeros = np.zeros(runs)
-    every = max(1, size // 50)
+    every = loop.report_every
     for k in range(size):
         theta_jet = (loop.jet_x @ state).T + held_u[:, None] * loop.jet_u  # (runs, 3)
         theta = theta_jet[:, 0]
@@ -169,7 +174,7 @@ def _fly_in_blocks(loop: PitchLoop) -> dict[str, FloatArray]:
     lead = max(loop.d_v, loop.d_m)
     e_all, felt_all = np.zeros((lead + size, runs)), np.zeros((lead + size, runs))
     series = {k: np.empty((size, runs)) for k in ("u", "theta", "n")}
-    every = max(1, size // 50)
+    every = loop.report_every
     k = 0
     while k < size:
         m = min(loop.d_v, block - k % block, size - k)
@@ -198,6 +203,6 @@ def _fly_in_blocks(loop: PitchLoop) -> dict[str, FloatArray]:
             felt_all[lead + begin : lead + k] = loop._felt(motion, begin, k)
         for done in range((k - m) // every * every + every, k + 1, every):
             loop._report(done, every)  # the reports stepping makes, at the block's end
-        if k % every:
+        if k == size and k % every:
             loop._report(k, every)  # the last sample
     return loop._outputs(e_all[lead:], series["u"], series["theta"], series["n"], felt_all[lead:])
