@@ -1,0 +1,52 @@
+"""The Cramer-Rao bound at a given pilot (:func:`twin.pilot.mle.bound_at`)."""
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from twin.chain.config import motion_system
+from twin.errors import SignalError
+from twin.pilot.experiment import pitch_remnant_scale
+from twin.pilot.mle import PARAMETERS, bound_at, fit_pitch_pilot
+from twin.pilot.pitch import PitchPilot, simulate_pitch
+
+TRUTH = PitchPilot(tau_v=0.275)  # visual + display delay on the 10 ms simulation grid
+CFG = motion_system("condition-8")
+
+
+@pytest.fixture(scope="module")
+def runs():
+    """Five repetitions of condition 8 at the thesis' remnant level (15 %)."""
+    return simulate_pitch(TRUTH, CFG, 5, seed=3, remnant_scale=pitch_remnant_scale(TRUTH, 0.15))
+
+
+def test_bound_at_the_estimate_is_the_fits_bound(runs):
+    """Asked at the fit's own estimate, the bound is the one the fit reports (the same Fisher
+    information; the two differ only in their finite differences)."""
+    fit = fit_pitch_pilot(runs.ft, runs.fd, runs.u, CFG)
+    at = bound_at(fit.pilot, runs.ft, runs.fd, runs.u, CFG)
+    for name in PARAMETERS:
+        assert at[name] == pytest.approx(fit.crlb[name], rel=0.02), name
+
+
+def test_the_lead_lag_bounds_scale_with_the_lag(runs):
+    """Why the reported bound of t_lead and t_lag is too narrow when t_lag comes out low: with
+    the net lead t_lead - t_lag held (the data pin it down) and the other parameters at the
+    truth, halving t_lag (0.1 to 0.05 s) narrows t_lead's bound by more than a quarter and
+    t_lag's by more than a tenth, while k_v's changes by less than a fifth."""
+    low = dataclasses.replace(TRUTH, t_lead=TRUTH.t_lead - 0.05, t_lag=TRUTH.t_lag - 0.05)
+    at_truth = bound_at(TRUTH, runs.ft, runs.fd, runs.u, CFG)
+    at_low = bound_at(low, runs.ft, runs.fd, runs.u, CFG)
+    assert at_low["t_lead"] < 0.75 * at_truth["t_lead"]
+    assert at_low["t_lag"] < 0.9 * at_truth["t_lag"]
+    assert at_truth["k_v"] / at_low["k_v"] == pytest.approx(1.0, abs=0.2)
+
+
+def test_bound_at_refuses_what_it_cannot_use(runs):
+    with pytest.raises(SignalError, match="finite"):
+        bound_at(dataclasses.replace(TRUTH, k_v=np.nan), runs.ft, runs.fd, runs.u, CFG)
+    with pytest.raises(SignalError, match="constant"):
+        bound_at(TRUTH, runs.ft, runs.fd, np.zeros_like(runs.u), CFG)
+    with pytest.raises(SignalError, match="1-D windows"):
+        bound_at(TRUTH, runs.ft[:100], runs.fd, runs.u, CFG)
