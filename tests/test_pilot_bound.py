@@ -43,8 +43,22 @@ def test_the_lead_lag_bounds_scale_with_the_lag(runs):
     assert at_truth["k_v"] / at_low["k_v"] == pytest.approx(1.0, abs=0.2)
 
 
+def test_a_parameter_the_data_do_not_see_gets_an_infinite_bound_and_only_it(runs):
+    """k_m = 0 leaves tau_m unseen; at t_lag = 0 a first-order lag acts as a delay, so t_lag
+    and tau_v cannot be told apart. Those get an infinite bound, the others a finite one near
+    their bound with the parameter seen (not zero, not all infinite)."""
+    at = bound_at(TRUTH, runs.ft, runs.fd, runs.u, CFG)
+    no_motion = bound_at(dataclasses.replace(TRUTH, k_m=0.0), runs.ft, runs.fd, runs.u, CFG)
+    assert no_motion["tau_m"] == np.inf
+    for name in set(PARAMETERS) - {"tau_m"}:
+        assert 0.5 < no_motion[name] / at[name] < 2.0, name
+    no_lag = bound_at(dataclasses.replace(TRUTH, t_lag=0.0), runs.ft, runs.fd, runs.u, CFG)
+    assert {n for n, b in no_lag.items() if not np.isfinite(b)} == {"t_lag", "tau_v"}
+    assert all(b > 0 for b in no_lag.values())
+
+
 def test_bound_at_refuses_what_it_cannot_use(runs):
-    with pytest.raises(SignalError, match="finite"):
+    with pytest.raises(SignalError, match="pilot's parameters must be finite"):
         bound_at(dataclasses.replace(TRUTH, k_v=np.nan), runs.ft, runs.fd, runs.u, CFG)
     with pytest.raises(SignalError, match="constant"):
         bound_at(TRUTH, runs.ft, runs.fd, np.zeros_like(runs.u), CFG)

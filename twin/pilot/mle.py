@@ -152,6 +152,9 @@ class PilotFit:
 #: beyond it the linearisation the bound rests on fails (the lead-lag pair at the thesis'
 #: remnant level: estimates spread 2-3x wider than their bound).
 IDENTIFIABLE_REL_SD = 1 / 3
+#: Eigenvalues of the Fisher information below this fraction of the largest count as zero: the
+#: data do not see those directions (a bound of infinity for the parameters in them).
+SINGULAR_REL = 1e-12
 #: Most lines the forcing functions may have (Table 6.2: 10 + 10).
 MAX_LINES = 64
 #: Fewest neighbouring bins on each side of a line whose power estimates the remnant there,
@@ -256,7 +259,7 @@ def line_data(
     return w, spectra[0][lines], spectra[1][lines], mean_u, var
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class _LineProblem:
     """The fit's data at the forcing functions' lines and its weighted residual (the MLE's)."""
 
@@ -301,11 +304,24 @@ class _LineProblem:
 
 
 def _bounds(jac: FloatArray) -> FloatArray:
-    """Cramer-Rao bound of each parameter's sd from the residual's Jacobian (Eq 2.26)."""
+    """Cramer-Rao bound of each parameter's sd from the residual's Jacobian (Eq 2.26).
+
+    Where the information is singular (k_m = 0 leaves tau_m unseen; t_lead = t_lag = 0 makes
+    the pair's columns proportional) the parameters in its null space get an infinite bound
+    and the others theirs from the pseudo-inverse, not a bound of zero or all infinite.
+    """
+    info = jac.T @ jac
     try:
-        return np.sqrt(np.clip(np.diag(np.linalg.inv(jac.T @ jac)), 0, None))
+        var = np.diag(np.linalg.inv(info))
     except np.linalg.LinAlgError:
-        return np.full(jac.shape[1], np.inf)
+        var = np.full(info.shape[0], -1.0)
+    if np.all(var > 0) and np.all(np.isfinite(var)):
+        return np.sqrt(var)
+    eig, vec = np.linalg.eigh(info)
+    null = eig <= max(eig.max(), 0.0) * SINGULAR_REL
+    unseen = (np.abs(vec[:, null]) > 1e-6).any(axis=1)
+    var = (vec[:, ~null] ** 2 / eig[~null]).sum(axis=1)
+    return np.where(unseen, np.inf, np.sqrt(var))
 
 
 def bound_at(
@@ -332,13 +348,29 @@ def bound_at(
     ----------
     pilot : PitchPilot
         Where to evaluate the bound.
-    ft, fd, u, config, rate_hz, hold
-        As :func:`fit_pitch_pilot`: the remnant's variance at each line is taken from ``u``.
+    ft, fd : ndarray, shape (n,)
+        Target and disturbance over a window of whole periods [rad].
+    u : ndarray, shape (n,) or (runs, n)
+        Control signal of one run or of repetitions; the remnant's variance at each line is
+        taken from it (as :func:`fit_pitch_pilot` does).
+    config : MotionSystem
+        The motion system in the loop.
+    rate_hz : float
+        Sample rate [Hz].
+    hold : bool
+        The loop holds u over each sample (as :func:`fit_pitch_pilot`).
 
     Returns
     -------
     dict of str to float
-        Each parameter's bound (one sd); infinite where the information is singular.
+        Each parameter's bound (one sd); infinite for a parameter the data do not see there
+        (tau_m where k_m = 0; the lead-lag pair where t_lead = t_lag = 0).
+
+    Raises
+    ------
+    SignalError
+        A pilot parameter that is not finite, or a window the fit would refuse (see
+        :func:`fit_pitch_pilot`).
 
     """
     problem = _LineProblem.of(ft, fd, u, config, rate_hz, hold, pilot)
