@@ -21,13 +21,25 @@ def runs():
     return simulate_pitch(TRUTH, CFG, 5, seed=3, remnant_scale=pitch_remnant_scale(TRUTH, 0.15))
 
 
-def test_bound_at_the_estimate_is_the_fits_bound(runs):
-    """Asked at the fit's own estimate, the bound is the one the fit reports (the same Fisher
-    information; the two differ only in their finite differences)."""
+def test_the_fits_bound_covers_every_minimum_it_cannot_rule_out(runs):
+    """At its estimate the fit's bound is :func:`bound_at`'s (the same Fisher information;
+    they differ only in their finite differences); the bound it reports is widened until two
+    of it cover each competing minimum's own two bounds: the largest of bound + half the
+    distance from the estimate over the estimate and the competing minima."""
     fit = fit_pitch_pilot(runs.ft, runs.fd, runs.u, CFG)
-    at = bound_at(fit.pilot, runs.ft, runs.fd, runs.u, CFG)
+    assert fit.competing  # five repetitions at this remnant level still leave the pair's two
+    minima = (fit.pilot, *fit.competing)
+    at = [bound_at(p, runs.ft, runs.fd, runs.u, CFG) for p in minima]
     for name in PARAMETERS:
-        assert at[name] == pytest.approx(fit.crlb[name], rel=0.02), name
+        assert at[0][name] == pytest.approx(fit.crlb_at_estimate[name], rel=0.02), name
+        est = getattr(fit.pilot, name)
+        cover = max(b[name] + abs(getattr(p, name) - est) / 2
+                    for p, b in zip(minima, at, strict=True))  # fmt: skip
+        assert cover == pytest.approx(fit.crlb[name], rel=0.02), name
+        assert fit.crlb[name] >= fit.crlb_at_estimate[name]
+    out = fit.to_dict()
+    assert len(out["competing_minima"]) == len(fit.competing)
+    assert out["crlb_sd_at_estimate"] == fit.crlb_at_estimate
 
 
 def test_the_lead_lag_bounds_scale_with_the_lag(runs):

@@ -392,7 +392,14 @@ def _cmd_identify(args: argparse.Namespace) -> int:
             span = ""
             if mle.intervals is not None:
                 span = "  2-sd interval " + _interval_text(name, *mle.intervals[name])
-            print(f"  {name:9s} {getattr(p, name):8.4f}  (CRLB sd {sd:.4f}){span}{flag}")
+            own = (mle.crlb_at_estimate or mle.crlb)[name]
+            at = "" if own == sd else f", {own:.4f} at the estimate alone"
+            print(f"  {name:9s} {getattr(p, name):8.4f}  (CRLB sd {sd:.4f}{at}){span}{flag}")
+        for other in mle.competing:
+            moved = ", ".join(f"{n} {getattr(other, n):.4f}" for n in mle.crlb
+                              if getattr(other, n) != getattr(p, n))  # fmt: skip
+            print(f"  another minimum the run does not rule out (Vuong's test; the bounds "
+                  f"above are widened to cover it): {moved}")  # fmt: skip
         print(
             f"  ARX structure {arx.orders}; FC and ARX responses at "
             f"{fc.omega_rad_s.size} lines in --json"

@@ -28,6 +28,7 @@ from scipy.optimize import least_squares
 
 from twin.chain.config import MotionSystem
 from twin.errors import SignalError
+from twin.pilot.minima import competing, distinct, widened
 from twin.pilot.pitch import PitchPilot, aircraft, motion_response
 from twin.pilot.profile import likelihood_interval
 from twin.plotting import finish, pyplot
@@ -75,21 +76,31 @@ class PilotFit:
     pilot : PitchPilot
         Estimated parameters.
     crlb : dict of str to float
-        Cramer-Rao lower bound of each parameter's standard deviation.
+        Cramer-Rao lower bound of each parameter's standard deviation at the estimate, widened
+        where minima compete so that two of it cover each competing minimum's own two bounds
+        (:func:`twin.pilot.minima.widened`: the truth may sit in any of them); equal to
+        ``crlb_at_estimate`` without competing minima.
     vaf_percent : float
         Variance-Accounted-For of u [%].
     residual_sd : float
         Standard deviation of the output error.
     unidentifiable : tuple of str
-        Parameters whose Cramer-Rao bound exceeds ``IDENTIFIABLE_REL_SD`` of their value, that
-        another, equally good minimum puts elsewhere, or (with intervals) whose likelihood-ratio
-        interval reaches much farther than two bounds (reported, not hidden).
+        Parameters whose bound (``crlb``, so widened by any competing minimum that puts them
+        elsewhere) exceeds ``IDENTIFIABLE_REL_SD`` of their value, or (with intervals) whose
+        likelihood-ratio interval reaches much farther than two bounds (reported, not hidden).
     intervals : dict of str to (float, float), or None
         Likelihood-ratio interval of each parameter (two standard deviations where the
         likelihood is a parabola; :mod:`twin.pilot.profile`), when asked for: honest where the
         bound is not (the lead-lag pair's several minima). An end at ``UPPER``, or at a
         ``LOWER`` above zero, is open: the data do not bound the parameter there (a lower end
         at zero is the physical limit of a time constant, delay or gain).
+    competing : tuple of PitchPilot
+        Other minima the data do not tell from the estimate (chi-square within
+        ``COMPETING_CHI2``, or not rejected by Vuong's test: :mod:`twin.pilot.minima`), best
+        first: from one run at the thesis' remnant level, typically the lead-lag pair's other
+        basin (t_lead near 0.5 s, t_lag near 0.9 s).
+    crlb_at_estimate : dict of str to float, or None
+        The Cramer-Rao bound at the estimate alone (the inverse Fisher information there).
 
     """
 
@@ -99,6 +110,8 @@ class PilotFit:
     residual_sd: float
     unidentifiable: tuple[str, ...] = ()
     intervals: dict[str, tuple[float, float]] | None = None
+    competing: tuple[PitchPilot, ...] = ()
+    crlb_at_estimate: dict[str, float] | None = None
 
     def to_dict(self) -> dict[str, object]:
         """JSON-ready."""
@@ -109,6 +122,8 @@ class PilotFit:
             "vaf_percent": self.vaf_percent,
             "residual_sd": self.residual_sd,
             "not_identifiable": list(self.unidentifiable),
+            "competing_minima": [dataclasses.asdict(c) for c in self.competing],
+            "crlb_sd_at_estimate": self.crlb_at_estimate or self.crlb,
         }
         if self.intervals is not None:
             out["likelihood_interval_2sd"] = {k: list(v) for k, v in self.intervals.items()}
@@ -164,8 +179,8 @@ NEIGHBOURS, NEIGHBOURS_REL = 4, 0.1
 START_DELAYS = ((0.30, 0.20), (0.20, 0.15), (0.40, 0.30), (0.25, 0.10))
 START_LEADS = (None, (0.1, 0.1), (0.5, 0.5))
 START_KM = (None, 0.0)
-#: Chi-square margin within which another minimum competes with the best (the 95 % point of
-#: chi-square with one degree of freedom).
+#: Chi-square margin within which another minimum competes with the best whatever Vuong's
+#: test says (the 95 % point of chi-square with one degree of freedom).
 COMPETING_CHI2 = 3.84
 #: Minima within this chi-square of the best start the profile fits of the intervals.
 PROFILE_CHI2 = 10.0
@@ -302,6 +317,14 @@ class _LineProblem:
         r = (U - _closed_loop_u(self.make(v), w, Ft, Fd, self.config, self.hold_s)) / sd
         return np.concatenate([r.real, r.imag])
 
+    def jacobian(self, v: FloatArray) -> FloatArray:
+        """Return the residual's Jacobian at ``v`` by central differences."""
+        step = 1e-6 * np.maximum(np.abs(v), 1e-2)
+        return np.stack(
+            [(self.residual(v + e) - self.residual(v - e)) / (2 * h)
+             for h, e in zip(step, np.diag(step), strict=True)], axis=1,
+        )  # fmt: skip
+
 
 def _bounds(jac: FloatArray) -> FloatArray:
     """Cramer-Rao bound of each parameter's sd from the residual's Jacobian (Eq 2.26).
@@ -377,12 +400,7 @@ def bound_at(
     x = np.array([getattr(pilot, n) for n in PARAMETERS], dtype=float)
     if not np.all(np.isfinite(x)):
         raise SignalError(f"the pilot's parameters must be finite; got {pilot}")
-    step = 1e-6 * np.maximum(np.abs(x), 1e-2)
-    jac = np.stack(
-        [(problem.residual(x + e) - problem.residual(x - e)) / (2 * h)
-         for h, e in zip(step, np.diag(step), strict=True)], axis=1,
-    )  # fmt: skip
-    return dict(zip(PARAMETERS, map(float, _bounds(jac)), strict=True))
+    return dict(zip(PARAMETERS, map(float, _bounds(problem.jacobian(x))), strict=True))
 
 
 def fit_pitch_pilot(
@@ -405,11 +423,15 @@ def fit_pitch_pilot(
     information is the Cramer-Rao bound for a coloured remnant (a time-domain fit with one
     white-noise variance for every sample is not). The cost has local minima in the delays and
     the lead-lag pair, so a grid of starts (delays, lead-lag, motion gain on or off) is tried
-    and the best kept. A parameter is reported not identifiable when its bound exceeds
-    ``IDENTIFIABLE_REL_SD`` of its value, or when another minimum explains the data as well
-    (chi-square within ``COMPETING_CHI2`` of the best) with that parameter more than two bounds
-    away: the bound describes one minimum's curvature and says nothing of the other (the
-    lead-lag pair at the thesis' remnant level has a second minimum near t_lead 0.4-0.6 s).
+    and the best kept. Another minimum competes with it when the data do not tell them apart:
+    chi-square within ``COMPETING_CHI2`` of the best, or Vuong's test for non-nested models
+    does not prefer the best (:mod:`twin.pilot.minima`; the lead-lag pair at the thesis'
+    remnant level has a second minimum near t_lead 0.4-0.6 s that one run rarely rules out).
+    The truth may sit in any competing minimum, with that minimum's bound as its spread, so
+    each parameter's reported bound is widened until two of it cover every competing minimum's
+    own two bounds (from one run this lifts omega_nm's coverage from 80 % to over 90 %). A
+    parameter is reported not identifiable when that bound exceeds ``IDENTIFIABLE_REL_SD`` of
+    its value: one minimum's curvature is then no description of its uncertainty.
     With ``intervals``, a parameter whose likelihood-ratio interval reaches on either side more
     than ``QUADRATIC_SIDE_RATIO`` times two bounds from the estimate is reported too: the
     profile found what the starts did not, and the interval, not the bound, is its uncertainty.
@@ -449,40 +471,37 @@ def fit_pitch_pilot(
             progress("MLE starts", len(sols), len(starts))
     sols.sort(key=lambda sol: sol.cost)
     best = sols[0]
+    minima = distinct([sol.x for sol in sols])
+    rivals = competing(residual, minima, COMPETING_CHI2)
     crlb = _bounds(best.jac)
-    # least_squares' cost is half the chi-square
-    rivals = [sol.x for sol in sols[1:] if 2 * (sol.cost - best.cost) < COMPETING_CHI2]
+    reported = widened(best.x, crlb, rivals, [_bounds(problem.jacobian(x)) for x in rivals])
     fitted = make(best.x)
     mean_u = problem.u if problem.u.ndim == 1 else problem.u.mean(axis=0)
     u_hat = model_output(fitted, problem.ft, problem.fd, config, rate_hz, hold)
-    bounds = dict(zip(PARAMETERS, map(float, crlb), strict=True))
+    bounds = dict(zip(PARAMETERS, map(float, reported), strict=True))
+    at_estimate = dict(zip(PARAMETERS, map(float, crlb), strict=True))
     weak = tuple(
         name for i, name in enumerate(PARAMETERS)
         if not bounds[name] < IDENTIFIABLE_REL_SD * max(abs(float(best.x[i])), 1e-9)
-        or any(abs(x[i] - best.x[i]) > 2 * crlb[i] for x in rivals)
     )  # fmt: skip
     ranges = None
     if intervals:
-        minima: list[FloatArray] = []
-        for sol in sols:  # best first, each distinct minimum once
-            near = any(np.allclose(sol.x, m, rtol=1e-3, atol=1e-4) for m in minima)
-            if 2 * (sol.cost - best.cost) < PROFILE_CHI2 and not near:
-                minima.append(sol.x)
+        near = [x for x in minima if residual(x) @ residual(x) - 2 * best.cost < PROFILE_CHI2]
         ranges = {}
         for k, name in enumerate(PARAMETERS):
             # two bounds, or half the estimate where the bound is no guide (the pair at t_lead
             # = t_lag: the bound is infinite there and the profile still curves)
             scale = max(0.5 * abs(best.x[k]), 0.01 * (UPPER[k] - LOWER[k]))
             step = min(2 * crlb[k], scale) if crlb[k] > 0 else scale
-            ranges[name] = likelihood_interval(residual, minima, k, LOWER, UPPER, step)
+            ranges[name] = likelihood_interval(residual, near, k, LOWER, UPPER, step)
             if progress:
                 progress("likelihood intervals", k + 1, len(PARAMETERS))
-        reach = QUADRATIC_SIDE_RATIO * 2 * crlb
+        reach = QUADRATIC_SIDE_RATIO * 2 * reported
         wide = {name for k, (name, (lo, hi)) in enumerate(ranges.items())
                 if not max(hi - best.x[k], best.x[k] - lo) <= reach[k]}  # fmt: skip
         weak = tuple(name for name in PARAMETERS if name in weak or name in wide)
     return PilotFit(fitted, bounds, vaf(mean_u, u_hat), float(np.std(mean_u - u_hat)), weak,
-                    ranges)  # fmt: skip
+                    ranges, tuple(map(make, rivals)), at_estimate)  # fmt: skip
 
 
 def _starts(p0: PitchPilot) -> list[FloatArray]:
