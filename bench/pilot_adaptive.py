@@ -18,8 +18,8 @@
    (condition 8, 15 % remnant, the thesis' level) fitted one by one (two workers); per
    parameter, among the estimates where it counted as identifiable, the fraction within 2
    Cramer-Rao sd of the truth, with the bound at the truth (the bound proper: does the
-   estimator attain it?) and with the bound the fit reports (the largest of those at its
-   estimate and at the minima the data do not rule out); and the
+   estimator attain it?) and with the bound the fit reports (widened to cover the minima the
+   data do not rule out: :mod:`twin.pilot.minima`); and the
    fraction of all estimates whose likelihood-ratio interval (:mod:`twin.pilot.profile`)
    holds the truth (goal >= 90 %). Each with its 95 % Wilson interval: 50 estimates pin a
    coverage down to about +-8 %, 200 to about +-4 %. Once with one run per estimate, once
