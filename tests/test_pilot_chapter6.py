@@ -135,7 +135,8 @@ def test_mle_on_repetitions_narrows_the_bound_as_averaging_should():
     one = fit_pitch_pilot(r.ft, r.fd, r.u[0], cfg)
     five = fit_pitch_pilot(r.ft, r.fd, r.u, cfg)
     for name in ("k_v", "k_m"):
-        assert 1.6 < one.crlb[name] / five.crlb[name] < 3.2, name
+        # the information at the estimate (the reported bound also covers competing minima)
+        assert 1.6 < one.crlb_at_estimate[name] / five.crlb_at_estimate[name] < 3.2, name
         assert abs(getattr(five.pilot, name) - getattr(truth, name)) <= 2.5 * five.crlb[name]
     with pytest.raises(SignalError, match="constant"):
         fit_pitch_pilot(r.ft, r.fd, np.zeros_like(r.u), cfg)
