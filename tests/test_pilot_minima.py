@@ -45,7 +45,21 @@ def test_competing_keeps_the_minima_the_data_do_not_rule_out():
     assert len(minima) == 3  # the two equal points are one minimum
     rivals = competing(residual, minima, chi2=0.0)
     assert [float(x[0]) for x in rivals] == [-2.0]
-    assert vuong_z(residual(minima[0]), residual(minima[0])) == 0.0
+    # within the chi-square margin a rival competes whatever Vuong's test says
+    worse = residual(np.array([1.0]))
+    assert vuong_z(residual(minima[0]), worse) > VUONG_Z
+    margin = float(worse @ worse - residual(minima[0]) @ residual(minima[0])) + 1.0
+    assert [float(x[0]) for x in competing(residual, minima, chi2=margin)] == [-2.0, 1.0]
+
+    # a point of a rival's flat valley that predicts like it (within 0.1 noise sd) is that
+    # rival again, not a second one
+    def valley(v):
+        return (v[0] ** 2 * t + 1e-4 * v[1] - y) / 0.1
+
+    points = [np.array([2.0, 0.0]), np.array([-2.0, 0.0]), np.array([-2.0, 5.0])]
+    assert len(distinct(points)) == 3
+    assert [list(x) for x in competing(valley, points, chi2=0.0)] == [[-2.0, 0.0]]
+    assert len(competing(valley, [points[0], points[2]], chi2=0.0)) == 1
     with pytest.raises(ValueError, match="at least one minimum"):
         competing(residual, [], chi2=3.84)
 
@@ -60,3 +74,7 @@ def test_widened_covers_each_minimums_own_two_bounds():
     assert np.all(best - 2 * sd <= rival - 2 * rb) and np.all(rival + 2 * rb <= best + 2 * sd)
     assert sd[1] == bound[1]  # 11.05 +- 0.02 lies inside 11.0 +- 0.2
     assert sd[0] == pytest.approx(0.1 + 0.3 / 2)
+    # a rival where the data do not see a parameter (k_m = 0 leaves tau_m unseen) makes that
+    # parameter's sd infinite, and only that one
+    sd = widened(best, bound, [rival], [np.array([0.1, np.inf])])
+    assert sd[1] == np.inf and np.isfinite(sd[0])

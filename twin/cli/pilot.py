@@ -393,13 +393,15 @@ def _cmd_identify(args: argparse.Namespace) -> int:
             if mle.intervals is not None:
                 span = "  2-sd interval " + _interval_text(name, *mle.intervals[name])
             own = (mle.crlb_at_estimate or mle.crlb)[name]
-            at = "" if own == sd else f", {own:.4f} at the estimate alone"
-            print(f"  {name:9s} {getattr(p, name):8.4f}  (CRLB sd {sd:.4f}{at}){span}{flag}")
+            sd_text = (f"CRLB sd {sd:.4f}" if own == sd else
+                       f"sd {sd:.4f} widened over competing minima; CRLB {own:.4f}")  # fmt: skip
+            print(f"  {name:9s} {getattr(p, name):8.4f}  ({sd_text}){span}{flag}")
+        own_sd = mle.crlb_at_estimate or mle.crlb
         for other in mle.competing:
-            moved = ", ".join(f"{n} {getattr(other, n):.4f}" for n in mle.crlb
-                              if getattr(other, n) != getattr(p, n))  # fmt: skip
-            print(f"  another minimum the run does not rule out (Vuong's test; the bounds "
-                  f"above are widened to cover it): {moved}")  # fmt: skip
+            moved = ", ".join(f"{n} {getattr(other, n):.4f}" for n in own_sd
+                              if abs(getattr(other, n) - getattr(p, n)) > own_sd[n])  # fmt: skip
+            print("  another minimum the data do not rule out (chi-square within 3.84 or "
+                  f"Vuong's test): {moved or 'within one CRLB of the estimate'}")  # fmt: skip
         print(
             f"  ARX structure {arx.orders}; FC and ARX responses at "
             f"{fc.omega_rad_s.size} lines in --json"

@@ -67,6 +67,13 @@ def model_output(
     return np.fft.irfft(U, n)
 
 
+def _finite(values: dict[str, float] | None) -> dict[str, float | None] | None:
+    """Return ``values`` with each non-finite one as None (JSON has no Infinity)."""
+    if values is None:
+        return None
+    return {k: (v if np.isfinite(v) else None) for k, v in values.items()}
+
+
 @dataclass(frozen=True)
 class PilotFit:
     """Result of the time-domain fit.
@@ -76,10 +83,10 @@ class PilotFit:
     pilot : PitchPilot
         Estimated parameters.
     crlb : dict of str to float
-        Cramer-Rao lower bound of each parameter's standard deviation at the estimate, widened
-        where minima compete so that two of it cover each competing minimum's own two bounds
-        (:func:`twin.pilot.minima.widened`: the truth may sit in any of them); equal to
-        ``crlb_at_estimate`` without competing minima.
+        The standard deviation reported for each parameter: its Cramer-Rao bound at the
+        estimate where no other minimum competes, else that bound widened so that two of it
+        cover each competing minimum's own two bounds (:func:`twin.pilot.minima.widened`: the
+        truth may sit in any of them). JSON ``crlb_sd``.
     vaf_percent : float
         Variance-Accounted-For of u [%].
     residual_sd : float
@@ -101,6 +108,7 @@ class PilotFit:
         basin (t_lead near 0.5 s, t_lag near 0.9 s).
     crlb_at_estimate : dict of str to float, or None
         The Cramer-Rao bound at the estimate alone (the inverse Fisher information there).
+        JSON ``crlb_sd_at_estimate``; non-finite bounds are written as null.
 
     """
 
@@ -118,12 +126,12 @@ class PilotFit:
         p = dataclasses.asdict(self.pilot)
         out: dict[str, object] = {
             "parameters": p,
-            "crlb_sd": self.crlb,
+            "crlb_sd": _finite(self.crlb),
             "vaf_percent": self.vaf_percent,
             "residual_sd": self.residual_sd,
             "not_identifiable": list(self.unidentifiable),
             "competing_minima": [dataclasses.asdict(c) for c in self.competing],
-            "crlb_sd_at_estimate": self.crlb_at_estimate or self.crlb,
+            "crlb_sd_at_estimate": _finite(self.crlb_at_estimate),
         }
         if self.intervals is not None:
             out["likelihood_interval_2sd"] = {k: list(v) for k, v in self.intervals.items()}
@@ -138,7 +146,7 @@ class PilotFit:
         return lo <= value <= hi
 
     def plot(self, path: str | None = None):
-        """Estimated parameters with their Cramer-Rao bounds (1 sd), relative to the estimate.
+        """Estimated parameters with their reported sd (``crlb``), relative to the estimate.
 
         Parameters
         ----------
@@ -157,7 +165,7 @@ class PilotFit:
         fig, ax = plt.subplots(figsize=(7, 3.5))
         ax.bar(names, rel * 100)
         ax.set_xlabel("parameter (Eq 6.5-6.7)")
-        ax.set_ylabel("CRLB sd / |estimate| [%]")
+        ax.set_ylabel("reported sd / |estimate| [%]")
         ax.set_title(f"pilot-model fit: VAF {self.vaf_percent:.1f} %", fontsize=9)
         ax.tick_params(axis="x", labelsize=8)
         return finish(fig, path)
@@ -188,7 +196,8 @@ PROFILE_CHI2 = 10.0
 #: two bounds, for the likelihood to count as a parabola and the bound as the parameter's
 #: uncertainty. Where the data are informative the interval's width is within about 1.4x of
 #: four bounds (median, 50 seeded fits); a side reaching farther means a second minimum or a
-#: flat side the bound cannot see.
+#: flat side the bound cannot see. Measured against the reported bound (widened over the
+#: competing minima), so a side that only reaches a competing minimum is not flagged again.
 QUADRATIC_SIDE_RATIO = 2.0
 
 
@@ -358,10 +367,10 @@ def bound_at(
 ) -> dict[str, float]:
     """Return each parameter's Cramer-Rao bound at a given pilot, for the remnant in ``u``.
 
-    The bound proper is the inverse Fisher information at the *true* parameters; a fit can
-    only report it at its own estimate (:attr:`PilotFit.crlb`). The two differ where the bound
-    depends steeply on the parameters: the lead-lag pair's bounds shrink with t_lag (over 50
-    fits of five repetitions at the thesis' remnant level, t_lead's ran from 0.009 s where
+    The bound proper is the inverse Fisher information at the *true* parameters; a fit can only
+    report it at its own estimate (:attr:`PilotFit.crlb_at_estimate`). The two differ where the
+    bound depends steeply on the parameters: the lead-lag pair's bounds shrink with t_lag (over
+    50 fits of five repetitions at the thesis' remnant level, t_lead's ran from 0.009 s where
     t_lag came out 0.04 s to 0.04 s where it came out 0.17 s), so an estimate whose t_lag came
     out low reports a bound too narrow for the spread it was drawn from. Asked at the truth this
     tells whether the estimator attains the bound (a simulation study's question); asked at a
