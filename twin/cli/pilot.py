@@ -456,9 +456,10 @@ def _cmd_lead(args: argparse.Namespace) -> int:
     cfg = common.configured(args.config, args)
     res = [analyse_lead(cfg, s, args.margin_deg) for s in SENSORS]
     if args.json:
-        rows = [{k: (None if isinstance(v, float) and not np.isfinite(v) else v)
-                 for k, v in r.__dict__.items()} for r in res]  # fmt: skip
-        print(json.dumps(rows, indent=2))  # no threshold: null (strict JSON has no NaN)
+        from twin.jsonable import plain
+
+        # no threshold: null (strict JSON has no NaN)
+        print(json.dumps(plain([r.__dict__ for r in res]), indent=2))
     else:
         print(
             f"lead channel through {cfg.name} (criterion: at most {args.margin_deg:g} deg "

@@ -40,6 +40,7 @@ from twin.diagnose.residuals import (
 )
 from twin.diagnose.select import BIC_MARGIN, Finding, Selection, name_causes
 from twin.errors import SignalError, UsageError
+from twin.jsonable import plain
 from twin.plotting import finish, pyplot
 from twin.progress import ProgressFn
 from twin.runs import RecordedRun
@@ -224,7 +225,7 @@ class Diagnosis:
 
         Numbers are plain Python ones and non-finite values null, ready for ``json.dumps``.
         """
-        return _plain(self._document())  # type: ignore[return-value]
+        return plain(self._document())  # type: ignore[return-value]
 
     def to_json(self) -> str:
         """Return :meth:`to_dict` as JSON text (alias)."""
@@ -252,23 +253,6 @@ class Diagnosis:
         if dof is not None and dof not in self.dofs:
             raise UsageError(f"{dof!r} was not analysed; analysed: {', '.join(self.dofs)}")
         return self.dofs[dof or next(iter(self.dofs))].plot(path, self.max_hz)
-
-
-def _plain(v: object) -> object:
-    """Turn numpy scalars into Python ones and NaN/inf into None, recursively."""
-    if isinstance(v, dict):
-        return {str(k): _plain(x) for k, x in v.items()}
-    if isinstance(v, list | tuple):
-        return [_plain(x) for x in v]
-    if isinstance(v, np.ndarray):
-        return _plain(v.tolist())
-    if isinstance(v, bool | np.bool_):
-        return bool(v)
-    if isinstance(v, int | np.integer):
-        return int(v)
-    if isinstance(v, float | np.floating):
-        return float(v) if np.isfinite(v) else None
-    return v
 
 
 def diagnose(

@@ -28,6 +28,7 @@ from scipy.optimize import least_squares
 
 from twin.chain.config import MotionSystem
 from twin.errors import SignalError
+from twin.jsonable import plain
 from twin.pilot.minima import competing, distinct, widened
 from twin.pilot.pitch import PitchPilot, aircraft, motion_response
 from twin.pilot.profile import likelihood_interval
@@ -65,13 +66,6 @@ def model_output(
     U = _closed_loop_u(pilot, w, np.fft.rfft(ft), np.fft.rfft(fd), config, hold / rate_hz)
     U[0] = 0.0
     return np.fft.irfft(U, n)
-
-
-def _finite(values: dict[str, float] | None) -> dict[str, float | None] | None:
-    """Return ``values`` with each non-finite one as None (JSON has no Infinity)."""
-    if values is None:
-        return None
-    return {k: (v if np.isfinite(v) else None) for k, v in values.items()}
 
 
 @dataclass(frozen=True)
@@ -126,12 +120,12 @@ class PilotFit:
         p = dataclasses.asdict(self.pilot)
         out: dict[str, object] = {
             "parameters": p,
-            "crlb_sd": _finite(self.crlb),
+            "crlb_sd": plain(self.crlb),
             "vaf_percent": self.vaf_percent,
             "residual_sd": self.residual_sd,
             "not_identifiable": list(self.unidentifiable),
             "competing_minima": [dataclasses.asdict(c) for c in self.competing],
-            "crlb_sd_at_estimate": _finite(self.crlb_at_estimate),
+            "crlb_sd_at_estimate": plain(self.crlb_at_estimate),
         }
         if self.intervals is not None:
             out["likelihood_interval_2sd"] = {k: list(v) for k, v in self.intervals.items()}
