@@ -75,3 +75,34 @@ def test_bound_at_refuses_what_it_cannot_use(runs):
         bound_at(TRUTH, runs.ft, runs.fd, np.zeros_like(runs.u), CFG)
     with pytest.raises(SignalError, match="1-D windows"):
         bound_at(TRUTH, runs.ft[:100], runs.fd, runs.u, CFG)
+
+
+@pytest.mark.slow
+def test_a_lag_on_its_bound_is_not_identifiable_and_widens_what_moves_with_it():
+    """A pilot with a lead and no lag (t_lag = 0), one run of condition 8 at the thesis'
+    remnant level (seed 3, run 0): the fit puts t_lag on the bound of its range, where the
+    likelihood is not stationary and its curvature says nothing of how far into the range the
+    data allow the lag. t_lag is reported on its bound and not identifiable, and every other
+    parameter's reported sd covers the point of t_lag's profile into the range where the
+    chi-square has risen by 3.84, so the truth stays within two of them."""
+    from twin.pilot.mle import COMPETING_CHI2, LOWER, UPPER, _LineProblem
+    from twin.pilot.profile import inward_point
+
+    truth = dataclasses.replace(TRUTH, t_lead=0.15, t_lag=0.0)
+    r = simulate_pitch(truth, CFG, 1, seed=3, remnant_scale=pitch_remnant_scale(truth, 0.15))
+    fit = fit_pitch_pilot(r.ft, r.fd, r.u[0], CFG)
+    assert fit.on_range_bound == ("t_lag",)
+    assert "t_lag" in fit.unidentifiable
+    assert fit.to_dict()["on_range_bound"] == ["t_lag"]
+    problem = _LineProblem.of(r.ft, r.fd, r.u[0], CFG, 100.0, True, truth)
+    x = np.array([getattr(fit.pilot, n) for n in PARAMETERS])
+    k = PARAMETERS.index("t_lag")
+    p = inward_point(problem.residual, x, k, LOWER, UPPER, 0.05, COMPETING_CHI2)
+    assert p[k] > 0.02  # the profile leaves the bound before the chi-square rises by 3.84
+    for j, name in enumerate(PARAMETERS):
+        assert fit.crlb[name] >= fit.crlb_at_estimate[name], name
+        assert abs(p[j] - x[j]) <= 2 * fit.crlb[name] * (1 + 1e-6), name
+        if name not in fit.unidentifiable:
+            assert abs(x[j] - getattr(truth, name)) <= 2 * fit.crlb[name], name
+    # omega_nm moves with the lag: its bound at the estimate alone would be far too narrow
+    assert fit.crlb["omega_nm"] > 2 * fit.crlb_at_estimate["omega_nm"]

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 from scipy.optimize import least_squares
 
-from twin.pilot.profile import likelihood_interval, profile_chi2
+from twin.pilot.profile import inward_point, likelihood_interval, profile_chi2
 
 T = np.linspace(0.0, 2.0, 21)
 RNG = np.random.default_rng(5)
@@ -60,6 +60,35 @@ def test_a_side_the_data_do_not_bound_is_open_at_the_range():
         lo, hi = likelihood_interval(saturated, [np.array([1.5, 2.0])], 0, [0, 0], [10, 10], step)
         assert hi == 10.0  # open above: the range's end
         assert lo == pytest.approx(0.8, abs=1e-3)  # 2 sd below the saturation
+
+
+def test_a_minimum_on_a_bound_is_followed_into_the_range_to_the_chi_square_rise():
+    """A line whose intercept must be >= 0.8 while the data want 0.5: the fit sits on the
+    bound, and along the profile into the range the slope moves with the intercept. The point
+    returned is where the chi-square has risen by 3.84, with the slope refitted there (for a
+    line, chi2(a) = chi2_free + (a - a_free)^2 / se_a^2, and the slope the one that minimises
+    the residual given a)."""
+    lower, upper = [0.8, -50.0], [50.0, 50.0]
+    at = least_squares(_line, [1.0, 0.0], bounds=(lower, upper)).x
+    assert at[0] == pytest.approx(0.8)
+    free = least_squares(_line, [0.0, 0.0]).x
+    jac = np.column_stack([np.ones_like(T), T]) / 0.2
+    se = np.sqrt(np.diag(np.linalg.inv(jac.T @ jac)))
+
+    def chi2(v):
+        return float(_line(v) @ _line(v))
+
+    for step in (0.01, 1.0):  # a first step short of the rise, and one beyond it
+        p = inward_point(_line, at, 0, lower, upper, step, 3.84)
+        assert chi2(p) - chi2(at) == pytest.approx(3.84, abs=1e-2)
+        a = free[0] + se[0] * np.sqrt(3.84 + chi2(at) - chi2(free))
+        assert p[0] == pytest.approx(a, rel=1e-3)
+        slope = np.sum((Y - a) * T) / np.sum(T * T)  # least squares of y - a on t
+        assert p[1] == pytest.approx(slope, rel=1e-3)
+    # the same line pinned from above: the point lies below the upper bound
+    q = inward_point(_line, least_squares(_line, [0.0, -2.0], bounds=([-50, -50], [0.2, 50])).x,
+                     0, [-50, -50], [0.2, 50], 0.05, 3.84)  # fmt: skip
+    assert q[0] < 0.2 and chi2(q) > chi2(free)
 
 
 @pytest.mark.slow

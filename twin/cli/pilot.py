@@ -387,6 +387,11 @@ def _cmd_identify(args: argparse.Namespace) -> int:
             f"{args.csv}: MLE fit (Eq 6.5-6.7, closed loop through {cfg.name}, u {loop}), "
             f"VAF {mle.vaf_percent:.1f} %"
         )
+        widened_over = " and ".join(
+            what for what, some in (("competing minima", mle.competing),
+                                    ("the profile off the range's bound", mle.on_range_bound))
+            if some
+        )  # fmt: skip
         for name, sd in mle.crlb.items():
             flag = "  not identifiable" if name in mle.unidentifiable else ""
             span = ""
@@ -394,7 +399,9 @@ def _cmd_identify(args: argparse.Namespace) -> int:
                 span = "  2-sd interval " + _interval_text(name, *mle.intervals[name])
             own = (mle.crlb_at_estimate or mle.crlb)[name]
             sd_text = (f"CRLB sd {sd:.4f}" if own == sd else
-                       f"sd {sd:.4f} widened over competing minima; CRLB {own:.4f}")  # fmt: skip
+                       f"sd {sd:.4f} widened over {widened_over}; CRLB {own:.4f}")  # fmt: skip
+            if name in mle.on_range_bound:
+                flag += " (on the bound of its range)"
             print(f"  {name:9s} {getattr(p, name):8.4f}  ({sd_text}){span}{flag}")
         own_sd = mle.crlb_at_estimate or mle.crlb
         for other in mle.competing:

@@ -31,7 +31,7 @@ from twin.errors import SignalError
 from twin.jsonable import plain
 from twin.pilot.minima import competing, distinct, widened
 from twin.pilot.pitch import PitchPilot, aircraft, motion_response
-from twin.pilot.profile import likelihood_interval
+from twin.pilot.profile import inward_point, likelihood_interval
 from twin.plotting import finish, pyplot
 from twin.progress import ProgressFn
 
@@ -80,7 +80,8 @@ class PilotFit:
         The standard deviation reported for each parameter: its Cramer-Rao bound at the
         estimate where no other minimum competes, else that bound widened so that two of it
         cover each competing minimum's own two bounds (:func:`twin.pilot.minima.widened`: the
-        truth may sit in any of them). JSON ``crlb_sd``.
+        truth may sit in any of them), and the point off a range's bound that
+        ``on_range_bound`` describes. JSON ``crlb_sd``.
     vaf_percent : float
         Variance-Accounted-For of u [%].
     residual_sd : float
@@ -103,6 +104,12 @@ class PilotFit:
     crlb_at_estimate : dict of str to float, or None
         The Cramer-Rao bound at the estimate alone (the inverse Fisher information there).
         JSON ``crlb_sd_at_estimate``; non-finite bounds are written as null.
+    on_range_bound : tuple of str
+        Parameters whose estimate sits on a bound of its range (``LOWER``, ``UPPER``; a lag or
+        gain at zero). The Cramer-Rao bound assumes an interior minimum, so these are reported
+        not identifiable, and the others' ``crlb`` is widened to cover the point where each
+        one's profile into the range has risen by ``COMPETING_CHI2`` (the others move with it
+        along the valley it opens). JSON ``on_range_bound``.
 
     """
 
@@ -114,6 +121,7 @@ class PilotFit:
     intervals: dict[str, tuple[float, float]] | None = None
     competing: tuple[PitchPilot, ...] = ()
     crlb_at_estimate: dict[str, float] | None = None
+    on_range_bound: tuple[str, ...] = ()
 
     def to_dict(self) -> dict[str, object]:
         """JSON-ready."""
@@ -126,6 +134,7 @@ class PilotFit:
             "not_identifiable": list(self.unidentifiable),
             "competing_minima": [dataclasses.asdict(c) for c in self.competing],
             "crlb_sd_at_estimate": plain(self.crlb_at_estimate),
+            "on_range_bound": list(self.on_range_bound),
         }
         if self.intervals is not None:
             out["likelihood_interval_2sd"] = {k: list(v) for k, v in self.intervals.items()}
@@ -184,6 +193,9 @@ START_KM = (None, 0.0)
 #: Chi-square margin within which another minimum competes with the best whatever Vuong's
 #: test says (the 95 % point of chi-square with one degree of freedom).
 COMPETING_CHI2 = 3.84
+#: An estimate within this fraction of its range from either end sits on the bound (the
+#: solver stops a few 1e-8 inside it).
+ON_BOUND_REL = 1e-6
 #: Minima within this chi-square of the best start the profile fits of the intervals.
 PROFILE_CHI2 = 10.0
 #: Farthest either end of the likelihood-ratio interval may lie from the estimate, relative to
@@ -435,6 +447,12 @@ def fit_pitch_pilot(
     own two bounds (from one run this lifts omega_nm's coverage from 80 % to over 90 %). A
     parameter is reported not identifiable when that bound exceeds ``IDENTIFIABLE_REL_SD`` of
     its value: one minimum's curvature is then no description of its uncertainty.
+    A best minimum with a parameter on a bound of its range (t_lag at zero: a small lag then
+    acts as a delay) is no stationary point, and the curvature there is the model's without
+    that parameter: the parameter is reported on its bound and not identifiable, and the
+    point where its profile into the range has risen by ``COMPETING_CHI2`` (the data do not
+    rule it out; the other parameters move with it) widens the bounds as a competing minimum
+    does (:func:`twin.pilot.profile.inward_point`).
     With ``intervals``, a parameter whose likelihood-ratio interval reaches on either side more
     than ``QUADRATIC_SIDE_RATIO`` times two bounds from the estimate is reported too: the
     profile found what the starts did not, and the interval, not the bound, is its uncertainty.
@@ -477,7 +495,14 @@ def fit_pitch_pilot(
     minima = distinct([sol.x for sol in sols])
     rivals = competing(residual, minima, COMPETING_CHI2)
     crlb = _bounds(best.jac)
-    reported = widened(best.x, crlb, rivals, [_bounds(problem.jacobian(x)) for x in rivals])
+    on_bound = _on_bound(best.x)
+    inward = [
+        inward_point(residual, best.x, k, LOWER, UPPER, 0.01 * (UPPER[k] - LOWER[k]),
+                     COMPETING_CHI2)
+        for k in on_bound
+    ]  # fmt: skip
+    points = [*rivals, *inward]
+    reported = widened(best.x, crlb, points, [_bounds(problem.jacobian(x)) for x in points])
     fitted = make(best.x)
     mean_u = problem.u if problem.u.ndim == 1 else problem.u.mean(axis=0)
     u_hat = model_output(fitted, problem.ft, problem.fd, config, rate_hz, hold)
@@ -485,7 +510,8 @@ def fit_pitch_pilot(
     at_estimate = dict(zip(PARAMETERS, map(float, crlb), strict=True))
     weak = tuple(
         name for i, name in enumerate(PARAMETERS)
-        if not bounds[name] < IDENTIFIABLE_REL_SD * max(abs(float(best.x[i])), 1e-9)
+        if i in on_bound
+        or not bounds[name] < IDENTIFIABLE_REL_SD * max(abs(float(best.x[i])), 1e-9)
     )  # fmt: skip
     ranges = None
     if intervals:
@@ -504,7 +530,14 @@ def fit_pitch_pilot(
                 if not max(hi - best.x[k], best.x[k] - lo) <= reach[k]}  # fmt: skip
         weak = tuple(name for name in PARAMETERS if name in weak or name in wide)
     return PilotFit(fitted, bounds, vaf(mean_u, u_hat), float(np.std(mean_u - u_hat)), weak,
-                    ranges, tuple(map(make, rivals)), at_estimate)  # fmt: skip
+                    ranges, tuple(map(make, rivals)), at_estimate,
+                    tuple(PARAMETERS[k] for k in on_bound))  # fmt: skip
+
+
+def _on_bound(x: FloatArray) -> list[int]:
+    """Return the indices of the parameters within ``ON_BOUND_REL`` of either end of their range."""
+    near = ON_BOUND_REL * (UPPER - LOWER)
+    return [int(k) for k in np.flatnonzero((x - LOWER <= near) | (UPPER - x <= near))]
 
 
 def _starts(p0: PitchPilot) -> list[FloatArray]:

@@ -62,6 +62,33 @@ def _chi2(residual: Residual, x: FloatArray) -> float:
     return float(r @ r)
 
 
+def profile_fit(
+    residual: Residual,
+    minima: Sequence[FloatArray],
+    k: int,
+    theta: float,
+    lower: ArrayLike,
+    upper: ArrayLike,
+) -> tuple[float, FloatArray]:
+    """Best fit with parameter ``k`` held at ``theta``: its chi-square and its parameters.
+
+    The other parameters are fitted again from each of ``minima`` (with parameter ``k``
+    replaced), and the fit of lowest chi-square is returned.
+    """
+    lo, up = np.delete(np.asarray(lower, float), k), np.delete(np.asarray(upper, float), k)
+
+    def held(v: FloatArray) -> FloatArray:
+        return residual(np.insert(v, k, theta))
+
+    best, point = np.inf, np.asarray(minima[0], float)
+    for x in minima:
+        x0 = np.clip(np.delete(np.asarray(x, float), k), lo, up)
+        sol = least_squares(held, x0, bounds=(lo, up), x_scale=np.maximum(np.abs(x0), 0.05))
+        if 2.0 * float(sol.cost) < best:
+            best, point = 2.0 * float(sol.cost), np.insert(sol.x, k, theta)
+    return best, point
+
+
 def profile_chi2(
     residual: Residual,
     minima: Sequence[FloatArray],
@@ -70,22 +97,54 @@ def profile_chi2(
     lower: ArrayLike,
     upper: ArrayLike,
 ) -> float:
-    """Chi-square of the best fit with parameter ``k`` held at ``theta``.
+    """Chi-square of the best fit with parameter ``k`` held at ``theta`` (:func:`profile_fit`)."""
+    return profile_fit(residual, minima, k, theta, lower, upper)[0]
 
-    The other parameters are fitted again from each of ``minima`` (with parameter ``k``
-    replaced), and the lowest chi-square of those fits is returned.
+
+def inward_point(
+    residual: Residual,
+    x: FloatArray,
+    k: int,
+    lower: ArrayLike,
+    upper: ArrayLike,
+    step: float,
+    rise: float,
+) -> FloatArray:
+    """Where the profile of a parameter on a bound of its range has risen by ``rise`` inside it.
+
+    A minimum with parameter ``k`` on a bound (a lag or gain at zero) is not a stationary point
+    of the likelihood: the curvature there says nothing of how far into the range the data
+    allow the parameter, and the other parameters move with it along the valley it opens. The
+    profile is followed from ``x`` into the range (doubling ``step``, then regula falsi) to the
+    value where the chi-square has risen by ``rise``, and the profile fit there is returned
+    (the range's far end if the rise is never reached).
+
+    Parameters
+    ----------
+    residual : callable
+        Weighted residuals of a parameter vector.
+    x : ndarray
+        The minimum, with ``x[k]`` on ``lower[k]`` or ``upper[k]``.
+    k : int
+        The parameter on its bound.
+    lower, upper : array_like
+        The parameters' ranges.
+    step : float
+        First step into the range.
+    rise : float
+        Chi-square rise at the returned point.
+
     """
-    lo, up = np.delete(np.asarray(lower, float), k), np.delete(np.asarray(upper, float), k)
+    x = np.asarray(x, float)
+    lo_k, up_k = float(np.asarray(lower, float)[k]), float(np.asarray(upper, float)[k])
+    sign, edge = (1.0, up_k) if x[k] - lo_k <= up_k - x[k] else (-1.0, lo_k)
+    chi_min = _chi2(residual, x)
 
-    def held(v: FloatArray) -> FloatArray:
-        return residual(np.insert(v, k, theta))
+    def rise_at(theta: float) -> float:
+        return profile_chi2(residual, [x], k, theta, lower, upper) - chi_min
 
-    best = np.inf
-    for x in minima:
-        x0 = np.clip(np.delete(np.asarray(x, float), k), lo, up)
-        sol = least_squares(held, x0, bounds=(lo, up), x_scale=np.maximum(np.abs(x0), 0.05))
-        best = min(best, 2.0 * float(sol.cost))
-    return best
+    theta = _crossing(rise_at, float(x[k]), 0.0, sign, edge, step, rise)
+    return profile_fit(residual, [x], k, theta, lower, upper)[1]
 
 
 def likelihood_interval(
