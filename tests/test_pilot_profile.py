@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 from scipy.optimize import least_squares
 
-from twin.pilot.profile import inward_point, likelihood_interval, profile_chi2
+from twin.pilot.profile import inward_point, likelihood_interval, profile_fit
 
 T = np.linspace(0.0, 2.0, 21)
 RNG = np.random.default_rng(5)
@@ -44,7 +44,8 @@ def test_an_interval_spans_every_equally_good_minimum_it_is_given():
     assert lo0 == pytest.approx(np.sqrt(0.9), abs=1e-4) and hi0 == pytest.approx(
         np.sqrt(1.1), abs=1e-4
     )
-    assert profile_chi2(_two_minima, minima, 0, -1.0, [-5, -5], [5, 5]) == pytest.approx(0.0)
+    chi2, point = profile_fit(_two_minima, minima, 0, -1.0, [-5, -5], [5, 5])
+    assert chi2 == pytest.approx(0.0) and point == pytest.approx([-1.0, 3.0], abs=1e-4)
     # from one minimum only, the profile of x1 still finds its own interval (x0 refitted)
     lo1, hi1 = likelihood_interval(_two_minima, minima[:1], 1, [-5, -5], [5, 5], 0.1)
     assert lo1 == pytest.approx(2.8, abs=1e-3) and hi1 == pytest.approx(3.2, abs=1e-3)

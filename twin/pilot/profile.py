@@ -89,18 +89,6 @@ def profile_fit(
     return best, point
 
 
-def profile_chi2(
-    residual: Residual,
-    minima: Sequence[FloatArray],
-    k: int,
-    theta: float,
-    lower: ArrayLike,
-    upper: ArrayLike,
-) -> float:
-    """Chi-square of the best fit with parameter ``k`` held at ``theta`` (:func:`profile_fit`)."""
-    return profile_fit(residual, minima, k, theta, lower, upper)[0]
-
-
 def inward_point(
     residual: Residual,
     x: FloatArray,
@@ -141,7 +129,7 @@ def inward_point(
     chi_min = _chi2(residual, x)
 
     def rise_at(theta: float) -> float:
-        return profile_chi2(residual, [x], k, theta, lower, upper) - chi_min
+        return profile_fit(residual, [x], k, theta, lower, upper)[0] - chi_min
 
     theta = _crossing(rise_at, float(x[k]), 0.0, sign, edge, step, rise)
     return profile_fit(residual, [x], k, theta, lower, upper)[1]
@@ -190,7 +178,7 @@ def likelihood_interval(
     lo_k, up_k = float(np.asarray(lower, float)[k]), float(np.asarray(upper, float)[k])
 
     def rise_at(theta: float) -> float:
-        return profile_chi2(residual, minima, k, theta, lower, upper) - chi_min
+        return profile_fit(residual, minima, k, theta, lower, upper)[0] - chi_min
 
     ends: list[float] = []
     for x, chi in zip(minima, chis, strict=True):
