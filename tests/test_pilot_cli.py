@@ -32,6 +32,7 @@ def test_run_writes_a_csv_that_identify_reads(capsys, tmp_path):
     assert out["mle"]["parameters"]["k_v"] == pytest.approx(1.5, rel=0.2)
     keys = set(out["mle"]["parameters"])
     assert all(set(other) == keys for other in out["mle"]["competing_minima"])
+    assert isinstance(out["mle"]["on_range_bound"], dict)  # parameter -> its profile's point
     assert set(out["mle"]["on_range_bound"]) <= set(out["mle"]["not_identifiable"])
 
 

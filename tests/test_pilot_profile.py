@@ -86,10 +86,27 @@ def test_a_minimum_on_a_bound_is_followed_into_the_range_to_the_chi_square_rise(
         assert p[0] == pytest.approx(a, rel=1e-3)
         slope = np.sum((Y - a) * T) / np.sum(T * T)  # least squares of y - a on t
         assert p[1] == pytest.approx(slope, rel=1e-3)
-    # the same line pinned from above: the point lies below the upper bound
-    q = inward_point(_line, least_squares(_line, [0.0, -2.0], bounds=([-50, -50], [0.2, 50])).x,
-                     0, [-50, -50], [0.2, 50], 0.05, 3.84)  # fmt: skip
-    assert q[0] < 0.2 and chi2(q) > chi2(free)
+    # the same line pinned from above (intercept <= 0.2): the point lies below the bound
+    top = least_squares(_line, [0.0, -2.0], bounds=([-50, -50], [0.2, 50])).x
+    q = inward_point(_line, top, 0, [-50, -50], [0.2, 50], 0.05, 3.84)
+    assert chi2(q) - chi2(top) == pytest.approx(3.84, abs=1e-2)
+    assert q[0] == pytest.approx(free[0] - se[0] * np.sqrt(3.84 + chi2(top) - chi2(free)), rel=1e-3)
+
+
+def test_a_profile_that_never_rises_ends_at_the_far_end_of_the_range():
+    """x0 is seen only through a saturation at 1 (on its lower end, 1, the fit is as good as
+    anywhere above): the data do not bound it, so the point is the range's other end."""
+
+    def saturated(v):
+        return np.array([(min(v[0], 1.0) - 1.0) / 0.1, (v[1] - 2.0) / 0.1])
+
+    p = inward_point(saturated, np.array([1.0, 2.0]), 0, [1, 0], [5, 10], 0.1, 3.84)
+    assert p == pytest.approx([5.0, 2.0])
+
+
+def test_a_profile_needs_a_start():
+    with pytest.raises(ValueError, match="at least one starting point"):
+        profile_fit(_line, [], 0, 1.0, [-5, -5], [5, 5])
 
 
 @pytest.mark.slow

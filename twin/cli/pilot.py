@@ -387,28 +387,32 @@ def _cmd_identify(args: argparse.Namespace) -> int:
             f"{args.csv}: MLE fit (Eq 6.5-6.7, closed loop through {cfg.name}, u {loop}), "
             f"VAF {mle.vaf_percent:.1f} %"
         )
-        widened_over = " and ".join(
-            what for what, some in (("competing minima", mle.competing),
-                                    ("the profile off the range's bound", mle.on_range_bound))
-            if some
-        )  # fmt: skip
+        own_sd = mle.crlb_at_estimate or mle.crlb
         for name, sd in mle.crlb.items():
             flag = "  not identifiable" if name in mle.unidentifiable else ""
             span = ""
             if mle.intervals is not None:
                 span = "  2-sd interval " + _interval_text(name, *mle.intervals[name])
-            own = (mle.crlb_at_estimate or mle.crlb)[name]
-            sd_text = (f"CRLB sd {sd:.4f}" if own == sd else
-                       f"sd {sd:.4f} widened over {widened_over}; CRLB {own:.4f}")  # fmt: skip
             if name in mle.on_range_bound:
-                flag += " (on the bound of its range)"
+                sd_text = "on the bound of its range: no sd"
+            elif own_sd[name] == sd:
+                sd_text = f"CRLB sd {sd:.4f}"
+            else:
+                sd_text = f"sd {sd:.4f} widened over the points below; CRLB {own_sd[name]:.4f}"
             print(f"  {name:9s} {getattr(p, name):8.4f}  ({sd_text}){span}{flag}")
-        own_sd = mle.crlb_at_estimate or mle.crlb
+
+        def moved(other) -> str:
+            far = [f"{n} {getattr(other, n):.4f}" for n in own_sd
+                   if abs(getattr(other, n) - getattr(p, n)) > own_sd[n]]  # fmt: skip
+            return ", ".join(far) or "within one CRLB of the estimate"
+
         for other in mle.competing:
-            moved = ", ".join(f"{n} {getattr(other, n):.4f}" for n in own_sd
-                              if abs(getattr(other, n) - getattr(p, n)) > own_sd[n])  # fmt: skip
             print("  another minimum the data do not rule out (chi-square within 3.84 or "
-                  f"Vuong's test): {moved or 'within one CRLB of the estimate'}")  # fmt: skip
+                  f"Vuong's test): {moved(other)}")  # fmt: skip
+        for name, other in mle.on_range_bound.items():
+            print(f"  {name} on the bound of its range; its profile into the range rises by "
+                  f"3.84 at {name} {getattr(other, name):.4f}; the others there: "
+                  f"{moved(other)}")  # fmt: skip
         print(
             f"  ARX structure {arx.orders}; FC and ARX responses at "
             f"{fc.omega_rad_s.size} lines in --json"

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import dataclasses
 import itertools
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -80,16 +81,18 @@ class PilotFit:
         The standard deviation reported for each parameter: its Cramer-Rao bound at the
         estimate where no other minimum competes, else that bound widened so that two of it
         cover each competing minimum's own two bounds (:func:`twin.pilot.minima.widened`: the
-        truth may sit in any of them), and the point off a range's bound that
-        ``on_range_bound`` describes. JSON ``crlb_sd``.
+        truth may sit in any of them) and each point of ``on_range_bound``. JSON ``crlb_sd``;
+        an unbounded sd (a parameter the data do not see, or one on its range's bound) is
+        infinite, null in the JSON.
     vaf_percent : float
         Variance-Accounted-For of u [%].
     residual_sd : float
         Standard deviation of the output error.
     unidentifiable : tuple of str
         Parameters whose bound (``crlb``, so widened by any competing minimum that puts them
-        elsewhere) exceeds ``IDENTIFIABLE_REL_SD`` of their value, or (with intervals) whose
-        likelihood-ratio interval reaches much farther than two bounds (reported, not hidden).
+        elsewhere) exceeds ``IDENTIFIABLE_REL_SD`` of their value, those on a bound of their
+        range (``on_range_bound``), or (with intervals) those whose likelihood-ratio interval
+        reaches much farther than two bounds (reported, not hidden).
     intervals : dict of str to (float, float), or None
         Likelihood-ratio interval of each parameter (two standard deviations where the
         likelihood is a parabola; :mod:`twin.pilot.profile`), when asked for: honest where the
@@ -102,14 +105,19 @@ class PilotFit:
         first: from one run at the thesis' remnant level, typically the lead-lag pair's other
         basin (t_lead near 0.5 s, t_lag near 0.9 s).
     crlb_at_estimate : dict of str to float, or None
-        The Cramer-Rao bound at the estimate alone (the inverse Fisher information there).
-        JSON ``crlb_sd_at_estimate``; non-finite bounds are written as null.
-    on_range_bound : tuple of str
-        Parameters whose estimate sits on a bound of its range (``LOWER``, ``UPPER``; a lag or
-        gain at zero). The Cramer-Rao bound assumes an interior minimum, so these are reported
-        not identifiable, and the others' ``crlb`` is widened to cover the point where each
-        one's profile into the range has risen by ``COMPETING_CHI2`` (the others move with it
-        along the valley it opens). JSON ``on_range_bound``.
+        The Cramer-Rao bound at the estimate alone (the inverse Fisher information there; with
+        parameters on their range's bound, the others' with those held there). JSON
+        ``crlb_sd_at_estimate``; non-finite bounds are written as null.
+    on_range_bound : dict of str to PitchPilot
+        Each parameter whose estimate sits on an end of its range (``LOWER``, ``UPPER``: a lag
+        or gain at zero), with the point where its profile into the range has risen by
+        ``COMPETING_CHI2`` (the range's other end if it never does). There the curvature
+        says nothing of how far into the range the data allow the parameter: a gain pushed
+        onto zero is no stationary point, and a lag at zero acts to first order as a delay,
+        so the likelihood rises only at second order. The parameter is reported not
+        identifiable with an infinite sd, the others' bound is taken with it held on its
+        bound, and the profile's point (the others move with it along the valley it opens)
+        widens their ``crlb`` as a competing minimum does. JSON ``on_range_bound``.
 
     """
 
@@ -121,7 +129,7 @@ class PilotFit:
     intervals: dict[str, tuple[float, float]] | None = None
     competing: tuple[PitchPilot, ...] = ()
     crlb_at_estimate: dict[str, float] | None = None
-    on_range_bound: tuple[str, ...] = ()
+    on_range_bound: dict[str, PitchPilot] = dataclasses.field(default_factory=dict)
 
     def to_dict(self) -> dict[str, object]:
         """JSON-ready."""
@@ -134,7 +142,7 @@ class PilotFit:
             "not_identifiable": list(self.unidentifiable),
             "competing_minima": [dataclasses.asdict(c) for c in self.competing],
             "crlb_sd_at_estimate": plain(self.crlb_at_estimate),
-            "on_range_bound": list(self.on_range_bound),
+            "on_range_bound": {k: dataclasses.asdict(v) for k, v in self.on_range_bound.items()},
         }
         if self.intervals is not None:
             out["likelihood_interval_2sd"] = {k: list(v) for k, v in self.intervals.items()}
@@ -193,9 +201,11 @@ START_KM = (None, 0.0)
 #: Chi-square margin within which another minimum competes with the best whatever Vuong's
 #: test says (the 95 % point of chi-square with one degree of freedom).
 COMPETING_CHI2 = 3.84
-#: An estimate within this fraction of its range from either end sits on the bound (the
-#: solver stops a few 1e-8 inside it).
-ON_BOUND_REL = 1e-6
+#: An estimate within this fraction of its range from either end, whose chi-square moved onto
+#: that end rises by less than ``ON_BOUND_CHI2``, sits on the bound: where the likelihood is
+#: flat to first order there (a lag at zero) the solver creeps towards it and stops short
+#: (1e-8 to 1e-6 s of t_lag in the seeded fits).
+ON_BOUND_REL, ON_BOUND_CHI2 = 1e-3, 0.01
 #: Minima within this chi-square of the best start the profile fits of the intervals.
 PROFILE_CHI2 = 10.0
 #: Farthest either end of the likelihood-ratio interval may lie from the estimate, relative to
@@ -345,7 +355,8 @@ def _bounds(jac: FloatArray) -> FloatArray:
     """Cramer-Rao bound of each parameter's sd from the residual's Jacobian (Eq 2.26).
 
     Where the information is singular (k_m = 0 leaves tau_m unseen; t_lead = t_lag = 0 makes
-    the pair's columns proportional) the parameters in its null space get an infinite bound
+    the pair's columns proportional; at t_lag = 0 a lag acts as a delay, so t_lag's column and
+    tau_v's are equal) the parameters in its null space get an infinite bound
     and the others theirs from the pseudo-inverse, not a bound of zero or all infinite.
     """
     info = jac.T @ jac
@@ -447,12 +458,13 @@ def fit_pitch_pilot(
     own two bounds (from one run this lifts omega_nm's coverage from 80 % to over 90 %). A
     parameter is reported not identifiable when that bound exceeds ``IDENTIFIABLE_REL_SD`` of
     its value: one minimum's curvature is then no description of its uncertainty.
-    A best minimum with a parameter on a bound of its range (t_lag at zero: a small lag then
-    acts as a delay) is no stationary point, and the curvature there is the model's without
-    that parameter: the parameter is reported on its bound and not identifiable, and the
-    point where its profile into the range has risen by ``COMPETING_CHI2`` (the data do not
-    rule it out; the other parameters move with it) widens the bounds as a competing minimum
-    does (:func:`twin.pilot.profile.inward_point`).
+    A best minimum with a parameter on an end of its range (t_lag at zero, where a small lag
+    acts as a delay) is described by its curvature neither for that parameter nor for those
+    that move with it: the parameter is reported on its bound and not identifiable, the
+    others' bound is taken with it held there, and the point where its profile into the range
+    has risen by ``COMPETING_CHI2`` (the data do not rule it out) widens their bounds as a
+    competing minimum does (:attr:`PilotFit.on_range_bound`,
+    :func:`twin.pilot.profile.inward_point`; about 0.5 s per such parameter).
     With ``intervals``, a parameter whose likelihood-ratio interval reaches on either side more
     than ``QUADRATIC_SIDE_RATIO`` times two bounds from the estimate is reported too: the
     profile found what the starts did not, and the interval, not the bound, is its uncertainty.
@@ -494,14 +506,16 @@ def fit_pitch_pilot(
     best = sols[0]
     minima = distinct([sol.x for sol in sols])
     rivals = competing(residual, minima, COMPETING_CHI2)
-    crlb = _bounds(best.jac)
-    on_bound = _on_bound(best.x)
-    inward = [
-        inward_point(residual, best.x, k, LOWER, UPPER, 0.01 * (UPPER[k] - LOWER[k]),
-                     COMPETING_CHI2)
+    on_bound = _on_bound(residual, best.x)
+    crlb = np.full(best.x.size, np.inf)
+    free = [k for k in range(best.x.size) if k not in on_bound]
+    crlb[free] = _bounds(best.jac[:, free])
+    inward = {
+        PARAMETERS[k]: inward_point(residual, best.x, k, LOWER, UPPER,
+                                    0.01 * (UPPER[k] - LOWER[k]), COMPETING_CHI2)
         for k in on_bound
-    ]  # fmt: skip
-    points = [*rivals, *inward]
+    }  # fmt: skip
+    points = [*rivals, *inward.values()]
     reported = widened(best.x, crlb, points, [_bounds(problem.jacobian(x)) for x in points])
     fitted = make(best.x)
     mean_u = problem.u if problem.u.ndim == 1 else problem.u.mean(axis=0)
@@ -531,13 +545,28 @@ def fit_pitch_pilot(
         weak = tuple(name for name in PARAMETERS if name in weak or name in wide)
     return PilotFit(fitted, bounds, vaf(mean_u, u_hat), float(np.std(mean_u - u_hat)), weak,
                     ranges, tuple(map(make, rivals)), at_estimate,
-                    tuple(PARAMETERS[k] for k in on_bound))  # fmt: skip
+                    {name: make(x) for name, x in inward.items()})  # fmt: skip
 
 
-def _on_bound(x: FloatArray) -> list[int]:
-    """Return the indices of the parameters within ``ON_BOUND_REL`` of either end of their range."""
-    near = ON_BOUND_REL * (UPPER - LOWER)
-    return [int(k) for k in np.flatnonzero((x - LOWER <= near) | (UPPER - x <= near))]
+def _on_bound(residual: Callable[[FloatArray], FloatArray], x: FloatArray) -> list[int]:
+    """Return the indices of the parameters of ``x`` that sit on an end of their range.
+
+    A parameter does when it lies within ``ON_BOUND_REL`` of the range from an end and moving
+    it onto that end raises the chi-square by less than ``ON_BOUND_CHI2``.
+    """
+    r = residual(x)
+    chi2 = float(r @ r)
+    ends = []
+    for k in range(x.size):
+        for end in (LOWER[k], UPPER[k]):
+            if abs(x[k] - end) <= ON_BOUND_REL * (UPPER[k] - LOWER[k]):
+                on = x.copy()
+                on[k] = end
+                r = residual(on)
+                if float(r @ r) - chi2 < ON_BOUND_CHI2:
+                    ends.append(k)
+                    break
+    return ends
 
 
 def _starts(p0: PitchPilot) -> list[FloatArray]:

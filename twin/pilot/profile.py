@@ -72,15 +72,41 @@ def profile_fit(
 ) -> tuple[float, FloatArray]:
     """Best fit with parameter ``k`` held at ``theta``: its chi-square and its parameters.
 
-    The other parameters are fitted again from each of ``minima`` (with parameter ``k``
-    replaced), and the fit of lowest chi-square is returned.
+    Parameters
+    ----------
+    residual : callable
+        Weighted residuals of a parameter vector (chi-square = their sum of squares).
+    minima : sequence of ndarray
+        Starting points: the other parameters are fitted again from each (with parameter
+        ``k`` replaced by ``theta``).
+    k : int
+        The parameter held.
+    theta : float
+        Its value.
+    lower, upper : array_like
+        The parameters' ranges.
+
+    Returns
+    -------
+    chi2 : float
+        The lowest chi-square of those fits (infinite if none converged to a finite one).
+    point : ndarray
+        Its parameter vector, with ``theta`` at ``k``.
+
+    Raises
+    ------
+    ValueError
+        If ``minima`` is empty.
+
     """
+    if not len(minima):
+        raise ValueError("profile_fit needs at least one starting point in minima; got none")
     lo, up = np.delete(np.asarray(lower, float), k), np.delete(np.asarray(upper, float), k)
 
     def held(v: FloatArray) -> FloatArray:
         return residual(np.insert(v, k, theta))
 
-    best, point = np.inf, np.asarray(minima[0], float)
+    best, point = np.inf, np.insert(np.delete(np.asarray(minima[0], float), k), k, theta)
     for x in minima:
         x0 = np.clip(np.delete(np.asarray(x, float), k), lo, up)
         sol = least_squares(held, x0, bounds=(lo, up), x_scale=np.maximum(np.abs(x0), 0.05))
@@ -98,21 +124,22 @@ def inward_point(
     step: float,
     rise: float,
 ) -> FloatArray:
-    """Where the profile of a parameter on a bound of its range has risen by ``rise`` inside it.
+    """Where the profile of a parameter on an end of its range has risen by ``rise`` inside it.
 
-    A minimum with parameter ``k`` on a bound (a lag or gain at zero) is not a stationary point
-    of the likelihood: the curvature there says nothing of how far into the range the data
-    allow the parameter, and the other parameters move with it along the valley it opens. The
-    profile is followed from ``x`` into the range (doubling ``step``, then regula falsi) to the
-    value where the chi-square has risen by ``rise``, and the profile fit there is returned
-    (the range's far end if the rise is never reached).
+    At a minimum with parameter ``k`` on an end of its range the curvature says nothing of how
+    far into the range the data allow the parameter: a gain pushed onto zero is no stationary
+    point, and a lag at zero acts to first order as a delay, so the chi-square rises only at
+    second order. The other parameters move with it along the valley it opens. The profile
+    is followed from ``x`` into the range (doubling ``step``, then regula falsi) to the value
+    where the chi-square has risen by ``rise``.
 
     Parameters
     ----------
     residual : callable
         Weighted residuals of a parameter vector.
     x : ndarray
-        The minimum, with ``x[k]`` on ``lower[k]`` or ``upper[k]``.
+        The minimum. ``x[k]`` is taken to be on the nearer end of its range, and the profile
+        is followed towards the other end.
     k : int
         The parameter on its bound.
     lower, upper : array_like
@@ -121,6 +148,12 @@ def inward_point(
         First step into the range.
     rise : float
         Chi-square rise at the returned point.
+
+    Returns
+    -------
+    ndarray
+        The profile's fit where the rise is reached, with ``x[k]`` moved there; the fit at
+        the range's other end if it never is (the data do not bound the parameter).
 
     """
     x = np.asarray(x, float)
