@@ -19,7 +19,8 @@
    parameter, among the estimates where it counted as identifiable, the fraction within 2
    Cramer-Rao sd of the truth, with the bound at the truth (the bound proper: does the
    estimator attain it?) and with the bound the fit reports (widened to cover the minima the
-   data do not rule out: :mod:`twin.pilot.minima`); and the
+   data do not rule out, :mod:`twin.pilot.minima`, and over the profile of a parameter on an
+   end of its range); and the
    fraction of all estimates whose likelihood-ratio interval (:mod:`twin.pilot.profile`)
    holds the truth (goal >= 90 %). Each with its 95 % Wilson interval: 50 estimates pin a
    coverage down to about +-8 %, 200 to about +-4 %. Once with one run per estimate, once
@@ -29,6 +30,7 @@
 
 import argparse
 import time
+from collections import Counter
 from pathlib import Path
 
 import numpy as np
@@ -129,6 +131,11 @@ def coverage(runs: int, intervals: bool = True) -> None:
               "on two workers; goal >= 90 %, 95 % Wilson interval in brackets):")  # fmt: skip
         rival = sum(bool(f.competing) for f, _ in done)
         print(f"  {rival} of {runs} fits had another minimum the data do not rule out")
+        ends = Counter(name for f, _ in done for name in f.on_range_bound)
+        print(
+            f"  {sum(bool(f.on_range_bound) for f, _ in done)} of {runs} fits had a parameter "
+            f"on an end of its range ({', '.join(f'{k} {v}' for k, v in ends.items()) or '-'})"
+        )
         for n in PARAMETERS:
             ok = [(f, at) for f, at in done if n not in f.unidentifiable]
             truth = getattr(TRUTH, n)
