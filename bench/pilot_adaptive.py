@@ -131,11 +131,14 @@ def coverage(runs: int, intervals: bool = True) -> None:
               "on two workers; goal >= 90 %, 95 % Wilson interval in brackets):")  # fmt: skip
         rival = sum(bool(f.competing) for f, _ in done)
         print(f"  {rival} of {runs} fits had another minimum the data do not rule out")
-        ends = Counter(name for f, _ in done for name in f.on_range_bound)
-        print(
-            f"  {sum(bool(f.on_range_bound) for f, _ in done)} of {runs} fits had a parameter "
-            f"on an end of its range ({', '.join(f'{k} {v}' for k, v in ends.items()) or '-'})"
-        )
+        for what, key in (
+            ("on an end of its range", "on_range_bound"),
+            ("the data cannot tell from an end of its range", "range_end"),
+        ):
+            some = [f for f, _ in done if getattr(f, key)]
+            count = Counter(name for f in some for name in getattr(f, key))
+            print(f"  {len(some)} of {runs} fits had a parameter {what} "
+                  f"({', '.join(f'{k} {v}' for k, v in count.items()) or '-'})")  # fmt: skip
         for n in PARAMETERS:
             ok = [(f, at) for f, at in done if n not in f.unidentifiable]
             truth = getattr(TRUTH, n)
