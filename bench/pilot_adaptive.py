@@ -19,18 +19,23 @@
    parameter, among the estimates where it counted as identifiable, the fraction within 2
    Cramer-Rao sd of the truth, with the bound at the truth (the bound proper: does the
    estimator attain it?) and with the bound the fit reports (widened to cover the minima the
-   data do not rule out, :mod:`twin.pilot.minima`, and over the profile of a parameter on an
-   end of its range); and the
-   fraction of all estimates whose likelihood-ratio interval (:mod:`twin.pilot.profile`)
+   data do not rule out, :mod:`twin.pilot.minima`, over the profile of a parameter on an end
+   of its range and over the fit with a weak parameter on the end it cannot be told from);
+   and the fraction of all estimates whose likelihood-ratio interval (:mod:`twin.pilot.profile`)
    holds the truth (goal >= 90 %). Each with its 95 % Wilson interval: 50 estimates pin a
    coverage down to about +-8 %, 200 to about +-4 %. Once with one run per estimate, once
    with five repetitions averaged (the thesis' five per condition, §6.3.4). With
    ``--no-intervals`` the fits skip the intervals and the rule that flags by them.
+4. The same coverage (60 estimates, no intervals) on data whose nuisance the twin's remnant
+   model did not shape: condition 4 with half the remnant and a white stick-sensor noise of
+   half u's sd added (five repetitions averaged), and a pilot the defaults are not (a lead
+   with no lag, t_lag on the end of its range) on the same nuisance, one run each.
 """
 
 import argparse
 import time
 from collections import Counter
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -55,7 +60,12 @@ EFFECT_POPULATIONS = 5
 TRUTH = PitchPilot(tau_v=0.275)
 
 
-def main(runs: int = 200, coverage_only: bool = False, intervals: bool = True) -> None:
+def main(
+    runs: int = 200, coverage_only: bool = False, intervals: bool = True, nuisance_only=False
+) -> None:
+    if nuisance_only:
+        nuisance()
+        return
     if coverage_only:
         coverage(runs, intervals)
         return
@@ -67,6 +77,7 @@ def main(runs: int = 200, coverage_only: bool = False, intervals: bool = True) -
     populations(ADAPTATION_SD / 2, POPULATIONS // 2)
     subject_effects()
     coverage(runs, intervals)
+    nuisance()
 
 
 def populations(sd: float, n: int) -> None:
@@ -115,41 +126,77 @@ def subject_effects() -> None:
 
 def coverage(runs: int, intervals: bool = True) -> None:
     """Section 3: the closed-loop MLE's coverage."""
-    cfg = motion_system("condition-8")
-    scale = pitch_remnant_scale(TRUTH, 0.15)
-    fit = _fit if intervals else _fit_without_intervals
     for reps in (1, REPETITIONS):
-        r = simulate_pitch(TRUTH, cfg, runs * reps, seed=1, remnant_scale=scale)
-        args = [(r.ft, r.fd, r.u[i * reps] if reps == 1 else r.u[i * reps : (i + 1) * reps])
-                for i in range(runs)]  # fmt: skip
-        t0 = time.perf_counter()
-        with Engine("local:2") as engine:
-            done = engine.map(fit, args, [{"run": i} for i in range(runs)], "fits").values()
         what = "one run" if reps == 1 else f"{reps} repetitions averaged (as the thesis)"
-        print(f"MLE coverage over {runs} estimates, each from {what} (fits "
-              f"{'with' if intervals else 'without'} intervals, {time.perf_counter() - t0:.0f} s "
-              "on two workers; goal >= 90 %, 95 % Wilson interval in brackets):")  # fmt: skip
-        rival = sum(bool(f.competing) for f, _ in done)
-        print(f"  {rival} of {runs} fits had another minimum the data do not rule out")
-        for what, key in (
-            ("on an end of its range", "on_range_bound"),
-            ("the data cannot tell from an end of its range", "range_end"),
-        ):
-            some = [f for f, _ in done if getattr(f, key)]
-            count = Counter(name for f in some for name in getattr(f, key))
-            print(f"  {len(some)} of {runs} fits had a parameter {what} "
-                  f"({', '.join(f'{k} {v}' for k, v in count.items()) or '-'})")  # fmt: skip
-        for n in PARAMETERS:
-            ok = [(f, at) for f, at in done if n not in f.unidentifiable]
-            truth = getattr(TRUTH, n)
-            proper = [abs(getattr(f.pilot, n) - truth) <= 2 * at[n] for f, at in ok]
-            plug_in = [abs(getattr(f.pilot, n) - truth) <= 2 * f.crlb[n] for f, _ in ok]
-            line = (f"  {n:9s} of {len(ok):3d} identifiable, within 2 bounds at the truth "
-                    f"{_share(proper)}, reported {_share(plug_in)}")  # fmt: skip
-            if intervals:
-                inside = [f.covers(n, truth) for f, _ in done]
-                line += f"; likelihood-ratio interval {_share(inside)} of {runs}"
-            print(line)
+        _coverage(Case(f"each from {what}", TRUTH, "condition-8", 1, reps), runs, intervals)
+
+
+@dataclass(frozen=True)
+class Case:
+    """Seeded data for a coverage figure: whose, flown where, and what was added."""
+
+    label: str
+    truth: PitchPilot
+    config: str
+    seed: int
+    repetitions: int
+    remnant: float = 1.0  # times the thesis' level (15 % of the control power)
+    white: float = 0.0  # white stick-sensor noise added to u, times u's sd
+
+
+#: Section 4: data whose nuisance the twin's remnant model did not shape.
+NUISANCE = (
+    Case("condition 4, half the remnant + white stick noise of half u's sd, five repetitions",
+         TRUTH, "condition-4", 7, REPETITIONS, 0.5, 0.5),
+    Case("a lead-only pilot (t_lead 0.15 s, t_lag 0), the same nuisance, one run",
+         PitchPilot(tau_v=0.275, t_lead=0.15, t_lag=0.0), "condition-4", 7, 1, 0.5, 0.5),
+)  # fmt: skip
+
+
+def nuisance(runs: int = 60) -> None:
+    """Section 4: the MLE's coverage on data the twin's remnant model did not shape."""
+    for case in NUISANCE:
+        _coverage(case, runs, intervals=False)
+
+
+def _coverage(case: Case, runs: int, intervals: bool) -> None:
+    """Fit ``runs`` seeded estimates of ``case`` and print each parameter's coverage."""
+    cfg = motion_system(case.config)
+    scale = pitch_remnant_scale(case.truth, 0.15) * case.remnant
+    reps = case.repetitions
+    r = simulate_pitch(case.truth, cfg, runs * reps, seed=case.seed, remnant_scale=scale)
+    u = r.u
+    if case.white:
+        u = u + np.random.default_rng(case.seed).normal(0.0, case.white * u.std(), u.shape)
+    args = [(r.ft, r.fd, u[i * reps] if reps == 1 else u[i * reps : (i + 1) * reps],
+             case.truth, case.config, intervals) for i in range(runs)]  # fmt: skip
+    t0 = time.perf_counter()
+    with Engine("local:2") as engine:
+        done = engine.map(_fit, args, [{"run": i} for i in range(runs)], "fits").values()
+    print(f"MLE coverage over {runs} estimates, {case.label} (fits "
+          f"{'with' if intervals else 'without'} intervals, {time.perf_counter() - t0:.0f} s "
+          "on two workers; goal >= 90 %, 95 % Wilson interval in brackets):")  # fmt: skip
+    rival = sum(bool(f.competing) for f, _ in done)
+    print(f"  {rival} of {runs} fits had another minimum the data do not rule out")
+    for what, key in (
+        ("on an end of its range", "on_range_bound"),
+        ("the data cannot tell from an end of its range", "range_end"),
+    ):
+        some = [f for f, _ in done if getattr(f, key)]
+        count = Counter(name for f in some for name in getattr(f, key))
+        print(f"  {len(some)} of {runs} fits had a parameter {what} "
+              f"({', '.join(f'{k} {v}' for k, v in count.items()) or '-'})")  # fmt: skip
+    for n in PARAMETERS:
+        ok = [(f, at) for f, at in done if n not in f.unidentifiable]
+        truth = getattr(case.truth, n)
+        proper = [abs(getattr(f.pilot, n) - truth) <= 2 * at[n] for f, at in ok]
+        plug_in = [abs(getattr(f.pilot, n) - truth) <= 2 * f.crlb[n] for f, _ in ok]
+        line = (f"  {n:9s} of {len(ok):3d} identifiable, within 2 bounds at the truth "
+                f"{_share(proper)}, reported {_share(plug_in)}")  # fmt: skip
+        if intervals:
+            inside = [f.covers(n, truth) for f, _ in done]
+            line += f"; likelihood-ratio interval {_share(inside)} of {runs}"
+        print(line)
 
 
 def _share(hits: list[bool]) -> str:
@@ -160,17 +207,12 @@ def _share(hits: list[bool]) -> str:
     return f"{np.mean(hits):4.0%} ({lo:.0%}-{hi:.0%})"
 
 
-def _fit(ft, fd, u, intervals: bool = True):
-    """One MLE fit (with likelihood-ratio intervals unless told not), and the bound at the
-    truth (a task of the engine)."""
-    cfg = motion_system("condition-8")
+def _fit(ft, fd, u, truth: PitchPilot, config: str, intervals: bool):
+    """One MLE fit (with likelihood-ratio intervals if asked), and the bound at the truth (a
+    task of the engine)."""
+    cfg = motion_system(config)
     fit = fit_pitch_pilot(ft, fd, u, cfg, intervals=intervals)
-    return fit, bound_at(TRUTH, ft, fd, u, cfg)
-
-
-def _fit_without_intervals(ft, fd, u):
-    """:func:`_fit` without the intervals (and so without the interval rule)."""
-    return _fit(ft, fd, u, intervals=False)
+    return fit, bound_at(truth, ft, fd, u, cfg)
 
 
 if __name__ == "__main__":
@@ -179,10 +221,11 @@ if __name__ == "__main__":
                         help="estimates per coverage figure (default 200: +-4 %% at 90 %%; "
                              "about 30 min each on two cores with the intervals)")  # fmt: skip
     parser.add_argument("--coverage-only", action="store_true", help="section 3 only")
+    parser.add_argument("--nuisance-only", action="store_true", help="section 4 only (2 min)")
     parser.add_argument("--no-intervals", action="store_true",
                         help="fit without the likelihood-ratio intervals (and their rule): "
                              "about 6x faster")  # fmt: skip
     args = parser.parse_args()
     if args.coverage_runs < 1:
         parser.error(f"--coverage-runs must be at least 1; got {args.coverage_runs}")
-    main(args.coverage_runs, args.coverage_only, not args.no_intervals)
+    main(args.coverage_runs, args.coverage_only, not args.no_intervals, args.nuisance_only)

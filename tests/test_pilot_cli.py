@@ -34,6 +34,8 @@ def test_run_writes_a_csv_that_identify_reads(capsys, tmp_path):
     assert all(set(other) == keys for other in out["mle"]["competing_minima"])
     assert isinstance(out["mle"]["on_range_bound"], dict)  # parameter -> its profile's point
     assert set(out["mle"]["on_range_bound"]) <= set(out["mle"]["not_identifiable"])
+    assert isinstance(out["mle"]["range_end"], dict)  # parameter -> the fit on its range's end
+    assert not set(out["mle"]["range_end"]) & set(out["mle"]["on_range_bound"])
 
 
 def _no_constant(name):

@@ -414,8 +414,10 @@ def _cmd_identify(args: argparse.Namespace) -> int:
                   f"3.84 at {name} {getattr(other, name):.4f}; the others there: "
                   f"{moved(other)}")  # fmt: skip
         for name, other in mle.range_end.items():
-            print(f"  {name} cannot be told from {getattr(other, name):g}, the end of its range "
-                  f"(chi-square within 3.84); the others there: {moved(other)}")  # fmt: skip
+            end = getattr(other, name)
+            side = "lower" if end < getattr(p, name) else "upper"
+            print(f"  {name} cannot be told from the {side} end of its range, {end:g} (the "
+                  f"others refitted there: chi-square within 3.84): {moved(other)}")  # fmt: skip
         print(
             f"  ARX structure {arx.orders}; FC and ARX responses at "
             f"{fc.omega_rad_s.size} lines in --json"

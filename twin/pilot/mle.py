@@ -81,8 +81,8 @@ class PilotFit:
         The standard deviation reported for each parameter: its Cramer-Rao bound at the
         estimate where no other minimum competes, else that bound widened so that two of it
         cover each competing minimum's own two bounds (:func:`twin.pilot.minima.widened`: the
-        truth may sit in any of them) and each point of ``on_range_bound`` and ``range_end``.
-        JSON ``crlb_sd``;
+        truth may sit in any of them) and each point of ``on_range_bound`` and ``range_end``
+        (a point's parameters on an end of their range count as points there). JSON ``crlb_sd``;
         an unbounded sd (a parameter the data do not see, or one on its range's bound) is
         infinite, null in the JSON.
     vaf_percent : float
@@ -120,13 +120,14 @@ class PilotFit:
         bound, and the profile's point (the others move with it along the valley it opens)
         widens their ``crlb`` as a competing minimum does. JSON ``on_range_bound``.
     range_end : dict of str to PitchPilot
-        Each parameter the data hardly see (bound above ``IDENTIFIABLE_REL_SD`` of its value)
-        and cannot tell from the nearer end of its range either (the others refitted with it
-        there cost less than ``COMPETING_CHI2``), with the fit there: a t_lag of 0.04 s that
-        may as well be none. Those fits widen the others' ``crlb`` as a competing minimum does
-        (a lag traded for a delay moves tau_v; with a lead-only pilot, one run of condition 4,
-        tau_v's reported sd held the truth in 81 % of 59 fits without this and 100 % with).
-        JSON ``range_end``.
+        Each parameter the data hardly see (its bound at the estimate above
+        ``IDENTIFIABLE_REL_SD`` of its distance to the nearer end of its range) and cannot tell
+        from that end either (the others refitted with it there cost less than
+        ``COMPETING_CHI2``), with the fit there: a t_lag of 0.04 s that may as well be none.
+        That fit widens the ``crlb`` of all parameters as a competing minimum does, its own to
+        at least half its distance to the end (a lag traded for a delay moves tau_v; with a
+        lead-only pilot, one run of condition 4, tau_v's reported sd held the truth in 81 % of
+        59 fits without this and 100 % with). JSON ``range_end``.
 
     """
 
@@ -526,10 +527,11 @@ def fit_pitch_pilot(
                                     0.01 * (UPPER[k] - LOWER[k]), COMPETING_CHI2)
         for k in on_bound
     }  # fmt: skip
-    ends = _ends_not_ruled_out(residual, best.x, crlb, on_bound)
-    points = [*rivals, *inward.values(), *(x for _, x in ends.values())]
-    held = [[]] * (len(rivals) + len(inward)) + [[k] for k, _ in ends.values()]
-    spread = [_held_bounds(problem.jacobian(x), h) for x, h in zip(points, held, strict=True)]
+    ends = _ends_not_ruled_out(residual, best.x, 2.0 * float(best.cost), crlb, on_bound)
+    points = [*rivals, *inward.values(), *ends.values()]
+    # a point's own parameters on an end are held there, and spread nothing about it
+    spread = [np.where(np.isin(np.arange(x.size), h), 0.0, _held_bounds(problem.jacobian(x), h))
+              for x, h in ((x, _on_bound(residual, x)) for x in points)]  # fmt: skip
     reported = widened(best.x, crlb, points, spread)
     fitted = make(best.x)
     mean_u = problem.u if problem.u.ndim == 1 else problem.u.mean(axis=0)
@@ -560,7 +562,7 @@ def fit_pitch_pilot(
     return PilotFit(fitted, bounds, vaf(mean_u, u_hat), float(np.std(mean_u - u_hat)), weak,
                     ranges, tuple(map(make, rivals)), at_estimate,
                     {name: make(x) for name, x in inward.items()},
-                    {name: make(x) for name, (_, x) in ends.items()})  # fmt: skip
+                    {name: make(x) for name, x in ends.items()})  # fmt: skip
 
 
 def _held_bounds(jac: FloatArray, held: list[int]) -> FloatArray:
@@ -574,25 +576,35 @@ def _held_bounds(jac: FloatArray, held: list[int]) -> FloatArray:
 def _ends_not_ruled_out(
     residual: Callable[[FloatArray], FloatArray],
     x: FloatArray,
+    chi2: float,
     bound: FloatArray,
     on_bound: list[int],
-) -> dict[str, tuple[int, FloatArray]]:
+) -> dict[str, FloatArray]:
     """Return the range ends that the parameters the data hardly see cannot be told from.
 
-    For each parameter (not on an end already) whose bound exceeds ``IDENTIFIABLE_REL_SD`` of
-    its value, the others are refitted with it on the nearer end of its range; where that
-    costs less than ``COMPETING_CHI2`` in chi-square the end competes with the estimate:
-    name -> (its index, the fit there).
+    A parameter is checked when its bound at the estimate ``x`` (chi-square ``chi2``) exceeds
+    ``IDENTIFIABLE_REL_SD`` of its distance to the nearer end of its range (its value, for a
+    range from zero), is finite (a parameter the data do not see at all, tau_m with k_m = 0,
+    moves nothing) and it is not on an end already. The others are refitted with it on that
+    end; where that costs less than ``COMPETING_CHI2`` the fit there competes with the
+    estimate (3.84 is conservative here: on a range's end the likelihood-ratio statistic is
+    half chi-square(0), half chi-square(1), whose 95 % point is 2.71; Self and Liang 1987).
+
+    Returns
+    -------
+    dict of str to ndarray
+        Parameter name -> the fit with it on its end.
+
     """
-    chi2 = float(residual(x) @ residual(x))
     ends = {}
     for k, name in enumerate(PARAMETERS):
-        if k in on_bound or bound[k] < IDENTIFIABLE_REL_SD * max(abs(float(x[k])), 1e-9):
-            continue
         end = LOWER[k] if x[k] - LOWER[k] <= UPPER[k] - x[k] else UPPER[k]
+        seen = np.isfinite(bound[k]) and k not in on_bound
+        if not seen or bound[k] < IDENTIFIABLE_REL_SD * abs(float(x[k] - end)):
+            continue
         there, point = profile_fit(residual, [x], k, float(end), LOWER, UPPER)
         if there - chi2 < COMPETING_CHI2:
-            ends[name] = (k, point)
+            ends[name] = point
     return ends
 
 
