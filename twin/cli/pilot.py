@@ -127,7 +127,8 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
     ide.add_argument(
         "--config",
         default="condition-1",
-        help="motion configuration the run was flown with (default condition-1)",
+        help="motion configuration the run was flown with (default condition-1; give the run's "
+        "own: the fit models the loop through it)",
     )
     ide.add_argument(
         "--continuous-loop",
@@ -326,7 +327,7 @@ def _cmd_identify(args: argparse.Namespace) -> int:
     from twin.pilot.arx import ARX_RATE_HZ, decimate, select_orders
     from twin.pilot.fc import fc_estimate
     from twin.pilot.forcing import MEASUREMENT_S, pitch_task
-    from twin.pilot.mle import fit_pitch_pilot
+    from twin.pilot.mle import LOWER, PARAMETERS, UPPER, fit_pitch_pilot
     from twin.pilot.records import read_pilot_csv
 
     cfg = motion_system(args.config)
@@ -389,35 +390,49 @@ def _cmd_identify(args: argparse.Namespace) -> int:
         )
         own_sd = mle.crlb_at_estimate or mle.crlb
         for name, sd in mle.crlb.items():
-            flag = "  not identifiable" if name in mle.unidentifiable else ""
+            value = getattr(p, name)
             span = ""
             if mle.intervals is not None:
                 span = "  2-sd interval " + _interval_text(name, *mle.intervals[name])
             if name in mle.on_range_bound:
-                sd_text = "on the bound of its range: no sd"
+                sd_text = "at the end of its range: no sd"
             elif own_sd[name] == sd:
                 sd_text = f"CRLB sd {sd:.4f}"
             else:
-                sd_text = f"sd {sd:.4f} widened over the points below; CRLB {own_sd[name]:.4f}"
-            print(f"  {name:9s} {getattr(p, name):8.4f}  ({sd_text}){span}{flag}")
+                sd_text = (f"sd {sd:.4f}: the CRLB here, {own_sd[name]:.4f}, widened so that "
+                           "+-2 sd covers the fits below")  # fmt: skip
+            flag = ""
+            if name in mle.unidentifiable:
+                why = ("at the end of its range" if name in mle.on_range_bound else
+                       "sd above a third of its value" if not sd < abs(value) / 3 else
+                       "its likelihood-ratio interval reaches far beyond 2 sd")  # fmt: skip
+                flag = f"  not identifiable ({why})"
+            print(f"  {name:9s} {value:8.4f}  ({sd_text}){span}{flag}")
 
-        def moved(other) -> str:
+        def moved(other, skip: str = "") -> str:
             far = [f"{n} {getattr(other, n):.4f}" for n in own_sd
-                   if abs(getattr(other, n) - getattr(p, n)) > own_sd[n]]  # fmt: skip
-            return ", ".join(far) or "within one CRLB of the estimate"
+                   if n != skip and abs(getattr(other, n) - getattr(p, n)) > own_sd[n]]  # fmt: skip
+            return ", ".join(far) or "every parameter within one CRLB of the estimate"
+
+        def end_of(name: str, at: float) -> str:
+            side = "lower" if at == LOWER[PARAMETERS.index(name)] else "upper"
+            return f"the {side} end of its range, {at:g}"
 
         for other in mle.competing:
-            print("  another minimum the data do not rule out (chi-square within 3.84 or "
-                  f"Vuong's test): {moved(other)}")  # fmt: skip
+            print("  another minimum the data do not rule out (chi-square within 3.84 of the "
+                  f"best, or Vuong's test does not prefer the best): {moved(other)}")  # fmt: skip
         for name, other in mle.on_range_bound.items():
-            print(f"  {name} on the bound of its range; its profile into the range rises by "
-                  f"3.84 at {name} {getattr(other, name):.4f}; the others there: "
-                  f"{moved(other)}")  # fmt: skip
+            at, k = getattr(other, name), PARAMETERS.index(name)
+            end, way = (LOWER[k], "up") if at > getattr(p, name) else (UPPER[k], "down")
+            print(f"  {name} estimated at {end_of(name, end)}: the data allow it {way} to "
+                  f"{at:.4f} (chi-square +3.84, the rest refitted); the fit there: "
+                  f"{moved(other, name)}")  # fmt: skip
         for name, other in mle.range_end.items():
-            end = getattr(other, name)
-            side = "lower" if end < getattr(p, name) else "upper"
-            print(f"  {name} cannot be told from the {side} end of its range, {end:g} (the "
-                  f"others refitted there: chi-square within 3.84): {moved(other)}")  # fmt: skip
+            print(f"  {name} may be at {end_of(name, getattr(other, name))}: held there, the "
+                  "rest refitted, the chi-square rises by less than 3.84; the fit there: "
+                  f"{moved(other, name)}")  # fmt: skip
+        if mle.competing or mle.on_range_bound or mle.range_end:
+            print("  (the fits above list the parameters more than one CRLB from the estimate)")
         print(
             f"  ARX structure {arx.orders}; FC and ARX responses at "
             f"{fc.omega_rad_s.size} lines in --json"
