@@ -39,6 +39,11 @@ def test_the_fits_bound_covers_every_minimum_it_cannot_rule_out(runs):
         assert fit.crlb[name] >= fit.crlb_at_estimate[name]
     out = fit.to_dict()
     assert len(out["competing_minima"]) == len(fit.competing)
+    # why each competes: within chi-square 3.84 of the best, or Vuong's test does not prefer it
+    why = out["evidence"]["competing_minima"]
+    assert len(why) == len(fit.competing)
+    assert all(e["delta_chi2"] < 3.84 or e["vuong_z"] < 1.96 for e in why)
+    assert all(e["delta_chi2"] >= 0 for e in why)  # the best is the best
 
 
 def test_the_lead_lag_bounds_scale_with_the_lag(runs):
@@ -183,6 +188,7 @@ def test_a_lag_the_data_cannot_tell_from_none_widens_the_delay_it_trades_with():
         assert list(fit.range_end) == ["t_lag"] and not fit.on_range_bound, run
         end = fit.range_end["t_lag"]
         assert end.t_lag == 0.0
+        assert 0.0 <= fit.evidence["range_end"]["t_lag"] < 3.84
         assert fit.crlb["t_lag"] >= fit.pilot.t_lag / 2
         # tau_v moves with the lag onto zero, and its sd covers the move
         assert fit.crlb["tau_v"] >= abs(end.tau_v - fit.pilot.tau_v) / 2 > 0.005

@@ -36,6 +36,8 @@ def test_run_writes_a_csv_that_identify_reads(capsys, tmp_path):
     assert set(out["mle"]["on_range_bound"]) <= set(out["mle"]["not_identifiable"])
     assert isinstance(out["mle"]["range_end"], dict)  # parameter -> the fit on its range's end
     assert not set(out["mle"]["range_end"]) & set(out["mle"]["on_range_bound"])
+    assert len(out["mle"]["evidence"]["competing_minima"]) == len(out["mle"]["competing_minima"])
+    assert set(out["mle"]["evidence"]["range_end"]) == set(out["mle"]["range_end"])
 
 
 def _no_constant(name):

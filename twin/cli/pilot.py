@@ -418,9 +418,11 @@ def _cmd_identify(args: argparse.Namespace) -> int:
             side = "lower" if at == LOWER[PARAMETERS.index(name)] else "upper"
             return f"the {side} end of its range, {at:g}"
 
-        for other in mle.competing:
-            print("  another minimum the data do not rule out (chi-square within 3.84 of the "
-                  f"best, or Vuong's test does not prefer the best): {moved(other)}")  # fmt: skip
+        why = mle.evidence.get("competing_minima", [])
+        for other, ev in zip(mle.competing, why, strict=True):
+            print(f"  another minimum the data do not rule out (chi-square +{ev['delta_chi2']:.2f} "
+                  f"over the best, Vuong's z {ev['vuong_z']:.2f}; it competes within 3.84 or "
+                  f"below z 1.96): {moved(other)}")  # fmt: skip
         for name, other in mle.on_range_bound.items():
             at, k = getattr(other, name), PARAMETERS.index(name)
             end, way = (LOWER[k], "up") if at > getattr(p, name) else (UPPER[k], "down")
@@ -428,8 +430,9 @@ def _cmd_identify(args: argparse.Namespace) -> int:
                   f"{at:.4f} (chi-square +3.84, the rest refitted); the fit there: "
                   f"{moved(other, name)}")  # fmt: skip
         for name, other in mle.range_end.items():
+            rise = mle.evidence["range_end"][name]
             print(f"  {name} may be at {end_of(name, getattr(other, name))}: held there, the "
-                  "rest refitted, the chi-square rises by less than 3.84; the fit there: "
+                  f"rest refitted, the chi-square rises by {rise:.2f} (< 3.84); the fit there: "
                   f"{moved(other, name)}")  # fmt: skip
         if mle.competing or mle.on_range_bound or mle.range_end:
             print("  (the fits above list the parameters more than one CRLB from the estimate)")

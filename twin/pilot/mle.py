@@ -30,7 +30,7 @@ from scipy.optimize import least_squares
 from twin.chain.config import MotionSystem
 from twin.errors import SignalError
 from twin.jsonable import plain
-from twin.pilot.minima import competing, distinct, widened
+from twin.pilot.minima import competing, distinct, vuong_z, widened
 from twin.pilot.pitch import PitchPilot, aircraft, motion_response
 from twin.pilot.profile import inward_point, likelihood_interval, profile_fit
 from twin.plotting import finish, pyplot
@@ -128,6 +128,11 @@ class PilotFit:
         at least half its distance to the end (a lag traded for a delay moves tau_v; with a
         lead-only pilot, one run of condition 4, tau_v's reported sd held the truth in 81 % of
         59 fits without this and 100 % with). JSON ``range_end``.
+    evidence : dict
+        Why each of those competes: ``competing_minima``, a list (in the order of
+        ``competing``) of ``{"delta_chi2", "vuong_z"}`` (chi-square above the best, and
+        Vuong's statistic for the best against it); ``range_end``, parameter -> the
+        chi-square rise with it on its end. JSON ``evidence``.
 
     """
 
@@ -141,6 +146,7 @@ class PilotFit:
     crlb_at_estimate: dict[str, float] | None = None
     on_range_bound: dict[str, PitchPilot] = dataclasses.field(default_factory=dict)
     range_end: dict[str, PitchPilot] = dataclasses.field(default_factory=dict)
+    evidence: dict[str, object] = dataclasses.field(default_factory=dict)
 
     def to_dict(self) -> dict[str, object]:
         """JSON-ready."""
@@ -155,6 +161,7 @@ class PilotFit:
             "crlb_sd_at_estimate": plain(self.crlb_at_estimate),
             "on_range_bound": {k: dataclasses.asdict(v) for k, v in self.on_range_bound.items()},
             "range_end": {k: dataclasses.asdict(v) for k, v in self.range_end.items()},
+            "evidence": plain(self.evidence),
         }
         if self.intervals is not None:
             out["likelihood_interval_2sd"] = {k: list(v) for k, v in self.intervals.items()}
@@ -527,7 +534,16 @@ def fit_pitch_pilot(
                                     0.01 * (UPPER[k] - LOWER[k]), COMPETING_CHI2)
         for k in on_bound
     }  # fmt: skip
-    ends = _ends_not_ruled_out(residual, best.x, 2.0 * float(best.cost), crlb, on_bound)
+    chi2 = 2.0 * float(best.cost)
+    ends = _ends_not_ruled_out(residual, best.x, chi2, crlb, on_bound)
+    rb = residual(best.x)
+    evidence = {
+        "competing_minima": [
+            {"delta_chi2": float(r @ r) - chi2, "vuong_z": vuong_z(rb, r)}
+            for r in map(residual, rivals)
+        ],
+        "range_end": {n: float(residual(x) @ residual(x)) - chi2 for n, x in ends.items()},
+    }
     points = [*rivals, *inward.values(), *ends.values()]
     # a point's own parameters on an end are held there, and spread nothing about it
     spread = [np.where(np.isin(np.arange(x.size), h), 0.0, _held_bounds(problem.jacobian(x), h))
@@ -562,7 +578,7 @@ def fit_pitch_pilot(
     return PilotFit(fitted, bounds, vaf(mean_u, u_hat), float(np.std(mean_u - u_hat)), weak,
                     ranges, tuple(map(make, rivals)), at_estimate,
                     {name: make(x) for name, x in inward.items()},
-                    {name: make(x) for name, x in ends.items()})  # fmt: skip
+                    {name: make(x) for name, x in ends.items()}, evidence)  # fmt: skip
 
 
 def _held_bounds(jac: FloatArray, held: list[int]) -> FloatArray:
