@@ -116,11 +116,13 @@ def test_an_end_competes_where_the_data_hardly_see_a_parameter_and_cannot_rule_t
 
     ends = _ends_not_ruled_out(residual, x, 0.0, sd, [0])
     assert set(ends) == {"t_lag", "omega_nm", "zeta_nm"}
-    for name, end in (("t_lag", 0.0), ("omega_nm", 40.0), ("zeta_nm", 0.02)):
+    for name, end, rise in (("t_lag", 0.0, 0.64), ("omega_nm", 40.0, 0.04),
+                            ("zeta_nm", 0.02, 0.09)):  # fmt: skip
         k = PARAMETERS.index(name)
-        assert ends[name][k] == end
+        point, cost = ends[name]
+        assert point[k] == end and cost == pytest.approx(rise)
         others = np.delete(np.arange(8), [k, 5])  # the rest stay where the data put them
-        assert ends[name][others] == pytest.approx(x[others], abs=1e-6)
+        assert point[others] == pytest.approx(x[others], abs=1e-6)
 
 
 @pytest.mark.slow

@@ -44,12 +44,17 @@ def test_competing_keeps_the_minima_the_data_do_not_rule_out():
     minima = distinct([np.array([2.0]), np.array([2.0 + 1e-6]), np.array([-2.0]), np.array([1.0])])
     assert len(minima) == 3  # the two equal points are one minimum
     rivals = competing(residual, minima, chi2=0.0)
-    assert [float(x[0]) for x in rivals] == [-2.0]
+    assert [float(r.x[0]) for r in rivals] == [-2.0]
+    best = residual(minima[0])
+    assert rivals[0].delta_chi2 == pytest.approx(0.0, abs=1e-9)  # +-2 predict alike
+    assert rivals[0].vuong_z == vuong_z(best, residual(rivals[0].x))
     # within the chi-square margin a rival competes whatever Vuong's test says
     worse = residual(np.array([1.0]))
     assert vuong_z(residual(minima[0]), worse) > VUONG_Z
     margin = float(worse @ worse - residual(minima[0]) @ residual(minima[0])) + 1.0
-    assert [float(x[0]) for x in competing(residual, minima, chi2=margin)] == [-2.0, 1.0]
+    wide = competing(residual, minima, chi2=margin)
+    assert [float(r.x[0]) for r in wide] == [-2.0, 1.0]
+    assert wide[1].delta_chi2 == pytest.approx(margin - 1.0) and wide[1].vuong_z > VUONG_Z
 
     # a point of a rival's flat valley that predicts like it (within 0.1 noise sd) is that
     # rival again, not a second one
@@ -58,7 +63,7 @@ def test_competing_keeps_the_minima_the_data_do_not_rule_out():
 
     points = [np.array([2.0, 0.0]), np.array([-2.0, 0.0]), np.array([-2.0, 5.0])]
     assert len(distinct(points)) == 3
-    assert [list(x) for x in competing(valley, points, chi2=0.0)] == [[-2.0, 0.0]]
+    assert [list(r.x) for r in competing(valley, points, chi2=0.0)] == [[-2.0, 0.0]]
     assert len(competing(valley, [points[0], points[2]], chi2=0.0)) == 1
     with pytest.raises(ValueError, match="at least one minimum"):
         competing(residual, [], chi2=3.84)

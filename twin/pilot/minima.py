@@ -43,6 +43,7 @@ True
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
+from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
@@ -78,6 +79,18 @@ def vuong_z(best: FloatArray, rival: FloatArray) -> float:
     return 0.0 if sd == 0.0 else float(np.sum(d) / (np.sqrt(d.size) * sd))
 
 
+class Rival(NamedTuple):
+    """A minimum that competes with the best, and why.
+
+    ``delta_chi2`` is its chi-square above the best's, ``vuong_z`` Vuong's statistic of the
+    best against it.
+    """
+
+    x: FloatArray
+    delta_chi2: float
+    vuong_z: float
+
+
 def distinct(points: Sequence[FloatArray]) -> list[FloatArray]:
     """Return ``points`` (best first) with each minimum once (equal within 0.1 % or 1e-4)."""
     kept: list[FloatArray] = []
@@ -89,7 +102,7 @@ def distinct(points: Sequence[FloatArray]) -> list[FloatArray]:
 
 def competing(
     residual: Callable[[FloatArray], FloatArray], minima: Sequence[FloatArray], chi2: float
-) -> list[FloatArray]:
+) -> list[Rival]:
     """Return the minima after the first (the best) that the data do not tell from it.
 
     A rival competes when its chi-square exceeds the best's by less than ``chi2`` or when
@@ -107,6 +120,12 @@ def competing(
     chi2 : float
         Chi-square margin within which a rival competes whatever Vuong's test says.
 
+    Returns
+    -------
+    list of Rival
+        The competing minima, best first, each with its chi-square above the best and
+        Vuong's statistic.
+
     Raises
     ------
     ValueError
@@ -116,15 +135,16 @@ def competing(
     if not minima:
         raise ValueError("competing() needs at least one minimum (the best, first)")
     best = residual(minima[0])
-    rivals: list[FloatArray] = []
+    rivals: list[Rival] = []
     seen: list[FloatArray] = []
     for x in minima[1:]:
         r = residual(x)
         # a search stopped at another point of a rival's flat valley is that rival again
         if any(np.linalg.norm(r - q) < SAME_PREDICTION for q in seen):
             continue
-        if float(r @ r - best @ best) < chi2 or vuong_z(best, r) < VUONG_Z:
-            rivals.append(x)
+        delta, z = float(r @ r - best @ best), vuong_z(best, r)
+        if delta < chi2 or z < VUONG_Z:
+            rivals.append(Rival(x, delta, z))
             seen.append(r)
     return rivals
 

@@ -30,7 +30,7 @@ from scipy.optimize import least_squares
 from twin.chain.config import MotionSystem
 from twin.errors import SignalError
 from twin.jsonable import plain
-from twin.pilot.minima import competing, distinct, vuong_z, widened
+from twin.pilot.minima import competing, distinct, widened
 from twin.pilot.pitch import PitchPilot, aircraft, motion_response
 from twin.pilot.profile import inward_point, likelihood_interval, profile_fit
 from twin.plotting import finish, pyplot
@@ -536,15 +536,11 @@ def fit_pitch_pilot(
     }  # fmt: skip
     chi2 = 2.0 * float(best.cost)
     ends = _ends_not_ruled_out(residual, best.x, chi2, crlb, on_bound)
-    rb = residual(best.x)
     evidence = {
-        "competing_minima": [
-            {"delta_chi2": float(r @ r) - chi2, "vuong_z": vuong_z(rb, r)}
-            for r in map(residual, rivals)
-        ],
-        "range_end": {n: float(residual(x) @ residual(x)) - chi2 for n, x in ends.items()},
+        "competing_minima": [{"delta_chi2": r.delta_chi2, "vuong_z": r.vuong_z} for r in rivals],
+        "range_end": {name: rise for name, (_, rise) in ends.items()},
     }
-    points = [*rivals, *inward.values(), *ends.values()]
+    points = [*(r.x for r in rivals), *inward.values(), *(x for x, _ in ends.values())]
     # a point's own parameters on an end are held there, and spread nothing about it
     spread = [np.where(np.isin(np.arange(x.size), h), 0.0, _held_bounds(problem.jacobian(x), h))
               for x, h in ((x, _on_bound(residual, x)) for x in points)]  # fmt: skip
@@ -576,9 +572,9 @@ def fit_pitch_pilot(
                 if not max(hi - best.x[k], best.x[k] - lo) <= reach[k]}  # fmt: skip
         weak = tuple(name for name in PARAMETERS if name in weak or name in wide)
     return PilotFit(fitted, bounds, vaf(mean_u, u_hat), float(np.std(mean_u - u_hat)), weak,
-                    ranges, tuple(map(make, rivals)), at_estimate,
+                    ranges, tuple(make(r.x) for r in rivals), at_estimate,
                     {name: make(x) for name, x in inward.items()},
-                    {name: make(x) for name, x in ends.items()}, evidence)  # fmt: skip
+                    {name: make(x) for name, (x, _) in ends.items()}, evidence)  # fmt: skip
 
 
 def _held_bounds(jac: FloatArray, held: list[int]) -> FloatArray:
@@ -595,7 +591,7 @@ def _ends_not_ruled_out(
     chi2: float,
     bound: FloatArray,
     on_bound: list[int],
-) -> dict[str, FloatArray]:
+) -> dict[str, tuple[FloatArray, float]]:
     """Return the range ends that the parameters the data hardly see cannot be told from.
 
     A parameter is checked when its bound at the estimate ``x`` (chi-square ``chi2``) exceeds
@@ -608,8 +604,8 @@ def _ends_not_ruled_out(
 
     Returns
     -------
-    dict of str to ndarray
-        Parameter name -> the fit with it on its end.
+    dict of str to (ndarray, float)
+        Parameter name -> the fit with it on its end, and that fit's chi-square above ``chi2``.
 
     """
     ends = {}
@@ -620,7 +616,7 @@ def _ends_not_ruled_out(
             continue
         there, point = profile_fit(residual, [x], k, float(end), LOWER, UPPER)
         if there - chi2 < COMPETING_CHI2:
-            ends[name] = point
+            ends[name] = (point, there - chi2)
     return ends
 
 
