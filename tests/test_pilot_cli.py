@@ -38,6 +38,14 @@ def test_run_writes_a_csv_that_identify_reads(capsys, tmp_path):
     assert not set(out["mle"]["range_end"]) & set(out["mle"]["on_range_bound"])
     assert len(out["mle"]["evidence"]["competing_minima"]) == len(out["mle"]["competing_minima"])
     assert set(out["mle"]["evidence"]["range_end"]) == set(out["mle"]["range_end"])
+    # no --config: the motion system is the one the run's theta_felt follows (condition-1's
+    # pitch response, which condition-2 and srs share)
+    assert out["motion"]["source"] == "theta_felt" and out["motion"]["mismatch"] < 0.01
+    assert out["motion"]["config"] in {"condition-1", "condition-2", "srs"}
+    assert main(["pilot", "identify", str(csv), "--config", "condition-7", "--quiet"]) == 0
+    text = capsys.readouterr().out
+    assert "closed loop through condition-7" in text
+    assert "WARNING: theta_felt differs from condition-1's response by only" in text
 
 
 def _no_constant(name):
@@ -60,6 +68,7 @@ def test_montecarlo_and_lead_json(capsys):
         (["pilot", "run", "srs", "--runs", "0"], "--runs: must be an integer in [1, 1,000]"),
         (["pilot", "run", "srs", "--remnant", "1.5"], "--remnant must be"),
         (["pilot", "identify", "/no/such.csv"], "no such pilot-run file"),
+        (["pilot", "identify", "/no/such.csv", "--break-hz", "2"], "give it with --config"),
     ],
 )
 def test_bad_input_is_one_line_and_exit_2(capsys, argv, message):

@@ -120,15 +120,17 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
     ada.set_defaults(func=_cmd_adapt)
     ide = cmds.add_parser(
         "identify",
-        parents=[common.json_parent(), common.quiet_parent()],
+        parents=[common.overrides_parent(imu=False), common.json_parent(), common.quiet_parent()],
         help="FC, ARX and MLE on a twin-pilot/1 CSV",
     )
     ide.add_argument("csv", metavar="RUN_CSV", help="t,ft,fd,e,u,theta[,theta_felt] (rad)")
     ide.add_argument(
         "--config",
-        default="condition-1",
-        help="motion configuration the run was flown with (default condition-1; give the run's "
-        "own: the fit models the loop through it)",
+        default=None,
+        help="motion configuration the run was flown with (name or twin-config/1 file): the fit "
+        "models the loop through it; checked against the run's theta_felt. Default: the "
+        "built-in one theta_felt follows (within 5 %%), or condition-1 if the run has no "
+        "theta_felt",
     )
     ide.add_argument(
         "--continuous-loop",
@@ -322,15 +324,20 @@ def _replication(args: argparse.Namespace) -> int:
 
 
 def _cmd_identify(args: argparse.Namespace) -> int:
-    from twin.chain.config import motion_system
-    from twin.errors import SignalError
+    from twin.errors import SignalError, UsageError
     from twin.pilot.arx import ARX_RATE_HZ, decimate, select_orders
     from twin.pilot.fc import fc_estimate
+    from twin.pilot.felt_motion import match_motion
     from twin.pilot.forcing import MEASUREMENT_S, pitch_task
     from twin.pilot.mle import LOWER, PARAMETERS, UPPER, fit_pitch_pilot
     from twin.pilot.records import read_pilot_csv
 
-    cfg = motion_system(args.config)
+    overridden = [o for o, v in (("--break-hz", args.break_hz), ("--delay-ms", args.delay_ms),
+                                 ("--no-noise", args.no_noise), ("--resonance", args.resonance))
+                  if v not in (None, False)]  # fmt: skip
+    if overridden and args.config is None:
+        raise UsageError(f"{', '.join(overridden)} change a configuration: give it with --config")
+    given = None if args.config is None else common.configured(args.config, args)
     d = read_pilot_csv(args.csv)
     rate = float(d["rate_hz"])
     n = round(MEASUREMENT_S * rate)
@@ -347,6 +354,8 @@ def _cmd_identify(args: argparse.Namespace) -> int:
             f"last {MEASUREMENT_S} s (a tracking run has the Table 6.2 forcing functions in ft "
             "and fd, the pilot's e and u, and the motion the pilot felt)"
         )
+    motion = match_motion(d, given)
+    cfg = motion.config
     felt = w.get("theta_felt", w["theta"])
     fd, ft = pitch_task()
     fc = fc_estimate(w["e"][None], w["u"][None], felt[None], fd, ft, w["fd"], w["ft"])
@@ -378,6 +387,7 @@ def _cmd_identify(args: argparse.Namespace) -> int:
             "h_ptheta_gain": np.abs(h_px).tolist(),
         },
         "mle": mle.to_dict(),
+        "motion": motion.to_dict(),
     }
     if args.json:
         print(json.dumps(out, indent=2))
@@ -388,6 +398,7 @@ def _cmd_identify(args: argparse.Namespace) -> int:
             f"{args.csv}: MLE fit (Eq 6.5-6.7, closed loop through {cfg.name}, u {loop}), "
             f"VAF {mle.vaf_percent:.1f} %"
         )
+        print("  " + motion.format())
         own_sd = mle.crlb_at_estimate or mle.crlb
         for name, sd in mle.crlb.items():
             value = getattr(p, name)

@@ -1,0 +1,188 @@
+"""Which motion system a recorded pilot run was flown through, read from its felt attitude.
+
+The closed-loop fit (:mod:`twin.pilot.mle`) models the loop through the motion system's pitch
+response, so it needs the right one: fitted through the SRS baseline, a run flown behind the
+MPI platform's 1 Hz filter is explained by a different pilot. A ``twin-pilot/1`` run that
+carries ``theta_felt`` (the attitude the motion system gave the pilot) shows which response
+it had: ``theta_felt`` is the simulated attitude ``theta`` through it. Each candidate's
+response is applied to ``theta`` (the whole record, zero-padded so nothing wraps round; the
+run-in takes the start-up) and compared with ``theta_felt`` over the measurement window.
+
+The mismatch is the rms of the difference over the rms of ``theta_felt``. On the twin's own
+runs (remnant 15 %) the right configuration leaves under 0.01 % (reduced platform), 0.3 % with
+the platform noise on, 0.7 % with the full MuJoCo platform; 10 ms more or less delay leaves
+1.6-2.4 %; the 1 Hz filter added or missed, 37-60 %; a 2 Hz filter for the 1 Hz, 23 %. The platform
+noise of Table 6.3 is in heave and the fit does not model it, so conditions that differ only
+in noise have the same pitch response and are named together.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from twin.chain.config import MotionSystem, config_names, motion_system
+from twin.errors import SignalError
+from twin.pilot.forcing import MEASUREMENT_S
+from twin.pilot.pitch import motion_response
+
+FloatArray = NDArray[np.float64]
+#: Configuration assumed when a run has neither ``--config`` nor ``theta_felt``.
+DEFAULT_CONFIG = "condition-1"
+#: Largest mismatch with which a configuration is taken as the run's own when none is given.
+MATCH_MAX = 0.05
+#: A given configuration is questioned when its mismatch is above :data:`QUESTION_FROM` and a
+#: built-in one's is below it by :data:`BETTER_BY` or more (10 ms of delay off is 1.5-2 %).
+QUESTION_FROM = 0.01
+BETTER_BY = 3.0
+#: Start of a record left out of the comparison [s]: the felt response to the attitude before
+#: it (the 1 Hz filter's and the delays' memory is well under a second).
+SETTLE_S = 2.0
+#: Responses closer than this (relative, at every frequency) count as the same.
+SAME_RESPONSE = 1e-9
+
+
+def felt_mismatch(theta: FloatArray, theta_felt: FloatArray, rate_hz: float,
+                  config: MotionSystem) -> float:  # fmt: skip
+    """Rms of ``theta_felt`` minus ``config``'s response to ``theta``, over ``theta_felt``'s rms.
+
+    Both signals are the whole record; the comparison uses its last 81.92 s, less the first
+    :data:`SETTLE_S` of the record (the response to the attitude before the record began).
+    """
+    start = max(theta.size - round(MEASUREMENT_S * rate_hz), round(SETTLE_S * rate_hz))
+    if start >= theta.size - 1:
+        raise SignalError(f"a run of {theta.size} samples is too short to check its felt motion")
+    padded = 2 * theta.size
+    w = 2 * np.pi * np.fft.rfftfreq(padded, 1.0 / rate_hz)
+    predicted = np.fft.irfft(np.fft.rfft(theta, padded) * motion_response(config, w), padded)
+    felt = theta_felt[start:]
+    scale = float(np.sqrt(np.mean(felt**2)))
+    if scale == 0.0:
+        raise SignalError("theta_felt is zero over the measurement window: no felt motion")
+    return float(np.sqrt(np.mean((felt - predicted[start : theta.size]) ** 2)) / scale)
+
+
+@dataclass(frozen=True)
+class MotionMatch:
+    """The motion system a run is fitted through, and how its felt attitude agrees.
+
+    Attributes
+    ----------
+    config : MotionSystem
+        The configuration the fit uses.
+    source : str
+        ``"given"`` (``--config``), ``"theta_felt"`` (the best-matching configuration) or
+        ``"default"`` (neither: :data:`DEFAULT_CONFIG`).
+    mismatch : float or None
+        Its mismatch with ``theta_felt`` (:func:`felt_mismatch`; None without it).
+    candidates : dict of str to float
+        Every built-in configuration's mismatch, best first (empty without ``theta_felt``).
+    same_response : tuple of str
+        Built-in configurations with the same pitch response as ``config``.
+
+    """
+
+    config: MotionSystem
+    source: str
+    mismatch: float | None
+    candidates: dict[str, float]
+    same_response: tuple[str, ...]
+
+    @property
+    def better(self) -> str | None:
+        """A built-in configuration ``theta_felt`` follows much better than ``config``, if any."""
+        if self.mismatch is None or self.mismatch <= QUESTION_FROM:
+            return None
+        name, best = next(iter(self.candidates.items()))
+        return name if best * BETTER_BY <= self.mismatch else None
+
+    def to_dict(self) -> dict[str, object]:
+        """JSON-ready."""
+        return {
+            "config": self.config.name,
+            "source": self.source,
+            "mismatch": self.mismatch,
+            "same_response": list(self.same_response),
+            "candidates": self.candidates,
+        }
+
+    def format(self) -> str:
+        """One or two lines for the identify report."""
+        alike = [n for n in self.same_response if n != self.config.name]
+        name = self.config.name + (f" (or {', '.join(alike)}: the same pitch response)"
+                                   if alike else "")  # fmt: skip
+        if self.mismatch is None:
+            if self.source == "default":
+                return (f"motion system: {name}, assumed: the run has no theta_felt and no "
+                        "--config was given")  # fmt: skip
+            return f"motion system: {name}, given; the run has no theta_felt to check it"
+        off = f"theta_felt differs from its response to theta by {100 * self.mismatch:.1f} % rms"
+        if self.source == "given":
+            line = f"motion system: {name}, given; {off}"
+        else:
+            line = f"motion system: {name}, the built-in one theta_felt follows best: {off}"
+            others = [(n, m) for n, m in self.candidates.items() if n not in self.same_response]
+            if others:
+                line += f"; the next, {others[0][0]}, {100 * others[0][1]:.1f} %"
+        if self.better is not None:
+            line += (f"\n  WARNING: theta_felt differs from {self.better}'s response by only "
+                     f"{100 * self.candidates[self.better]:.1f} %: was the run flown through it? "
+                     "(the fit models the loop through the given one)")  # fmt: skip
+        return line
+
+
+def _same(a: MotionSystem, b: MotionSystem, w: FloatArray) -> bool:
+    ha, hb = motion_response(a, w), motion_response(b, w)
+    return bool(np.all(np.abs(ha - hb) <= SAME_RESPONSE * np.abs(hb)))
+
+
+def match_motion(run: Mapping[str, FloatArray], config: MotionSystem | None = None,
+                 rate_hz: float | None = None) -> MotionMatch:  # fmt: skip
+    """Check ``config`` against the run's ``theta_felt``, or choose it from ``theta_felt``.
+
+    Parameters
+    ----------
+    run : mapping
+        A read ``twin-pilot/1`` run (:func:`twin.pilot.records.read_pilot_csv`): ``theta``,
+        maybe ``theta_felt``, and ``rate_hz``.
+    config : MotionSystem, optional
+        The configuration the user gave; None to choose among the built-in ones.
+    rate_hz : float, optional
+        Sample rate (the run's ``rate_hz`` by default).
+
+    Raises
+    ------
+    SignalError
+        No configuration given and ``theta_felt`` follows none of the built-in ones within
+        :data:`MATCH_MAX` (the fit would model the wrong loop: give ``--config``).
+
+    """
+    rate = float(run["rate_hz"]) if rate_hz is None else rate_hz
+    builtin = {name: motion_system(name) for name in config_names()}
+    w = 2 * np.pi * np.geomspace(0.01, 0.5 * rate, 200)
+
+    def alike(cfg: MotionSystem) -> tuple[str, ...]:
+        return tuple(n for n, c in builtin.items() if _same(c, cfg, w))
+
+    if "theta_felt" not in run:
+        cfg = config if config is not None else builtin[DEFAULT_CONFIG]
+        return MotionMatch(cfg, "given" if config is not None else "default", None, {}, alike(cfg))
+    theta, felt = np.asarray(run["theta"]), np.asarray(run["theta_felt"])
+    found = {n: felt_mismatch(theta, felt, rate, c) for n, c in builtin.items()}
+    candidates = dict(sorted(found.items(), key=lambda kv: (kv[1], kv[0])))
+    if config is not None:
+        known = config.name in builtin and _same(builtin[config.name], config, w)
+        own = found[config.name] if known else felt_mismatch(theta, felt, rate, config)
+        return MotionMatch(config, "given", own, candidates, alike(config))
+    name, best = next(iter(candidates.items()))
+    if best > MATCH_MAX:
+        raise SignalError(
+            f"theta_felt follows none of the built-in motion systems within "
+            f"{100 * MATCH_MAX:.0f} % (best {name}, {100 * best:.1f} %); give the run's own "
+            "configuration (--config NAME or twin-config/1 file; --break-hz, --delay-ms to "
+            "change it)"
+        )
+    return MotionMatch(builtin[name], "theta_felt", best, candidates, alike(builtin[name]))
