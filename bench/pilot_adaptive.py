@@ -30,6 +30,12 @@
    model did not shape: condition 4 with half the remnant and a white stick-sensor noise of
    half u's sd added (five repetitions averaged), and a pilot the defaults are not (a lead
    with no lag, t_lag on the end of its range) on the same nuisance, one run each.
+5. Subjects who also adapt their visual delay (``--visual-delay-only``, about 15 min): the
+   speed-accuracy trade-off of :func:`twin.pilot.adapt.visual_noise_ratio` (an assumption):
+   section 2's per-subject count and a replication over 10 populations, tau_v among the
+   measures (Table 6.7: F 35.8, lower behind the filter). And Table 6.7's tau_m (F 140.1,
+   "close to zero" behind the filter): the adapted pilot of conditions 1 and 5 flown 20 times
+   each (15 % remnant) and fitted: is tau_m identifiable, and where do its estimates land?
 """
 
 import argparse
@@ -42,7 +48,7 @@ import numpy as np
 from statsmodels.stats.proportion import proportion_confint
 
 from twin.chain.config import motion_system
-from twin.pilot.adapt import ADAPTED, EQUALISATION
+from twin.pilot.adapt import ADAPTED, EQUALISATION, SPEED_ACCURACY, adapt
 from twin.pilot.experiment import pitch_remnant_scale
 from twin.pilot.mle import PARAMETERS, bound_at, fit_pitch_pilot
 from twin.pilot.pitch import PitchPilot, simulate_pitch
@@ -60,11 +66,30 @@ EFFECT_POPULATIONS = 5
 TRUTH = PitchPilot(tau_v=0.275)
 
 
+#: Section 2's models: the pilot who adapts its equalisation and neuromuscular tuning, and
+#: the one whose neuromuscular system is fixed (the model before).
+MODELS = (("equalisation and neuromuscular tuning", ADAPTED),
+          ("equalisation only (neuromuscular system fixed)", EQUALISATION))  # fmt: skip
+#: Section 5's model: the visual delay adapted too.
+VISUAL_DELAY = (
+    ("equalisation, neuromuscular tuning and visual delay", (*ADAPTED, *SPEED_ACCURACY)),
+)
+#: Populations of section 5.
+VISUAL_DELAY_POPULATIONS = 10
+
+
 def main(
-    runs: int = 200, coverage_only: bool = False, intervals: bool = True, nuisance_only=False
+    runs: int = 200,
+    coverage_only: bool = False,
+    intervals: bool = True,
+    nuisance_only: bool = False,
+    visual_delay_only: bool = False,
 ) -> None:
     if nuisance_only:
         nuisance()
+        return
+    if visual_delay_only:
+        visual_delay()
         return
     if coverage_only:
         coverage(runs, intervals)
@@ -78,30 +103,63 @@ def main(
     subject_effects()
     coverage(runs, intervals)
     nuisance()
+    visual_delay()
 
 
-def populations(sd: float, n: int) -> None:
+def populations(sd: float, n: int, adapted: tuple[str, ...] = ADAPTED) -> None:
     """Section 1: agreement with Tables 6.4-6.7 over seeded populations, beside the agreement
     the thesis' own F predicts (:mod:`twin.pilot.replication`)."""
-    rep, _ = run_populations(n, SUBJECTS, 0, scheduler="local:2", run_to_run_sd=sd)
+    rep, _ = run_populations(n, SUBJECTS, 0, scheduler="local:2", run_to_run_sd=sd,
+                             adapted=adapted)  # fmt: skip
     full = sum(e.agreed == e.populations for e in rep.effects)
     print(f"{n} populations of {SUBJECTS} subjects (the thesis' nine), run-to-run variation "
           f"{sd:.0%}: {full} of {len(rep.effects)} main effects agree with Tables 6.4-6.7 in "
           "every population")  # fmt: skip
     print(rep.format_table())
-    if sd == ADAPTATION_SD:
+    if sd == ADAPTATION_SD and adapted == ADAPTED:
         Path("out").mkdir(exist_ok=True)
         rep.plot(FIGURE)
         print(f"figure: {FIGURE}")
 
 
-def subject_effects() -> None:
-    """Section 2: the filter's effect per adapted subject, both models."""
+def visual_delay() -> None:
+    """Section 5: subjects who also trade their visual delay against the visual remnant, and
+    the motion delay of a pilot who no longer uses motion."""
+    subject_effects(VISUAL_DELAY)
+    populations(ADAPTATION_SD, VISUAL_DELAY_POPULATIONS, VISUAL_DELAY[0][1])
+    motion_delay()
+
+
+def motion_delay(runs: int = 20) -> None:
+    """Section 5: tau_m fitted where the adapted pilot uses motion (condition 1) and where it
+    does not (condition 5, K_m = 0)."""
+    print(f"tau_m of the adapted default pilot, fitted to {runs} seeded runs each (15 % "
+          "remnant): estimates median (5-95 %)")  # fmt: skip
+    for n in (1, 5):
+        config = f"condition-{n}"
+        truth = adapt(config).pilot
+        r = simulate_pitch(truth, config, runs, seed=11, remnant_scale=pitch_remnant_scale(truth))
+        args = [(r.ft, r.fd, r.u[i], truth, config, False) for i in range(runs)]
+        with Engine("local:2") as engine:
+            done = engine.map(_fit, args, [{"run": i} for i in range(runs)], "fits").values()
+        tau_m = np.array([f.pilot.tau_m for f, _ in done])
+        k_m = np.array([f.pilot.k_m for f, _ in done])
+        seen = sum("tau_m" not in f.unidentifiable for f, _ in done)
+        print(f"  {config}: true K_m {truth.k_m:.3f}, tau_m {truth.tau_m:.3f} s; tau_m "
+              f"identifiable in {seen} of {runs}; tau_m {_spread(tau_m)} s, below 0.05 s in "
+              f"{np.sum(tau_m < 0.05)}; K_m {_spread(k_m)}")  # fmt: skip
+
+
+def _spread(x: np.ndarray) -> str:
+    """Median (5-95 %) of ``x``."""
+    lo, mid, hi = np.percentile(x, [5, 50, 95])
+    return f"{mid:.3f} ({lo:.3f}-{hi:.3f})"
+
+
+def subject_effects(models: tuple[tuple[str, tuple[str, ...]], ...] = MODELS) -> None:
+    """Section 2: the filter's effect per adapted subject, for each of ``models``."""
     subs = [s for seed in range(EFFECT_POPULATIONS) for s in subjects(SUBJECTS, seed)]
-    for name, adapted in (
-        ("equalisation and neuromuscular tuning", ADAPTED),
-        ("equalisation only (neuromuscular system fixed)", EQUALISATION),
-    ):
+    for name, adapted in models:
         with Engine("local:2") as engine:
             effects = list(engine.map(filter_effect, [(s, adapted) for s in subs],
                                       [{"subject": i} for i in range(len(subs))],
@@ -222,10 +280,23 @@ if __name__ == "__main__":
                              "about 30 min each on two cores with the intervals)")  # fmt: skip
     parser.add_argument("--coverage-only", action="store_true", help="section 3 only")
     parser.add_argument("--nuisance-only", action="store_true", help="section 4 only (2 min)")
+    parser.add_argument("--visual-delay-only", action="store_true",
+                        help="section 5 only (about 20 min)")  # fmt: skip
+    parser.add_argument("--motion-delay-only", action="store_true",
+                        help="section 5's tau_m fits only (about 3 min)")  # fmt: skip
     parser.add_argument("--no-intervals", action="store_true",
                         help="fit without the likelihood-ratio intervals (and their rule): "
                              "about 6x faster")  # fmt: skip
     args = parser.parse_args()
     if args.coverage_runs < 1:
         parser.error(f"--coverage-runs must be at least 1; got {args.coverage_runs}")
-    main(args.coverage_runs, args.coverage_only, not args.no_intervals, args.nuisance_only)
+    if args.motion_delay_only:
+        motion_delay()
+        raise SystemExit(0)
+    main(
+        args.coverage_runs,
+        args.coverage_only,
+        not args.no_intervals,
+        args.nuisance_only,
+        args.visual_delay_only,
+    )

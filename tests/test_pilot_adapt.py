@@ -10,7 +10,17 @@ import pytest
 
 from twin.cli.main import main
 from twin.errors import SignalError
-from twin.pilot.adapt import ADAPTED, EQUALISATION, Task, adapt, predict, stable
+from twin.pilot.adapt import (
+    ADAPTED,
+    EQUALISATION,
+    SPEED_ACCURACY,
+    SPEED_ACCURACY_EXPONENT,
+    Task,
+    adapt,
+    predict,
+    stable,
+    visual_noise_ratio,
+)
 from twin.pilot.pitch import PitchPilot, simulate_pitch
 from twin.pilot.population import COMPARED, FACTORS, MEASURES, anova, levels
 
@@ -56,8 +66,8 @@ def test_a_pilot_with_fixed_limitations_keeps_its_neuromuscular_system():
     a = adapt("condition-5", mine, adapted=EQUALISATION)
     assert (a.pilot.omega_nm, a.pilot.zeta_nm) == (9.0, 0.3)
     assert a.to_dict()["adapted"] == list(EQUALISATION)
-    with pytest.raises(SignalError, match=r"among k_v, t_lead.*got tau_v"):
-        adapt("condition-5", adapted=("k_v", "tau_v"))
+    with pytest.raises(SignalError, match=r"among k_v, t_lead.*tau_v; got tau_m"):
+        adapt("condition-5", adapted=("k_v", "tau_m"))
     with pytest.raises(SignalError, match="got none"):
         adapt("condition-5", adapted=())
     with pytest.raises(SignalError, match="sequence of names; got the string 'k_v'"):
@@ -151,6 +161,37 @@ def test_the_anova_finds_planted_effects_and_keeps_the_json_contract():
             assert doc["anova"][m][factor]["direction"] in "+-"
 
 
+def test_the_visual_remnant_carries_the_cost_of_speed():
+    """The speed-accuracy trade-off: processing in half the pilot's own visual delay
+    multiplies the visual observation noise by 2^k; not adapted, the visual ratio is the
+    common one, and a visual ratio equal to it predicts what the common one does."""
+    own = PitchPilot()
+    fast = dataclasses.replace(own, tau_v=own.tau_v / 2)
+    assert visual_noise_ratio(fast, own, 0.01, ADAPTED) is None
+    assert visual_noise_ratio(fast, own, 0.01, (*ADAPTED, *SPEED_ACCURACY)) == pytest.approx(
+        0.01 * 2**SPEED_ACCURACY_EXPONENT)  # fmt: skip
+    task = Task.pitch("condition-1")
+    same, plain = predict(own, task, 0.03, 0.01, 0.01), predict(own, task, 0.03, 0.01)
+    assert (same.var_e, same.var_u) == pytest.approx((plain.var_e, plain.var_u), rel=1e-12)
+    noisier = predict(own, task, 0.03, 0.01, 0.04)
+    assert noisier.var_e > plain.var_e and noisier.var_u > plain.var_u
+
+
+def test_population_measures_follow_what_was_adapted():
+    """tau_v is among the ANOVA's measures (beside Table 6.7's F 35.8) only where the subjects
+    adapt it; a subject's rows carry it either way."""
+    from twin.pilot.population import population_result
+
+    rng = np.random.default_rng(4)
+    flown = [[{"subject": s, "condition": n, "filter": fb, "delay": dl, "noise": nz,
+               **{m: s + fb + rng.normal(0, 0.1) for m in COMPARED}}
+              for n, (fb, dl, nz) in LEVELS.items()] for s in (1, 2, 3)]  # fmt: skip
+    assert "tau_v" not in population_result(flown, 0, ADAPTED, 0.1).anova
+    with_delay = population_result(flown, 0, (*ADAPTED, *SPEED_ACCURACY), 0.1)
+    assert with_delay.anova["tau_v"]["filter"]["direction"] == "+"
+    assert "tau_v" in with_delay.format_table()
+
+
 def test_an_adapted_pilot_without_motion_flies_as_predicted(srs_and_filter):
     """Behind the 1 Hz filter the adapted K_m is 0: the pilot flies (time domain, the whole
     chain) and its var(e), var(u) without remnant match the frequency-domain prediction
@@ -178,6 +219,36 @@ def test_cli_adapt_prints_parameters_and_margins(capsys):
     doc = json.loads(capsys.readouterr().out)
     assert doc["adapted"] == list(EQUALISATION)
     assert doc["pilot"]["omega_nm"] == PitchPilot().omega_nm
+    assert main(["pilot", "experiment", "--adapt-visual-delay"]) == 2
+    assert "--adapt-visual-delay chooses what adaptive subjects adapt" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_a_pilot_who_trades_speed_for_remnant_processes_faster_behind_the_filter(capsys):
+    """Table 6.7 (tau_v, F 35.80, lower with the 1 Hz filter; the thesis: "the visual cues
+    were processed faster" where they had to give the lead, §6.4.2.2). Without any assumed
+    cost of speed: at a fixed visual delay, the adapted cost rises faster with tau_v behind the
+    filter (1.6e-4 against 1.2e-4 per s at 0.25-0.35 s), so any cost of speed that is convex in
+    tau_v puts the optimum lower there. With the trade-off of visual_noise_ratio: on the SRS
+    baseline the pilot keeps its own delay within 5 % (how k was chosen), behind the filter
+    it processes faster, and the other filter effects of the first test still hold."""
+    slopes = []
+    for n in (1, 5):
+        cost = [adapt(f"condition-{n}", dataclasses.replace(PitchPilot(), tau_v=t)).performance.cost
+                for t in (0.25, 0.35)]  # fmt: skip
+        slopes.append((cost[1] - cost[0]) / 0.1)
+    assert slopes[1] > 1.15 * slopes[0] > 0, slopes
+    assert main(["pilot", "adapt", "condition-1", "--adapt-visual-delay", "--json"]) == 0
+    srs = json.loads(capsys.readouterr().out)
+    assert main(["pilot", "adapt", "condition-5", "--adapt-visual-delay", "--json"]) == 0
+    filt = json.loads(capsys.readouterr().out)
+    assert srs["adapted"][-1] == "tau_v"
+    own = PitchPilot().tau_v
+    assert srs["pilot"]["tau_v"] == pytest.approx(own, rel=0.05)
+    assert filt["pilot"]["tau_v"] < srs["pilot"]["tau_v"]
+    assert filt["pilot"]["k_m"] < 0.05 * srs["pilot"]["k_m"]
+    assert filt["crossover_target_rad_s"] < srs["crossover_target_rad_s"]
+    assert filt["var_u_deg2"] < srs["var_u_deg2"]
 
 
 @pytest.mark.slow
@@ -235,3 +306,27 @@ def test_nearly_every_adapted_subject_flies_with_less_control_activity_behind_th
     assert lower["var_u"] >= 8, lower
     assert lower["crossover_target_rad_s"] >= 7, lower
     assert lower["omega_nm"] == 9, lower
+
+
+@pytest.mark.slow
+def test_behind_the_filter_the_motion_delay_is_not_identifiable():
+    """Table 6.7 (tau_m, F 140.10: behind the 1 Hz filter "significantly reduced and attained
+    values close to zero", with K_m). The adapted pilot does not use motion there (K_m = 0),
+    so tau_m acts on nothing: fitted to its runs (15 % remnant) the MLE reports K_m near zero
+    (as the thesis' did) and tau_m not identifiable, whatever value the fit lands on; where
+    the pilot uses motion (condition 1) tau_m is identified within two bounds of its own."""
+    from twin.chain.config import motion_system
+    from twin.pilot.experiment import pitch_remnant_scale
+    from twin.pilot.mle import fit_pitch_pilot
+
+    for n in (1, 5):
+        truth = adapt(f"condition-{n}").pilot
+        runs = simulate_pitch(truth, f"condition-{n}", 3, 11, pitch_remnant_scale(truth))
+        for u in runs.u:
+            fit = fit_pitch_pilot(runs.ft, runs.fd, u, motion_system(f"condition-{n}"))
+            if n == 1:
+                assert "tau_m" not in fit.unidentifiable
+                assert abs(fit.pilot.tau_m - truth.tau_m) <= 2 * fit.crlb["tau_m"]
+            else:
+                assert truth.k_m == 0.0 and fit.pilot.k_m < 0.15
+                assert "tau_m" in fit.unidentifiable

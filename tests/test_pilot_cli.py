@@ -42,10 +42,6 @@ def test_run_writes_a_csv_that_identify_reads(capsys, tmp_path):
     # pitch response, which condition-2 and srs share)
     assert out["motion"]["source"] == "theta_felt" and out["motion"]["mismatch"] < 0.01
     assert out["motion"]["config"] in {"condition-1", "condition-2", "srs"}
-    assert main(["pilot", "identify", str(csv), "--config", "condition-7", "--quiet"]) == 0
-    text = capsys.readouterr().out
-    assert "closed loop through condition-7" in text
-    assert "WARNING: theta_felt differs from condition-1's response by only" in text
 
 
 def _no_constant(name):
@@ -95,7 +91,15 @@ def test_identify_intervals_are_printed_and_in_the_json(capsys, tmp_path):
     capsys.readouterr()
     assert main(["pilot", "identify", str(csv), "--config", "condition-8", "--intervals",
                  "--quiet"]) == 0  # fmt: skip
-    assert capsys.readouterr().out.count("2-sd interval [") == 8
+    text = capsys.readouterr().out
+    assert text.count("2-sd interval [") == 8
+    assert "condition-8 (or " in text and ", given; theta_felt differs" in text
+    assert "WARNING" not in text
+    # the wrong configuration given: fitted through it, and questioned
+    assert main(["pilot", "identify", str(csv), "--config", "condition-1", "--quiet"]) == 0
+    text = capsys.readouterr().out
+    assert "closed loop through condition-1" in text
+    assert "WARNING: theta_felt differs from condition-7's response by only" in text
     assert main(["pilot", "identify", str(csv), "--config", "condition-8", "--intervals",
                  "--json", "--quiet"]) == 0  # fmt: skip
     mle = json.loads(capsys.readouterr().out)["mle"]

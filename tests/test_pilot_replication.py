@@ -12,7 +12,8 @@ from scipy import stats
 from twin.cli.main import main
 from twin.errors import SignalError
 from twin.pilot import population, replication
-from twin.pilot.population import COMPARED, PopulationResult, anova, levels
+from twin.pilot.adapt import ADAPTED
+from twin.pilot.population import COMPARED, PopulationResult, anova, compared, levels
 from twin.pilot.replication import agreement_probability, replicate, run_populations
 from twin.thesis import TABLE_6_3, TABLES_6_4_TO_6_7
 
@@ -195,7 +196,8 @@ def test_cli_populations_json_and_figure(monkeypatch, tmp_path, capsys):
     doc = json.loads(capsys.readouterr().out)
     assert doc["seeds"] == [4, 5] and doc["subjects"] == 3
     assert [p["seed"] for p in doc["per_population"]] == [4, 5]
-    assert set(doc["per_population"][0]["anova"]) == set(doc["replication"]) == set(COMPARED)
+    default = set(compared(ADAPTED))  # tau_v only where the subjects adapt it
+    assert set(doc["per_population"][0]["anova"]) == set(doc["replication"]) == default
     assert doc["replication"]["k_v"]["filter"]["populations"] == 2
     assert png.stat().st_size > 10_000
     assert main(["pilot", "experiment", "--pilot", "adaptive", "--populations", "2",

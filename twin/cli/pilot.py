@@ -90,7 +90,7 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
         "their equalisation and neuromuscular tuning to each motion system, with the thesis' "
         "repeated-measures ANOVA",
     )
-    _fixed_neuromuscular_option(exp)
+    _adaptation_options(exp)
     exp.add_argument(
         "--subjects",
         type=common.count(2, MAX_SUBJECTS),
@@ -116,7 +116,7 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
     ada.add_argument(
         "--weight", type=float, default=None, help="r of the cost (default: twin.pilot.adapt's)"
     )
-    _fixed_neuromuscular_option(ada)
+    _adaptation_options(ada)
     ada.set_defaults(func=_cmd_adapt)
     ide = cmds.add_parser(
         "identify",
@@ -236,7 +236,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _fixed_neuromuscular_option(parser: argparse.ArgumentParser) -> None:
+def _adaptation_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--fixed-neuromuscular",
         action="store_true",
@@ -244,12 +244,20 @@ def _fixed_neuromuscular_option(parser: argparse.ArgumentParser) -> None:
         "neuromuscular system (omega_nm, zeta_nm), as a pilot model with fixed limitations "
         "(pilot experiment: with --pilot adaptive)",
     )
+    parser.add_argument(
+        "--adapt-visual-delay",
+        action="store_true",
+        help="also adapt the visual delay tau_v, traded against the visual remnant (a "
+        "speed-accuracy trade-off, twin.pilot.adapt.visual_noise_ratio; an assumption, not "
+        "the thesis') (pilot experiment: with --pilot adaptive)",
+    )
 
 
 def _adapted(args: argparse.Namespace) -> tuple[str, ...]:
-    from twin.pilot.adapt import ADAPTED, EQUALISATION
+    from twin.pilot.adapt import ADAPTED, EQUALISATION, SPEED_ACCURACY
 
-    return EQUALISATION if args.fixed_neuromuscular else ADAPTED
+    base = EQUALISATION if args.fixed_neuromuscular else ADAPTED
+    return (*base, *SPEED_ACCURACY) if args.adapt_visual_delay else base
 
 
 def _cmd_adapt(args: argparse.Namespace) -> int:
@@ -267,9 +275,11 @@ def _cmd_experiment(args: argparse.Namespace) -> int:
     from twin.errors import UsageError
     from twin.pilot.experiment import run_experiment
 
-    if args.fixed_neuromuscular and args.pilot != "adaptive":
-        raise UsageError("--fixed-neuromuscular chooses what adaptive subjects adapt: give it "
-                         "with --pilot adaptive")  # fmt: skip
+    for flag, given in (("--fixed-neuromuscular", args.fixed_neuromuscular),
+                        ("--adapt-visual-delay", args.adapt_visual_delay)):  # fmt: skip
+        if given and args.pilot != "adaptive":
+            raise UsageError(f"{flag} chooses what adaptive subjects adapt: give it with "
+                             "--pilot adaptive")  # fmt: skip
     if args.runs is not None and args.pilot == "adaptive":
         raise UsageError("--runs sets the fixed pilot's runs per condition; adaptive subjects "
                          "fly five repetitions per condition, as the thesis' participants "

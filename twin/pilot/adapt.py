@@ -12,7 +12,10 @@ thesis found both changed with the filter, Table 6.7) - to minimise
 
     J = var(e) + r var(u)
 
-for the motion system at hand, while its delays tau_v and tau_m stay its own: the
+for the motion system at hand, while its delays tau_v and tau_m stay its own (on request,
+``adapted`` with ``"tau_v"``, the visual delay adapts too, traded against the visual remnant:
+:func:`visual_noise_ratio`; tau_m does not: behind the filter K_m is zero and tau_m means
+nothing, see the README's Chapter 6 figures): the
 optimal-control view of manual control (Kleinman, Baron and Levison 1970; McRuer's adjustment
 rules, McRuer and Jex 1967, as the outcome), restricted to the structure of Eq 6.5-6.7 as in
 Hess (1990) and Zaal et al. (2009). A stiffer, faster neuromuscular system passes more of the
@@ -71,6 +74,18 @@ NEUROMUSCULAR = frozenset({"omega_nm", "zeta_nm"})
 #: Parameters the pilot adapts: the equalisation and the neuromuscular tuning; the delays are
 #: the pilot's own.
 ADAPTED = (*EQUALISATION, "omega_nm", "zeta_nm")
+#: Adaptable too, on request: the visual delay, traded against the visual remnant
+#: (:func:`visual_noise_ratio`).
+SPEED_ACCURACY = ("tau_v",)
+#: Exponent k of the speed-accuracy trade-off: processing the visual error in tau_v instead of
+#: the pilot's own tau_0 multiplies the visual observation noise by (tau_0 / tau_v)^k. An
+#: assumption, chosen so that on the SRS baseline (condition 1, no filter) a pilot keeps about
+#: its own delay (the default pilot: 0.310 s for its 0.300 s); with k = 2 every pilot would
+#: process at about 0.21 s, with k = 8 above its own (the remnant is -20 dB: speed must cost
+#: steeply to matter).
+SPEED_ACCURACY_EXPONENT = 4.0
+#: Range of the adapted visual delay, relative to the pilot's own.
+TAU_V_RANGE = (0.5, 1.5)
 #: Bounds of the adapted parameters (the neuromuscular ones a physiological range, about
 #: twice either side of the 6-16 rad/s and 0.1-0.5 that pilot models identify).
 BOUNDS = {"k_v": (0.05, 20.0), "t_lead": (0.0, 2.0), "t_lag": (0.02, 2.0), "k_m": (0.0, 3.0),
@@ -161,19 +176,39 @@ class Performance:
     remnant_gain: float
 
 
+def visual_noise_ratio(pilot: PitchPilot, own: PitchPilot, noise_ratio: float,
+                       adapted: Sequence[str]) -> float | None:  # fmt: skip
+    """Return the visual observation-noise ratio of ``pilot``, whose own delay is ``own``'s.
+
+    None (the ratio is ``noise_ratio``, as the motion channel's) unless ``tau_v`` is
+    ``adapted``; then ``noise_ratio (own.tau_v / pilot.tau_v)^k`` (k
+    :data:`SPEED_ACCURACY_EXPONENT`): a speed-accuracy trade-off (Wickelgren 1977), processing
+    the error faster perceives it with more noise. The human's effective delay is not fixed:
+    it falls as the task demands more (McRuer and Jex 1967, tau_e = tau_0 - Delta tau
+    omega_i), and the thesis read its lower tau_v behind the filter as faster visual
+    processing where vision had to give the lead (§6.4.2.2).
+    """
+    if "tau_v" not in adapted:
+        return None
+    return noise_ratio * (own.tau_v / pilot.tau_v) ** SPEED_ACCURACY_EXPONENT
+
+
 def predict(
     pilot: PitchPilot,
     task: Task,
     weight: float = CONTROL_WEIGHT,
     noise_ratio: float = NOISE_RATIO,
+    visual_ratio: float | None = None,
 ) -> Performance:
     """Predict var(e), var(u) and the cost of ``pilot`` flying ``task`` (frequency domain).
 
     The remnant is observation noise (Kleinman, Baron and Levison 1970): white, on the
     displayed error and on the felt pitch rate, each with a one-sided density of
     ``noise_ratio`` times its signal's variance per rad/s (the optimal-control model's
-    V = pi rho E[y^2]). Visual lead differentiates the visual noise; the motion channel senses
-    the rate directly. Both variances depend on the noise they scale: a 2 x 2 linear system.
+    V = pi rho E[y^2]); ``visual_ratio``, if given, replaces it on the displayed error
+    (:func:`visual_noise_ratio`). Visual lead differentiates the visual noise; the motion
+    channel senses the rate directly. Both variances depend on the noise they scale: a 2 x 2
+    linear system.
     """
     cfg = task.config
 
@@ -205,12 +240,18 @@ def predict(
     gains = np.array([[float(np.trapezoid(np.abs(x[k]) ** 2, w)) for k in ("v", "r")]
                       for x in out])  # fmt: skip
     # [ve, vr] = forced[e, rate] + noise_ratio * G [ve, vr], G from the e and rate rows
-    g = noise_ratio * gains[[0, 2]]
+    if visual_ratio is None:
+        g = noise_ratio * gains[[0, 2]]
+    else:  # the visual noise's column scaled by its own ratio
+        g = gains[[0, 2]] * np.array([visual_ratio, noise_ratio])
     radius = float(np.max(np.abs(np.linalg.eigvals(g))))
     if radius >= 1:
         return Performance(float("inf"), float("inf"), float("inf"), float("inf"), radius)
     ve, vr = np.linalg.solve(np.eye(2) - g, forced[[0, 2]])
-    vu = forced[1] + noise_ratio * (gains[1, 0] * ve + gains[1, 1] * vr)
+    if visual_ratio is None:
+        vu = forced[1] + noise_ratio * (gains[1, 0] * ve + gains[1, 1] * vr)
+    else:
+        vu = forced[1] + visual_ratio * gains[1, 0] * ve + noise_ratio * gains[1, 1] * vr
     return Performance(float(ve), float(vu), float(vr), float(ve + weight * vu), radius)
 
 
@@ -281,7 +322,9 @@ class Adapted:
             f"K_m {p.k_m:.3f} s",
             f"  neuromuscular ({'adapted' if NEUROMUSCULAR & set(self.adapted) else 'its own'}): "
             f"omega_nm {p.omega_nm:.2f} rad/s  zeta_nm {p.zeta_nm:.2f}",
-            f"  delays (its own): tau_v {p.tau_v:.3f} s  tau_m {p.tau_m:.3f} s",
+            (f"  visual delay (adapted: speed against visual remnant): tau_v {p.tau_v:.3f} s  "
+             f"motion delay (its own): tau_m {p.tau_m:.3f} s" if "tau_v" in self.adapted else
+             f"  delays (its own): tau_v {p.tau_v:.3f} s  tau_m {p.tau_m:.3f} s"),
             f"  var(e) {d['var_e_deg2']:.3f} deg^2  var(u) {d['var_u_deg2']:.3f} deg^2",
             f"  disturbance loop: crossover {self.loops.crossover_d:.2f} rad/s, "
             f"phase margin {self.loops.phase_margin_d:.1f} deg",
@@ -291,22 +334,24 @@ class Adapted:
 
 
 def adapted_names(adapted: Sequence[str]) -> tuple[str, ...]:
-    """Check a choice of adapted parameters and return it in :data:`ADAPTED`'s order.
+    """Check a choice of adapted parameters and return it in :data:`ADAPTED` order.
 
     Raises
     ------
     SignalError
-        None given, a bare string, or a name not among :data:`ADAPTED`.
+        None given, a bare string, or a name not among :data:`ADAPTED` and
+        :data:`SPEED_ACCURACY`.
 
     """
     if isinstance(adapted, str):
         raise SignalError(f"adapted parameters must be a sequence of names; got the string "
                           f"{adapted!r}")  # fmt: skip
-    unknown = sorted(set(adapted) - set(ADAPTED))
+    allowed = (*ADAPTED, *SPEED_ACCURACY)
+    unknown = sorted(set(adapted) - set(allowed))
     if unknown or not adapted:
-        raise SignalError(f"adapted parameters must be among {', '.join(ADAPTED)}; got "
+        raise SignalError(f"adapted parameters must be among {', '.join(allowed)}; got "
                           f"{', '.join(map(str, unknown)) or 'none'}")  # fmt: skip
-    return tuple(k for k in ADAPTED if k in adapted)
+    return tuple(k for k in allowed if k in adapted)
 
 
 def adapt(
@@ -351,15 +396,16 @@ def adapt(
     names = adapted_names(adapted)
     t = task if isinstance(task, Task) else Task.pitch(task)
     base = limitations or PitchPilot()
-    lo = np.array([BOUNDS[k][0] for k in names])
-    hi = np.array([BOUNDS[k][1] for k in names])
+    bounds = {**BOUNDS, "tau_v": tuple(base.tau_v * f for f in TAU_V_RANGE)}
+    lo = np.array([bounds[k][0] for k in names])
+    hi = np.array([bounds[k][1] for k in names])
 
     def pilot_of(x: FloatArray) -> PitchPilot:
         return dataclasses.replace(base, **dict(zip(names, np.clip(x, lo, hi), strict=True)))
 
     def cost(x: FloatArray) -> float:
         p = pilot_of(x)
-        perf = predict(p, t, weight, noise_ratio)
+        perf = predict(p, t, weight, noise_ratio, visual_noise_ratio(p, base, noise_ratio, names))
         if not np.isfinite(perf.cost) or perf.remnant_gain >= 0.95 or not stable(p, t):
             return UNSTABLE_COST
         return perf.cost / scale
@@ -381,5 +427,5 @@ def adapt(
     if best is None:
         raise SignalError(f"no stable equalisation found for {t.config.name}")
     p = pilot_of(best.x)
-    perf = predict(p, t, weight, noise_ratio)
+    perf = predict(p, t, weight, noise_ratio, visual_noise_ratio(p, base, noise_ratio, names))
     return Adapted(p, perf, open_loops(p, t.config), t.config.name, names)

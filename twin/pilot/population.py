@@ -29,7 +29,9 @@ minus the first), beside the thesis' F and directions.
 
 Assumptions (stated, not from the thesis): the spreads of :data:`SUBJECT_SPREAD` and the
 adaptation noise; the cost J = var(e) + r var(u) and the observation-noise remnant of
-:mod:`twin.pilot.adapt`. What to keep in mind when reading the F values: the motion noise of
+:mod:`twin.pilot.adapt`; where the subjects adapt their visual delay too (``adapted`` with
+``"tau_v"``), the speed-accuracy trade-off of :func:`twin.pilot.adapt.visual_noise_ratio`.
+What to keep in mind when reading the F values: the motion noise of
 Eq 5.10 changes the predicted var(e) by parts per million, so the noise factor is nearly inert
 in this model (its "no effect" agrees with the thesis by construction); behind the filter the
 adapted loop's gain falls slowly through 0 dB (about -0.5 in log-log between 1 and 3 rad/s),
@@ -59,6 +61,7 @@ from twin.pilot.adapt import (
     CONTROL_WEIGHT,
     EQUALISATION,
     NOISE_RATIO,
+    SPEED_ACCURACY,
     STARTS,
     Adapted,
     Performance,
@@ -67,6 +70,7 @@ from twin.pilot.adapt import (
     adapted_names,
     predict,
     stable,
+    visual_noise_ratio,
 )
 from twin.pilot.pitch import PitchPilot, open_loops
 from twin.progress import ProgressFn
@@ -88,9 +92,9 @@ MEASURES = (
     "k_m",
     "k_v",
 )
-#: Measures compared with the thesis: the contract's, the lead-lag pair (Table 6.6) and the
-#: neuromuscular tuning (Table 6.7; compared where it is adapted).
-COMPARED = (*MEASURES, "t_lead", "t_lag", "omega_nm", "zeta_nm")
+#: Measures compared with the thesis: the contract's, the lead-lag pair (Table 6.6), the
+#: neuromuscular tuning and the visual delay (Table 6.7; each compared where it is adapted).
+COMPARED = (*MEASURES, "t_lead", "t_lag", "omega_nm", "zeta_nm", "tau_v")
 #: Subject spread: parameter -> (mean, sd) for limitations; log-normal sd for the priorities.
 SUBJECT_SPREAD = {
     "tau_v": (0.30, 0.03),
@@ -193,7 +197,7 @@ def fly_subject(
             "var_e": float(np.mean([x.var_e for x in perf])) * deg2,
             "k_m": pilot.k_m, "k_v": pilot.k_v,
             "t_lead": pilot.t_lead, "t_lag": pilot.t_lag,
-            "omega_nm": pilot.omega_nm, "zeta_nm": pilot.zeta_nm,
+            "omega_nm": pilot.omega_nm, "zeta_nm": pilot.zeta_nm, "tau_v": pilot.tau_v,
         })  # fmt: skip
     return rows
 
@@ -212,7 +216,9 @@ def _repetition(
                  for k in adapted.adapted}  # fmt: skip
         pilot = dataclasses.replace(adapted.pilot, **noisy)
         if stable(pilot, task):
-            perf = predict(pilot, task, subject.weight, subject.noise_ratio)
+            visual = visual_noise_ratio(pilot, subject.limitations, subject.noise_ratio,
+                                        adapted.adapted)  # fmt: skip
+            perf = predict(pilot, task, subject.weight, subject.noise_ratio, visual)
             if perf.cost <= MAX_COST_RATIO * best:
                 return pilot, perf
     return adapted.pilot, adapted.performance
@@ -395,6 +401,8 @@ class PopulationResult:
             ("t_lead", "T_lead (Fig 6.8)", "s"), ("t_lag", "T_lag (Fig 6.8)", "s"),
             ("omega_nm", "omega_nm (Fig 6.9)", "rad/s"), ("zeta_nm", "zeta_nm (Fig 6.9)", "-"),
         )  # fmt: skip
+        if "tau_v" in self.adapted:
+            measures = (*measures, ("tau_v", "tau_v (Fig 6.9a)", "s"))
         panels = [Panel(title, f"{title.split(' (')[0]} [{unit}]",
                         samples_by_condition(self.rows, key))
                   for key, title, unit in measures]  # fmt: skip
@@ -509,5 +517,12 @@ def population_result(
 ) -> PopulationResult:
     """Assemble the subjects' rows (:func:`fly_subject`'s, in subject order) and their ANOVA."""
     rows = [row for r in flown for row in r]
-    measures = tuple(m for m in COMPARED if m not in ADAPTED or m in adapted)
-    return PopulationResult(rows, anova(rows, measures), seed, adapted, run_to_run_sd)
+    return PopulationResult(rows, anova(rows, compared(adapted)), seed, adapted, run_to_run_sd)
+
+
+def compared(adapted: tuple[str, ...]) -> tuple[str, ...]:
+    """Return the measures compared with the thesis when the subjects adapt ``adapted``.
+
+    Those of :data:`COMPARED` that are not pilot parameters, and the parameters adapted.
+    """
+    return tuple(m for m in COMPARED if m not in (*ADAPTED, *SPEED_ACCURACY) or m in adapted)
