@@ -70,6 +70,8 @@ def test_a_pilot_with_fixed_limitations_keeps_its_neuromuscular_system():
         adapt("condition-5", adapted=("k_v", "tau_m"))
     with pytest.raises(SignalError, match="got none"):
         adapt("condition-5", adapted=())
+    with pytest.raises(SignalError, match=r"visual delay to adapt must be > 0 s"):
+        adapt("condition-5", dataclasses.replace(mine, tau_v=0.0), adapted=(*ADAPTED, "tau_v"))
     with pytest.raises(SignalError, match="sequence of names; got the string 'k_v'"):
         adapt("condition-5", adapted="k_v")
 

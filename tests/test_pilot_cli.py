@@ -65,6 +65,7 @@ def test_montecarlo_and_lead_json(capsys):
         (["pilot", "run", "srs", "--remnant", "1.5"], "--remnant must be"),
         (["pilot", "identify", "/no/such.csv"], "no such pilot-run file"),
         (["pilot", "identify", "/no/such.csv", "--break-hz", "2"], "give it with --config"),
+        (["pilot", "identify", "/no/such.csv", "--break-hz", "0"], "--break-hz changes a config"),
     ],
 )
 def test_bad_input_is_one_line_and_exit_2(capsys, argv, message):

@@ -6,7 +6,7 @@ import pytest
 from twin.chain.config import motion_system
 from twin.errors import SignalError
 from twin.pilot.experiment import pitch_remnant_scale
-from twin.pilot.felt_motion import MATCH_MAX, felt_mismatch, match_motion
+from twin.pilot.felt_motion import MATCH_MAX, felt_mismatch, match_motion, settle_s
 from twin.pilot.pitch import PitchPilot, simulate_pitch
 
 #: Configurations with condition-7's pitch response (1 Hz filter, 35 ms; noise is in heave).
@@ -62,6 +62,9 @@ def test_nuisance_in_the_felt_attitude(runs):
     late = dict(run, theta_felt=np.concatenate([felt[:1], felt[:-1]]))
     m = match_motion(late)
     assert m.config.name in LIKE_7 and m.mismatch < MATCH_MAX
+    # a constant offset of the felt attitude (a sensor's zero) of 10 % of its rms is left out
+    offset = dict(run, theta_felt=felt + 0.1 * np.sqrt(np.mean(felt**2)))
+    assert match_motion(offset).mismatch == pytest.approx(match_motion(run).mismatch, abs=1e-9)
 
 
 def test_no_built_in_match_asks_for_the_configuration(runs):
@@ -70,9 +73,29 @@ def test_no_built_in_match_asks_for_the_configuration(runs):
     run = runs["condition-1"]
     with pytest.raises(SignalError, match="follows none of the built-in motion systems"):
         match_motion(dict(run, theta_felt=0.8 * run["theta_felt"]))
-    # given, it is fitted through and reported with its mismatch
+    # given, it is fitted through, reported with its mismatch and questioned
     m = match_motion(dict(run, theta_felt=0.8 * run["theta_felt"]), motion_system("condition-1"))
     assert m.mismatch == pytest.approx(0.25, rel=0.05)  # |0.8 - 1| / 0.8
+    assert m.better is None and "more than the 5 %" in m.warning
+    assert m.to_dict()["warning"] == m.warning
+
+
+def test_a_file_named_like_a_built_in_is_told_apart(runs, tmp_path):
+    """A twin-config/1 file called "condition-1" with condition-7's response is checked as the
+    file it is, and its label says it is not the built-in."""
+    path = tmp_path / "c7.json"
+    motion_system("condition-7").replace(name="condition-1").save(path)
+    m = match_motion(runs["condition-7"], motion_system(str(path)))
+    assert m.mismatch < 0.005 and m.warning is None
+    assert m.label == "condition-1 (from a file: not the built-in condition-1)"
+    assert match_motion(runs["condition-1"], motion_system("condition-1")).label == "condition-1"
+
+
+def test_a_slow_filter_settles_before_it_is_compared():
+    """The start of a record holds the response to the attitude before it: left out for the
+    1 Hz filter's 2 s, for a 0.2 Hz filter its 10 s."""
+    assert settle_s(motion_system("condition-1")) == settle_s(motion_system("mpi")) == 2.0
+    assert settle_s(motion_system("mpi").override(0.2, None, None, None)) == pytest.approx(10.0)
 
 
 def test_without_theta_felt(runs):
@@ -87,6 +110,6 @@ def test_without_theta_felt(runs):
 def test_bad_felt_attitude(runs):
     theta = runs["condition-1"]["theta"]
     with pytest.raises(SignalError, match="no felt motion"):
-        felt_mismatch(theta, np.zeros_like(theta), 100.0, motion_system("srs"))
+        felt_mismatch(theta, np.full_like(theta, 0.01), 100.0, motion_system("srs"))
     with pytest.raises(SignalError, match="too short"):
         felt_mismatch(theta[:150], theta[:150], 100.0, motion_system("srs"))

@@ -217,6 +217,20 @@ def overrides_parent(imu: bool = True) -> argparse.ArgumentParser:
     return p
 
 
+def overrides_given(args: argparse.Namespace) -> list[str]:
+    """Return the configuration overrides (:func:`overrides_parent`) given, by option name.
+
+    A value of 0 counts as given (``--break-hz 0`` removes the filter).
+    """
+    values = {
+        "--break-hz": args.break_hz,
+        "--delay-ms": args.delay_ms,
+        "--no-noise": args.no_noise or None,
+        "--resonance": args.resonance or None,
+    }
+    return [name for name, v in values.items() if v is not None]
+
+
 def configured(config: str | MotionSystem, args: argparse.Namespace) -> MotionSystem:
     """Return a configuration (name, file or object) with the overrides in ``args``.
 

@@ -62,8 +62,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 def _nominal(args: argparse.Namespace):
     """Return the nominal configuration with the overrides (None: the runs' own, unchanged)."""
-    given = (args.break_hz, args.delay_ms, args.no_noise or None, args.resonance or None)
-    if args.config is None and all(v is None for v in given):
+    if args.config is None and not common.overrides_given(args):
         return None
     if args.config is not None:
         return common.configured(args.config, args)
@@ -81,8 +80,7 @@ def _cmd_each(args: argparse.Namespace) -> int:
         raise UsageError("--each diagnoses every measurement on its own: --validate and "
                          "--save-config are for one measurement (each report folder holds "
                          "its extended.json)")  # fmt: skip
-    overrides = (args.break_hz, args.delay_ms, args.no_noise or None, args.resonance or None)
-    if args.config is None and any(v is not None for v in overrides):
+    if args.config is None and common.overrides_given(args):
         raise UsageError("with --each, configuration overrides need --config (the nominal of "
                          "every measurement); without it each uses its own meta.json")  # fmt: skip
     options = {"model": args.model, "max_hz": args.max_hz, "seed": args.seed, "dofs": args.dof,

@@ -127,10 +127,10 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
     ide.add_argument(
         "--config",
         default=None,
-        help="motion configuration the run was flown with (name or twin-config/1 file): the fit "
-        "models the loop through it; checked against the run's theta_felt. Default: the "
-        "built-in one theta_felt follows (within 5 %%), or condition-1 if the run has no "
-        "theta_felt",
+        help="motion configuration the run was flown with (name or twin-config/1 file; the "
+        "configuration overrides change it): the fit models the loop through it; checked "
+        "against the run's theta_felt. Default: the built-in one theta_felt follows (refused "
+        "if none is within 5 %%), or condition-1 if the run has no theta_felt",
     )
     ide.add_argument(
         "--continuous-loop",
@@ -342,18 +342,18 @@ def _cmd_identify(args: argparse.Namespace) -> int:
     from twin.pilot.mle import LOWER, PARAMETERS, UPPER, fit_pitch_pilot
     from twin.pilot.records import read_pilot_csv
 
-    overridden = [o for o, v in (("--break-hz", args.break_hz), ("--delay-ms", args.delay_ms),
-                                 ("--no-noise", args.no_noise), ("--resonance", args.resonance))
-                  if v not in (None, False)]  # fmt: skip
+    overridden = common.overrides_given(args)
     if overridden and args.config is None:
-        raise UsageError(f"{', '.join(overridden)} change a configuration: give it with --config")
+        raise UsageError(f"{', '.join(overridden)} {'change' if overridden[1:] else 'changes'} "
+                         "a configuration: give it with --config")  # fmt: skip
     given = None if args.config is None else common.configured(args.config, args)
     d = read_pilot_csv(args.csv)
     rate = float(d["rate_hz"])
     n = round(MEASUREMENT_S * rate)
     if d["t"].size < n:
         raise SignalError(
-            f"{args.csv}: needs at least {MEASUREMENT_S} s of data; has {d['t'].size / rate:.2f} s"
+            f"{args.csv}: needs at least {MEASUREMENT_S} s of data ({n} samples at {rate:g} Hz); "
+            f"has {d['t'].size} samples"
         )
     w = {k: v[-n:] for k, v in d.items() if k != "rate_hz"}
     felt = "theta_felt" if "theta_felt" in w else "theta"
@@ -364,7 +364,10 @@ def _cmd_identify(args: argparse.Namespace) -> int:
             f"last {MEASUREMENT_S} s (a tracking run has the Table 6.2 forcing functions in ft "
             "and fd, the pilot's e and u, and the motion the pilot felt)"
         )
-    motion = match_motion(d, given)
+    try:
+        motion = match_motion(d, given)
+    except SignalError as e:
+        raise SignalError(f"{args.csv}: {e}") from None
     cfg = motion.config
     felt = w.get("theta_felt", w["theta"])
     fd, ft = pitch_task()

@@ -180,13 +180,32 @@ def visual_noise_ratio(pilot: PitchPilot, own: PitchPilot, noise_ratio: float,
                        adapted: Sequence[str]) -> float | None:  # fmt: skip
     """Return the visual observation-noise ratio of ``pilot``, whose own delay is ``own``'s.
 
-    None (the ratio is ``noise_ratio``, as the motion channel's) unless ``tau_v`` is
-    ``adapted``; then ``noise_ratio (own.tau_v / pilot.tau_v)^k`` (k
-    :data:`SPEED_ACCURACY_EXPONENT`): a speed-accuracy trade-off (Wickelgren 1977), processing
-    the error faster perceives it with more noise. The human's effective delay is not fixed:
+    Parameters
+    ----------
+    pilot : PitchPilot
+        The pilot as it flies (its tau_v perhaps adapted).
+    own : PitchPilot
+        The pilot as it is: its tau_v is the one at which the visual noise is ``noise_ratio``.
+    noise_ratio : float
+        The observation-noise ratio of both channels at the pilot's own delays.
+    adapted : sequence of str
+        What the pilot adapts.
+
+    Returns
+    -------
+    float or None
+        None (the ratio is ``noise_ratio``, as the motion channel's) unless ``tau_v`` is
+        ``adapted``; then ``noise_ratio (own.tau_v / pilot.tau_v)^k`` (k
+        :data:`SPEED_ACCURACY_EXPONENT`).
+
+    Notes
+    -----
+    A speed-accuracy trade-off (Wickelgren 1977): processing the error faster perceives it
+    with more noise. The human's effective delay is not fixed:
     it falls as the task demands more (McRuer and Jex 1967, tau_e = tau_0 - Delta tau
     omega_i), and the thesis read its lower tau_v behind the filter as faster visual
     processing where vision had to give the lead (§6.4.2.2).
+
     """
     if "tau_v" not in adapted:
         return None
@@ -371,7 +390,9 @@ def adapt(
         Chapter 6 pitch task through it).
     limitations : PitchPilot, optional
         The pilot whose delays (and every parameter not in ``adapted``) are kept, and whose
-        neuromuscular tuning starts the search (Eq 6.5-6.7 defaults).
+        neuromuscular tuning starts the search (Eq 6.5-6.7 defaults). Where ``tau_v`` is
+        adapted, its tau_v is the pilot's own, against which faster processing costs visual
+        remnant (:func:`visual_noise_ratio`; searched over :data:`TAU_V_RANGE` times it).
     weight : float
         r in J = var(e) + r var(u) (> 0).
     noise_ratio : float
@@ -379,14 +400,15 @@ def adapt(
     starts : sequence of PitchPilot, optional
         Starting points (:data:`STARTS` on the ``limitations`` pilot by default).
     adapted : sequence of str
-        The parameters the pilot adapts, among :data:`ADAPTED` (``EQUALISATION`` keeps the
-        neuromuscular system fixed, as a pilot model with fixed limitations).
+        The parameters the pilot adapts, among :data:`ADAPTED` and :data:`SPEED_ACCURACY`
+        (``EQUALISATION`` keeps the neuromuscular system fixed, as a pilot model with fixed
+        limitations; ``(*ADAPTED, "tau_v")`` adapts the visual delay too).
 
     Raises
     ------
     SignalError
-        A weight or ratio out of range, an unknown adapted parameter, or no stable
-        equalisation found.
+        A weight or ratio out of range, an unknown adapted parameter, a visual delay to adapt
+        that is not positive, or no stable equalisation found.
 
     """
     if not np.isfinite(weight) or weight <= 0:
@@ -396,6 +418,9 @@ def adapt(
     names = adapted_names(adapted)
     t = task if isinstance(task, Task) else Task.pitch(task)
     base = limitations or PitchPilot()
+    if "tau_v" in names and not base.tau_v > 0:
+        raise SignalError(f"a visual delay to adapt must be > 0 s (the pilot's own, which "
+                          f"faster processing is measured against); got {base.tau_v}")  # fmt: skip
     bounds = {**BOUNDS, "tau_v": tuple(base.tau_v * f for f in TAU_V_RANGE)}
     lo = np.array([bounds[k][0] for k in names])
     hi = np.array([bounds[k][1] for k in names])

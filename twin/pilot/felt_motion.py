@@ -11,9 +11,10 @@ run-in takes the start-up) and compared with ``theta_felt`` over the measurement
 The mismatch is the rms of the difference over the rms of ``theta_felt``. On the twin's own
 runs (remnant 15 %) the right configuration leaves under 0.01 % (reduced platform), 0.3 % with
 the platform noise on, 0.7 % with the full MuJoCo platform; 10 ms more or less delay leaves
-1.6-2.4 %; the 1 Hz filter added or missed, 37-60 %; a 2 Hz filter for the 1 Hz, 23 %. The platform
-noise of Table 6.3 is in heave and the fit does not model it, so conditions that differ only
-in noise have the same pitch response and are named together.
+1.6-2.4 %; the 1 Hz filter added or missed, 37-60 %; a 2 Hz filter for the 1 Hz, 23 %. A
+constant offset of the felt attitude is left out. The platform noise of Table 6.3 is in heave
+and the fit does not model it, so conditions that differ only in noise have the same pitch
+response and are named together.
 """
 
 from __future__ import annotations
@@ -27,7 +28,7 @@ from numpy.typing import NDArray
 from twin.chain.config import MotionSystem, config_names, motion_system
 from twin.errors import SignalError
 from twin.pilot.forcing import MEASUREMENT_S
-from twin.pilot.pitch import motion_response
+from twin.pilot.pitch import PITCH, motion_response
 
 FloatArray = NDArray[np.float64]
 #: Configuration assumed when a run has neither ``--config`` nor ``theta_felt``.
@@ -35,34 +36,65 @@ DEFAULT_CONFIG = "condition-1"
 #: Largest mismatch with which a configuration is taken as the run's own when none is given.
 MATCH_MAX = 0.05
 #: A given configuration is questioned when its mismatch is above :data:`QUESTION_FROM` and a
-#: built-in one's is below it by :data:`BETTER_BY` or more (10 ms of delay off is 1.5-2 %).
+#: built-in one's is below it by :data:`BETTER_BY` or more (10 ms of delay off is 1.6-2.4 %),
+#: and whenever its mismatch is above :data:`MATCH_MAX`.
 QUESTION_FROM = 0.01
 BETTER_BY = 3.0
-#: Start of a record left out of the comparison [s]: the felt response to the attitude before
-#: it (the 1 Hz filter's and the delays' memory is well under a second).
+#: Start of a record left out of the comparison [s], at least: the felt response to the
+#: attitude before the record began (the 1 Hz filter's and the delays' memory is under a
+#: second); a slower platform filter leaves out :data:`SETTLE_PERIODS` of its break period.
 SETTLE_S = 2.0
+SETTLE_PERIODS = 2.0
 #: Responses closer than this (relative, at every frequency) count as the same.
 SAME_RESPONSE = 1e-9
 
 
+def settle_s(config: MotionSystem) -> float:
+    """Return how much of a record's start is left out when checking ``config`` [s]."""
+    fb = config.breaks_hz[PITCH]
+    return SETTLE_S if fb is None else max(SETTLE_S, SETTLE_PERIODS / fb)
+
+
 def felt_mismatch(theta: FloatArray, theta_felt: FloatArray, rate_hz: float,
                   config: MotionSystem) -> float:  # fmt: skip
-    """Rms of ``theta_felt`` minus ``config``'s response to ``theta``, over ``theta_felt``'s rms.
+    """Return how far ``theta_felt`` is from ``config``'s response to ``theta``.
 
-    Both signals are the whole record; the comparison uses its last 81.92 s, less the first
-    :data:`SETTLE_S` of the record (the response to the attitude before the record began).
+    Parameters
+    ----------
+    theta, theta_felt : ndarray
+        Simulated and felt pitch attitude [rad], the whole record (the comparison uses its
+        last 81.92 s, less the record's first :func:`settle_s`).
+    rate_hz : float
+        Sample rate [Hz].
+    config : MotionSystem
+        The candidate.
+
+    Returns
+    -------
+    float
+        Rms of the difference over the rms of ``theta_felt``, both about their means (a
+        constant offset of the felt attitude, e.g. a sensor's, does not count).
+
+    Raises
+    ------
+    SignalError
+        A record too short to leave anything after the settling, or a constant
+        ``theta_felt``.
+
     """
-    start = max(theta.size - round(MEASUREMENT_S * rate_hz), round(SETTLE_S * rate_hz))
+    start = max(theta.size - round(MEASUREMENT_S * rate_hz), round(settle_s(config) * rate_hz))
     if start >= theta.size - 1:
-        raise SignalError(f"a run of {theta.size} samples is too short to check its felt motion")
+        raise SignalError(f"a run of {theta.size} samples is too short to check its felt motion "
+                          f"through {config.name}")  # fmt: skip
     padded = 2 * theta.size
     w = 2 * np.pi * np.fft.rfftfreq(padded, 1.0 / rate_hz)
     predicted = np.fft.irfft(np.fft.rfft(theta, padded) * motion_response(config, w), padded)
-    felt = theta_felt[start:]
+    felt = theta_felt[start:] - np.mean(theta_felt[start:])
     scale = float(np.sqrt(np.mean(felt**2)))
     if scale == 0.0:
-        raise SignalError("theta_felt is zero over the measurement window: no felt motion")
-    return float(np.sqrt(np.mean((felt - predicted[start : theta.size]) ** 2)) / scale)
+        raise SignalError("theta_felt is constant over the measurement window: no felt motion")
+    diff = felt - predicted[start : theta.size]
+    return float(np.sqrt(np.mean((diff - np.mean(diff)) ** 2)) / scale)
 
 
 @dataclass(frozen=True)
@@ -99,21 +131,44 @@ class MotionMatch:
         name, best = next(iter(self.candidates.items()))
         return name if best * BETTER_BY <= self.mismatch else None
 
+    @property
+    def warning(self) -> str | None:
+        """Why ``config`` may not be the run's own, if it may not (None: no reason to doubt)."""
+        if self.better is not None:
+            return (f"theta_felt differs from {self.better}'s response by only "
+                    f"{100 * self.candidates[self.better]:.1f} %: was the run flown through it? "
+                    "(the fit models the loop through the given one)")  # fmt: skip
+        if self.mismatch is not None and self.mismatch > MATCH_MAX:
+            return (f"theta_felt differs from the given configuration's response by "
+                    f"{100 * self.mismatch:.1f} %, more than the {100 * MATCH_MAX:.0f} % "
+                    "within which a configuration is taken as a run's own: is it this "
+                    "run's? (the fit models the loop through it)")  # fmt: skip
+        return None
+
+    @property
+    def label(self) -> str:
+        """The configuration's name, marked when a file's shares a built-in one's name."""
+        name = self.config.name
+        if name in config_names() and name not in self.same_response:
+            return f"{name} (from a file: not the built-in {name})"
+        return name
+
     def to_dict(self) -> dict[str, object]:
-        """JSON-ready."""
+        """JSON-ready (``warning`` null when there is no reason to doubt the configuration)."""
         return {
             "config": self.config.name,
             "source": self.source,
             "mismatch": self.mismatch,
             "same_response": list(self.same_response),
             "candidates": self.candidates,
+            "warning": self.warning,
         }
 
     def format(self) -> str:
         """One or two lines for the identify report."""
         alike = [n for n in self.same_response if n != self.config.name]
-        name = self.config.name + (f" (or {', '.join(alike)}: the same pitch response)"
-                                   if alike else "")  # fmt: skip
+        name = self.label + (f" (or {', '.join(alike)}: the same pitch response)"
+                             if alike else "")  # fmt: skip
         if self.mismatch is None:
             if self.source == "default":
                 return (f"motion system: {name}, assumed: the run has no theta_felt and no "
@@ -127,10 +182,8 @@ class MotionMatch:
             others = [(n, m) for n, m in self.candidates.items() if n not in self.same_response]
             if others:
                 line += f"; the next, {others[0][0]}, {100 * others[0][1]:.1f} %"
-        if self.better is not None:
-            line += (f"\n  WARNING: theta_felt differs from {self.better}'s response by only "
-                     f"{100 * self.candidates[self.better]:.1f} %: was the run flown through it? "
-                     "(the fit models the loop through the given one)")  # fmt: skip
+        if self.warning is not None:
+            line += f"\n  WARNING: {self.warning}"
         return line
 
 

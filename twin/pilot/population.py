@@ -523,6 +523,15 @@ def population_result(
 def compared(adapted: tuple[str, ...]) -> tuple[str, ...]:
     """Return the measures compared with the thesis when the subjects adapt ``adapted``.
 
-    Those of :data:`COMPARED` that are not pilot parameters, and the parameters adapted.
+    Parameters
+    ----------
+    adapted : tuple of str
+        What the subjects adapt (:func:`twin.pilot.adapt.adapted_names`).
+
+    Returns
+    -------
+    tuple of str
+        Those of :data:`COMPARED` that are not pilot parameters, and the parameters adapted.
+
     """
     return tuple(m for m in COMPARED if m not in (*ADAPTED, *SPEED_ACCURACY) or m in adapted)
