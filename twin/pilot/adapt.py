@@ -201,10 +201,10 @@ def visual_noise_ratio(pilot: PitchPilot, own: PitchPilot, noise_ratio: float,
     Notes
     -----
     A speed-accuracy trade-off (Wickelgren 1977): processing the error faster perceives it
-    with more noise. The human's effective delay is not fixed:
-    it falls as the task demands more (McRuer and Jex 1967, tau_e = tau_0 - Delta tau
-    omega_i), and the thesis read its lower tau_v behind the filter as faster visual
-    processing where vision had to give the lead (§6.4.2.2).
+    with more noise. The human's effective delay is not fixed: in the crossover model it
+    falls as the forcing function's bandwidth rises (McRuer and Jex 1967), and the thesis read
+    its lower tau_v behind the filter as faster visual processing where vision had to give
+    the lead (§6.4.2.2).
 
     """
     if "tau_v" not in adapted:

@@ -5,8 +5,9 @@ response, so it needs the right one: fitted through the SRS baseline, a run flow
 MPI platform's 1 Hz filter is explained by a different pilot. A ``twin-pilot/1`` run that
 carries ``theta_felt`` (the attitude the motion system gave the pilot) shows which response
 it had: ``theta_felt`` is the simulated attitude ``theta`` through it. Each candidate's
-response is applied to ``theta`` (the whole record, zero-padded so nothing wraps round; the
-run-in takes the start-up) and compared with ``theta_felt`` over the measurement window.
+response is applied to ``theta`` (the whole record, zero-padded so nothing wraps round) and
+compared with ``theta_felt`` over the measurement window, less the record's first seconds
+(:func:`settle_s`: the felt response to the attitude before the record began).
 
 The mismatch is the rms of the difference over the rms of ``theta_felt``. On the twin's own
 runs (remnant 15 %) the right configuration leaves under 0.01 % (reduced platform), 0.3 % with
@@ -205,6 +206,12 @@ def match_motion(run: Mapping[str, FloatArray], config: MotionSystem | None = No
         The configuration the user gave; None to choose among the built-in ones.
     rate_hz : float, optional
         Sample rate (the run's ``rate_hz`` by default).
+
+    Returns
+    -------
+    MotionMatch
+        The configuration to fit through, where it came from, and every built-in one's
+        mismatch.
 
     Raises
     ------
