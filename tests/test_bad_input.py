@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from twin.cli.main import EXIT_BUG, error_line, main
+from twin.cli.main import EXIT_BROKEN_PIPE, EXIT_BUG, error_line, main
 from twin.errors import DataError
 
 REST = ["simulate", "srs", "--model", "reduced", "--signal", "rest-1", "--quiet"]
@@ -227,6 +227,22 @@ def test_twin_debug_shows_the_traceback_of_a_bug(monkeypatch):
     monkeypatch.setenv("TWIN_DEBUG", "1")
     with pytest.raises(ZeroDivisionError):
         main(["workspace", "srs"])
+
+
+def test_a_reader_that_goes_away_ends_the_command_quietly(monkeypatch, capsys):
+    """``twin ... | head``: stdout's reader closed early; no error line, exit 141 as a shell
+    reports SIGPIPE (before, 'twin: error: Broken pipe')."""
+
+    class Closed:
+        def write(self, text: str) -> int:
+            raise BrokenPipeError(32, "Broken pipe")
+
+        def flush(self) -> None:
+            raise BrokenPipeError(32, "Broken pipe")
+
+    monkeypatch.setattr("sys.stdout", Closed())
+    assert main(["pilot", "lead", "srs"]) == EXIT_BROKEN_PIPE == 141
+    assert capsys.readouterr().err == ""
 
 
 def test_the_command_line_bounds_are_the_library_bounds():

@@ -27,6 +27,8 @@ EXIT_USAGE = 2
 EXIT_BUG = 70
 #: Exit code after Ctrl-C (128 + SIGINT).
 EXIT_INTERRUPTED = 130
+#: Exit code when the reader of stdout went away (128 + SIGPIPE, as a shell reports it).
+EXIT_BROKEN_PIPE = 141
 
 
 class _Parser(argparse.ArgumentParser):
@@ -189,11 +191,24 @@ def _parser() -> argparse.ArgumentParser:
     return build_parser()
 
 
+def _quiet_stdout() -> None:
+    """Point stdout at the null device, so Python's flush at exit does not fail again."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+    except (OSError, ValueError, AttributeError):  # not a real file (a test's capture)
+        pass
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the ``twin`` command; return its exit code (see :func:`error_line`)."""
     try:
         args = _parser().parse_args(argv)
         return int(args.func(args))
+    except BrokenPipeError:
+        # the reader of stdout went away (``twin ... | head``): nothing to report
+        _quiet_stdout()
+        return EXIT_BROKEN_PIPE
     except (Exception, KeyboardInterrupt) as e:
         if os.environ.get("TWIN_DEBUG") and not isinstance(e, TwinError):
             raise
