@@ -9,6 +9,7 @@ nothing half-written is left.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import functools
 import json
 import os
@@ -193,11 +194,9 @@ def _parser() -> argparse.ArgumentParser:
 
 def _quiet_stdout() -> None:
     """Point stdout at the null device, so Python's flush at exit does not fail again."""
-    try:
-        devnull = os.open(os.devnull, os.O_WRONLY)
-        os.dup2(devnull, sys.stdout.fileno())
-    except (OSError, ValueError, AttributeError):  # not a real file (a test's capture)
-        pass
+    # a stdout that is no real file (a test's capture) has no descriptor to point elsewhere
+    with contextlib.suppress(OSError, ValueError, AttributeError):
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
 
 
 def main(argv: Sequence[str] | None = None) -> int:
