@@ -20,7 +20,8 @@
    Cramer-Rao sd of the truth, with the bound at the truth (the bound proper: does the
    estimator attain it?) and with the bound the fit reports (widened to cover the minima the
    data do not rule out, :mod:`twin.pilot.minima`, over the profile of a parameter on an end
-   of its range and over the fit with a weak parameter on the end it cannot be told from;
+   of its range and over the fit with a weak parameter on the end it cannot be told from,
+   and for the selection where the data rule a minimum out, :mod:`twin.pilot.selection`;
    printed with how often, and by how much, it is wider than the bound at the estimate);
    and the fraction of all estimates whose likelihood-ratio interval (:mod:`twin.pilot.profile`)
    holds the truth (goal >= 90 %). Each with its 95 % Wilson interval: 50 estimates pin a

@@ -202,7 +202,10 @@ def test_a_lag_the_data_cannot_tell_from_none_widens_the_delay_it_trades_with():
             cover = max(fit.crlb_at_estimate[name], *(
                 b[name] + abs(getattr(p, name) - est) / 2
                 for p, b in zip(others, [*spread, held], strict=True)))  # fmt: skip
-            assert fit.crlb[name] == pytest.approx(cover, rel=0.05), (run, name)
+            if fit.evidence["ruled_out_minima"]:  # widened for the selection too (run 10)
+                assert fit.crlb[name] >= cover * (1 - 0.05), (run, name)
+            else:
+                assert fit.crlb[name] == pytest.approx(cover, rel=0.05), (run, name)
         error = abs(fit.pilot.tau_v - truth.tau_v)
         assert error <= 2 * fit.crlb["tau_v"], run
         if run == 6:
@@ -211,3 +214,25 @@ def test_a_lag_the_data_cannot_tell_from_none_widens_the_delay_it_trades_with():
             rival = max(b["tau_v"] + abs(p.tau_v - fit.pilot.tau_v) / 2
                         for p, b in zip(fit.competing, spread, strict=True))  # fmt: skip
             assert error > 2 * rival
+
+
+@pytest.mark.slow
+def test_a_minimum_the_data_rule_out_widens_the_bound_for_the_selection():
+    """Five repetitions of condition 8 at the thesis' remnant level, seed 23: the lead-lag
+    pair's other basin is ruled out (chi-square 15 above the best, Vuong's test prefers the
+    best), nothing competes, and the estimate came out low, as those that pass do: t_lead
+    0.173 s with a bound of 0.013 s at the estimate, which misses the truth (0.2) by more than
+    two. Widened for the selection (:mod:`twin.pilot.selection`) it holds the truth; t_lag,
+    whose estimate lies near the limit where the other basin would compete again, is no
+    longer counted as identified."""
+    r = simulate_pitch(TRUTH, CFG, 5, seed=23, remnant_scale=pitch_remnant_scale(TRUTH, 0.15))
+    fit = fit_pitch_pilot(r.ft, r.fd, r.u, CFG)
+    assert not fit.competing and not fit.range_end and not fit.on_range_bound
+    ruled = fit.evidence["ruled_out_minima"]
+    assert ruled and all(e["delta_chi2"] >= 3.84 and e["vuong_z"] >= 1.96 for e in ruled)
+    error = abs(fit.pilot.t_lead - TRUTH.t_lead)
+    assert error > 2 * fit.crlb_at_estimate["t_lead"]
+    assert "t_lead" not in fit.unidentifiable and error <= 2 * fit.crlb["t_lead"]
+    assert "t_lag" in fit.unidentifiable
+    assert fit.crlb_at_estimate["t_lag"] < fit.pilot.t_lag / 3  # it was, by its own bound
+    assert all(fit.crlb[n] >= fit.crlb_at_estimate[n] for n in PARAMETERS)

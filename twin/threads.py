@@ -22,8 +22,11 @@ and restore it after.
 
 from __future__ import annotations
 
+import functools
 import os
 import sys
+from contextlib import AbstractContextManager
+from typing import Any
 
 #: The variables OpenBLAS, OpenMP and MKL read when they load.
 BLAS_THREAD_VARIABLES = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")
@@ -42,3 +45,20 @@ def single_blas_thread() -> bool:
     for name in BLAS_THREAD_VARIABLES:
         os.environ.setdefault(name, "1")
     return "numpy" not in sys.modules
+
+
+@functools.cache
+def _controller() -> Any:
+    """Return the process's thread pools, found once (finding them costs about 3 ms a time)."""
+    from threadpoolctl import ThreadpoolController
+
+    return ThreadpoolController()
+
+
+def one_blas_thread() -> AbstractContextManager[object]:
+    """Keep BLAS to one thread within a ``with`` block, whatever the process set; restore after.
+
+    The pools are found at the first call (NumPy's and SciPy's BLAS are loaded by then, as the
+    chain imports both), so a BLAS library loaded later is not limited.
+    """
+    return _controller().limit(limits=1, user_api="blas")

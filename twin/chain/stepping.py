@@ -32,6 +32,7 @@ from twin.chain.noise import NoiseStream
 from twin.chain.response import PlatformResponse
 from twin.errors import SignalError
 from twin.platform.geometry import Geometry
+from twin.threads import one_blas_thread
 
 FloatArray = NDArray[np.float64]
 
@@ -261,9 +262,7 @@ def overlapped(
     slower than without the look-ahead (bench/twin_throughput.py, in a process that has not
     set its threads as the ``twin`` command does).
     """
-    from threadpoolctl import threadpool_limits
-
-    with threadpool_limits(limits=1, user_api="blas"):
+    with one_blas_thread():
         pending = None
         for item in items:
             nxt = submit(item)

@@ -423,8 +423,8 @@ def _cmd_identify(args: argparse.Namespace) -> int:
             elif own_sd[name] == sd:
                 sd_text = f"CRLB sd {sd:.4f}"
             else:
-                sd_text = (f"sd {sd:.4f}: the CRLB here, {own_sd[name]:.4f}, widened so that "
-                           "+-2 sd covers the fits below")  # fmt: skip
+                sd_text = (f"sd {sd:.4f}: the CRLB here, {own_sd[name]:.4f}, widened for the "
+                           "fits below")  # fmt: skip
             flag = ""
             if name in mle.unidentifiable:
                 why = ("at the end of its range" if name in mle.on_range_bound else
@@ -447,6 +447,12 @@ def _cmd_identify(args: argparse.Namespace) -> int:
             print(f"  another minimum the data do not rule out (chi-square +{ev['delta_chi2']:.2f} "
                   f"over the best, Vuong's z {ev['vuong_z']:.2f}; it competes within 3.84 or "
                   f"below z 1.96): {moved(other)}")  # fmt: skip
+        ruled = mle.evidence.get("ruled_out_minima", [])
+        if ruled:
+            rises = ", ".join(f"+{ev['delta_chi2']:.1f}" for ev in ruled[:4])
+            print(f"  {len(ruled)} other minim{'um' if len(ruled) == 1 else 'a'} the data rule "
+                  f"out (chi-square {rises}{', ...' if len(ruled) > 4 else ''}): the bounds "
+                  "are widened for the selection (twin.pilot.selection)")  # fmt: skip
         for name, other in mle.on_range_bound.items():
             at, k = getattr(other, name), PARAMETERS.index(name)
             end, way = (LOWER[k], "up") if at > getattr(p, name) else (UPPER[k], "down")
