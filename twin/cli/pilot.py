@@ -451,8 +451,9 @@ def _cmd_identify(args: argparse.Namespace) -> int:
         if ruled:
             rises = ", ".join(f"+{ev['delta_chi2']:.1f}" for ev in ruled[:4])
             print(f"  {len(ruled)} other minim{'um' if len(ruled) == 1 else 'a'} the data rule "
-                  f"out (chi-square {rises}{', ...' if len(ruled) > 4 else ''}): the bounds "
-                  "are widened for the selection (twin.pilot.selection)")  # fmt: skip
+                  f"out (chi-square {rises}{', ...' if len(ruled) > 4 else ''}): a bound is "
+                  "widened for the selection where its estimate is near the limit at which "
+                  "one would compete again (twin.pilot.selection)")  # fmt: skip
         for name, other in mle.on_range_bound.items():
             at, k = getattr(other, name), PARAMETERS.index(name)
             end, way = (LOWER[k], "up") if at > getattr(p, name) else (UPPER[k], "down")
