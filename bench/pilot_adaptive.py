@@ -14,7 +14,9 @@
    without run-to-run variation (condition 5 against condition 1), for the pilot who adapts
    its equalisation and neuromuscular tuning and for one whose neuromuscular system is fixed
    (the model before): how many subjects go the thesis' way per measure.
-3. Closed-loop MLE coverage: 200 seeded runs (``--coverage-runs``) of a known pilot
+3. Closed-loop MLE coverage: 200 seeded runs (``--coverage-runs``; 200 per seed, seeds 1, 2,
+   ...: ``--coverage-runs 1200 --coverage-only --no-intervals`` gives the README's 1200
+   five-repetition estimates, about 1.5 h) of a known pilot
    (condition 8, 15 % remnant, the thesis' level) fitted one by one (two workers); per
    parameter, among the estimates where it counted as identifiable, the fraction within 2
    Cramer-Rao sd of the truth, with the bound at the truth (the bound proper: does the
@@ -28,7 +30,7 @@
    coverage down to about +-8 %, 200 to about +-4 %. Once with one run per estimate, once
    with five repetitions averaged (the thesis' five per condition, §6.3.4). With
    ``--no-intervals`` the fits skip the intervals and the rule that flags by them.
-4. The same coverage (60 estimates, no intervals) on data whose nuisance the twin's remnant
+4. The same coverage (480 estimates, no intervals) on data whose nuisance the twin's remnant
    model did not shape: condition 4 with half the remnant and a white stick-sensor noise of
    half u's sd added (five repetitions averaged), and a pilot the defaults are not (a lead
    with no lag, t_lag on the end of its range) on the same nuisance, one run each.
@@ -188,7 +190,8 @@ def coverage(runs: int, intervals: bool = True) -> None:
     """Section 3: the closed-loop MLE's coverage."""
     for reps in (1, REPETITIONS):
         what = "one run" if reps == 1 else f"{reps} repetitions averaged (as the thesis)"
-        _coverage(Case(f"each from {what}", TRUTH, "condition-8", 1, reps), runs, intervals)
+        case = Case(f"each from {what}", TRUTH, "condition-8", 1, reps, batch=200)
+        _coverage(case, runs, intervals)
 
 
 @dataclass(frozen=True)
@@ -202,34 +205,51 @@ class Case:
     repetitions: int
     remnant: float = 1.0  # times the thesis' level (15 % of the control power)
     white: float = 0.0  # white stick-sensor noise added to u, times u's sd
+    batch: int = 0  # estimates simulated per seed (case.seed, case.seed + 1, ...); 0: all
 
 
 #: Section 4: data whose nuisance the twin's remnant model did not shape.
 NUISANCE = (
     Case("condition 4, half the remnant + white stick noise of half u's sd, five repetitions",
-         TRUTH, "condition-4", 7, REPETITIONS, 0.5, 0.5),
+         TRUTH, "condition-4", 7, REPETITIONS, 0.5, 0.5, batch=120),
     Case("a lead-only pilot (t_lead 0.15 s, t_lag 0), the same nuisance, one run",
-         PitchPilot(tau_v=0.275, t_lead=0.15, t_lag=0.0), "condition-4", 7, 1, 0.5, 0.5),
+         PitchPilot(tau_v=0.275, t_lead=0.15, t_lag=0.0), "condition-4", 7, 1, 0.5, 0.5,
+         batch=120),
 )  # fmt: skip
 
 
-def nuisance(runs: int = 60) -> None:
+#: Estimates of each section-4 figure: 60 had left the lead-lag pair's coverage open (t_lag
+#: 83 % of 12 identifiable, Wilson 55-95 %); 480 pin it to about +-4 %.
+NUISANCE_RUNS = 480
+
+
+def nuisance(runs: int = NUISANCE_RUNS) -> None:
     """Section 4: the MLE's coverage on data the twin's remnant model did not shape."""
     for case in NUISANCE:
         _coverage(case, runs, intervals=False)
 
 
-def _coverage(case: Case, runs: int, intervals: bool) -> None:
-    """Fit ``runs`` seeded estimates of ``case`` and print each parameter's coverage."""
+def _draws(case: Case, runs: int):
+    """Yield the seeded data of ``runs`` estimates of ``case``: (f_t, f_d, u of each estimate),
+    simulated in batches of ``case.batch`` estimates, batch ``b`` with seed ``case.seed + b``."""
     cfg = motion_system(case.config)
     scale = pitch_remnant_scale(case.truth, 0.15) * case.remnant
     reps = case.repetitions
-    r = simulate_pitch(case.truth, cfg, runs * reps, seed=case.seed, remnant_scale=scale)
-    u = r.u
-    if case.white:
-        u = u + np.random.default_rng(case.seed).normal(0.0, case.white * u.std(), u.shape)
-    args = [(r.ft, r.fd, u[i * reps] if reps == 1 else u[i * reps : (i + 1) * reps],
-             case.truth, case.config, intervals) for i in range(runs)]  # fmt: skip
+    batch = case.batch or runs
+    for b, first in enumerate(range(0, runs, batch)):
+        n, seed = min(batch, runs - first), case.seed + b
+        r = simulate_pitch(case.truth, cfg, n * reps, seed=seed, remnant_scale=scale)
+        u = r.u
+        if case.white:
+            u = u + np.random.default_rng(seed).normal(0.0, case.white * u.std(), u.shape)
+        yield r.ft, r.fd, [u[i * reps] if reps == 1 else u[i * reps : (i + 1) * reps]
+                           for i in range(n)]  # fmt: skip
+
+
+def _coverage(case: Case, runs: int, intervals: bool) -> None:
+    """Fit ``runs`` seeded estimates of ``case`` and print each parameter's coverage."""
+    args = [(ft, fd, u, case.truth, case.config, intervals)
+            for ft, fd, us in _draws(case, runs) for u in us]  # fmt: skip
     t0 = time.perf_counter()
     with Engine("local:2") as engine:
         done = engine.map(_fit, args, [{"run": i} for i in range(runs)], "fits").values()
@@ -298,7 +318,8 @@ if __name__ == "__main__":
                         help="estimates per coverage figure (default 200: +-4 %% at 90 %%; "
                              "about 30 min each on two cores with the intervals)")  # fmt: skip
     parser.add_argument("--coverage-only", action="store_true", help="section 3 only")
-    parser.add_argument("--nuisance-only", action="store_true", help="section 4 only (2 min)")
+    parser.add_argument("--nuisance-only", action="store_true",
+                        help="section 4 only (about 7 min)")  # fmt: skip
     parser.add_argument("--visual-delay-only", action="store_true",
                         help="section 5 only (about 25 min)")  # fmt: skip
     parser.add_argument("--motion-delay-only", action="store_true",
