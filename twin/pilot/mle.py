@@ -384,14 +384,14 @@ def _bounds(jac: FloatArray) -> FloatArray:
     and the others theirs from the pseudo-inverse, not a bound of zero or all infinite.
     """
     info = jac.T @ jac
-    try:
-        var = np.diag(np.linalg.inv(info))
-    except np.linalg.LinAlgError:
-        var = np.full(info.shape[0], -1.0)
-    if np.all(var > 0) and np.all(np.isfinite(var)):
-        return np.sqrt(var)
     eig, vec = np.linalg.eigh(info)
+    # singular by the eigenvalues, not by whether inv() fails: rounding decides that, and one
+    # BLAS returns a finite bound of 5e4 s where another raises or gives a negative variance
     null = eig <= max(eig.max(), 0.0) * SINGULAR_REL
+    if not null.any():  # well-conditioned (cond < 1e12): inv() as before, same bits
+        var = np.diag(np.linalg.inv(info))
+        if np.all(var > 0) and np.all(np.isfinite(var)):
+            return np.sqrt(var)
     unseen = (np.abs(vec[:, null]) > 1e-6).any(axis=1)
     var = (vec[:, ~null] ** 2 / eig[~null]).sum(axis=1)
     return np.where(unseen, np.inf, np.sqrt(var))
