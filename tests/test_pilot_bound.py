@@ -8,7 +8,7 @@ import pytest
 from twin.chain.config import motion_system
 from twin.errors import SignalError
 from twin.pilot.experiment import pitch_remnant_scale
-from twin.pilot.mle import PARAMETERS, bound_at, fit_pitch_pilot
+from twin.pilot.mle import PARAMETERS, _bounds, bound_at, fit_pitch_pilot
 from twin.pilot.pitch import PitchPilot, simulate_pitch
 
 TRUTH = PitchPilot(tau_v=0.275)  # visual + display delay on the 10 ms simulation grid
@@ -236,3 +236,17 @@ def test_a_minimum_the_data_rule_out_widens_the_bound_for_the_selection():
     assert "t_lag" in fit.unidentifiable
     assert fit.crlb_at_estimate["t_lag"] < fit.pilot.t_lag / 3  # it was, by its own bound
     assert all(fit.crlb[n] >= fit.crlb_at_estimate[n] for n in PARAMETERS)
+
+
+def test_a_nearly_singular_information_is_singular_whatever_inv_returns():
+    """Two columns equal to 1e-7 (the information's condition about 1e15): ``inv`` returns a
+    finite, positive variance for both there (on some BLAS builds, at t_lag = 0, 5e4 s), but
+    the data do not tell them apart, so both get an infinite bound and the others their own."""
+    rng = np.random.default_rng(0)
+    jac = rng.normal(size=(200, 4))
+    jac[:, 3] = jac[:, 2] + 1e-7 * rng.normal(size=200)
+    assert np.all(np.isfinite(np.diag(np.linalg.inv(jac.T @ jac))))  # inv alone does not see it
+    sd = _bounds(jac)
+    assert np.isinf(sd[2:]).all()
+    free = np.sqrt(np.diag(np.linalg.inv(jac[:, :2].T @ jac[:, :2])))
+    assert np.all(np.isfinite(sd[:2])) and np.all(sd[:2] >= free * (1 - 1e-9))
