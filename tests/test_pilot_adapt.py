@@ -223,6 +223,9 @@ def test_cli_adapt_prints_parameters_and_margins(capsys):
     assert doc["pilot"]["omega_nm"] == PitchPilot().omega_nm
     assert main(["pilot", "experiment", "--adapt-visual-delay"]) == 2
     assert "--adapt-visual-delay chooses what adaptive subjects adapt" in capsys.readouterr().err
+    # the fixed pilot has no subjects: refused, not silently ignored
+    assert main(["pilot", "experiment", "--subjects", "3"]) == 2
+    assert "--subjects counts adaptive subjects" in capsys.readouterr().err
 
 
 @pytest.mark.slow

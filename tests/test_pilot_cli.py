@@ -84,6 +84,26 @@ def test_a_malformed_pilot_csv_names_the_problem(capsys, tmp_path):
     assert "row 2 (line 3): e is nan; all values must be finite" in capsys.readouterr().err
 
 
+@pytest.mark.parametrize(
+    ("rows", "message"),
+    [
+        # every message counts rows alike: row 1 is the first after the header, on line 2
+        ("0,0,0,0,0,0\n0.01,0,0,,0,0\n", "row 2 (line 3): e is empty, not a number"),
+        ("0,0,0,0,0,0\n0.01,0,0,x,0,0\n", "row 2 (line 3): e is 'x', not a number"),
+        ("0,0,0,0,0,0\n0.01,0,0\n", "row 2 (line 3) has 3 values, the header 6"),
+        ("0,0,0,0,0,0\n0,0,0,0,0,0\n", "row 2 (0 s) is not after row 1 (0 s)"),
+        ("0,0,0,0,0,0\n0.01,0,0,0,0,0\n0.025,0,0,0,0,0\n0.03,0,0,0,0,0\n",
+         "row 3 is at 0.025 s"),
+    ],
+)
+def test_a_bad_pilot_csv_row_is_named_as_its_row_and_line(capsys, tmp_path, rows, message):
+    bad = tmp_path / "bad.csv"
+    bad.write_text("t,ft,fd,e,u,theta\n" + rows)
+    assert main(["pilot", "identify", str(bad)]) == 2
+    err = capsys.readouterr().err
+    assert message in err and err.count("\n") == 1
+
+
 @pytest.mark.slow
 def test_identify_intervals_are_printed_and_in_the_json(capsys, tmp_path):
     """--intervals: every parameter's likelihood-ratio interval holds its estimate."""

@@ -133,7 +133,8 @@ def read_number_table(
         except RunFormatError:
             raise
         except ValueError as e:
-            raise RunFormatError(f"{path}: not a table of numbers ({str(e)[:200]})") from None
+            why = _first_bad_line(path, got) or str(e)[:200]
+            raise RunFormatError(f"{path}: not a table of numbers: {why}") from None
     if data.shape[0] < 2 or data.shape[1] != len(got):
         raise RunFormatError(f"{path}: needs at least 2 rows of {len(got)} numbers")
     bad = ~np.isfinite(data)
@@ -145,6 +146,27 @@ def read_number_table(
         )
     check_values(data, got, str(path), limits)
     return data, got
+
+
+def _first_bad_line(path: Path, header: tuple[str, ...]) -> str | None:
+    """Say where a CSV of numbers after its header first is not one, as rows and lines are
+    counted in the other messages (row 1 is line 2); None if no line is found wrong."""
+    with path.open(encoding=ENCODING) as fh:
+        fh.readline()
+        for row, line in enumerate(fh, start=1):
+            if not line.strip():
+                continue
+            cells = [c.strip() for c in line.rstrip("\n").split(",")]
+            where = f"row {row} (line {row + 1})"
+            if len(cells) != len(header):
+                return f"{where} has {len(cells)} values, the header {len(header)}"
+            for name, cell in zip(header, cells, strict=True):
+                try:
+                    float(cell)
+                except ValueError:
+                    shown = repr(cell[:40]) if cell else "empty"
+                    return f"{where}: {name} is {shown}, not a number"
+    return None
 
 
 def check_values(

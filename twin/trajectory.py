@@ -244,20 +244,24 @@ def uniform_rate(t: ArrayLike, what: str = "time column", tol: float = 0.01) -> 
     tt = np.asarray(t, dtype=float)
     if tt.ndim != 1 or tt.size < 2:
         raise SignalError(f"{what}: needs at least 2 samples")
+    # rows are counted from 1, the first sample (in a CSV with a header: line row + 1)
     if not np.all(np.isfinite(tt)):
-        raise SignalError(f"{what}: time is not finite at row {int(np.argmin(np.isfinite(tt)))}")
+        row = int(np.argmin(np.isfinite(tt))) + 1
+        raise SignalError(f"{what}: time is not finite at row {row}")
     d = np.diff(tt)
     if np.any(d <= 0):
+        row = int(np.argmax(d <= 0)) + 2
         raise SignalError(
-            f"{what}: time must increase strictly; row {int(np.argmax(d <= 0)) + 1} does not"
+            f"{what}: time must increase strictly; row {row} ({tt[row - 1]:.6g} s) is not "
+            f"after row {row - 1} ({tt[row - 2]:.6g} s)"
         )
     step = (tt[-1] - tt[0]) / (tt.size - 1)
     off = np.abs(tt - (tt[0] + np.arange(tt.size) * step)) > tol * step
     if off.any():
-        row = int(np.argmax(off))
+        k = int(np.argmax(off))
         raise SignalError(
-            f"{what}: time steps must be uniform (mean {step:.6g} s); row {row} is at "
-            f"{tt[row]:.6g} s, {tt[row] - tt[0] - row * step:+.3g} s off the grid"
+            f"{what}: time steps must be uniform (mean {step:.6g} s); row {k + 1} is at "
+            f"{tt[k]:.6g} s, {tt[k] - tt[0] - k * step:+.3g} s off the grid"
         )
     return 1.0 / step
 

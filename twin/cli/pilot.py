@@ -17,6 +17,8 @@ DEG2 = (180 / np.pi) ** 2
 MAX_RUNS = 1000
 #: Most simulated subjects of ``pilot experiment --pilot adaptive``.
 MAX_SUBJECTS = 1000
+#: Subjects of ``pilot experiment --pilot adaptive`` by default: the thesis' participants.
+DEFAULT_SUBJECTS = 9
 #: Most populations of ``pilot experiment --pilot adaptive --populations``.
 MAX_POPULATIONS = 1000
 #: Runs per task of ``pilot montecarlo`` (:func:`twin.pilot.montecarlo.monte_carlo`'s batch).
@@ -94,7 +96,6 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
     exp.add_argument(
         "--subjects",
         type=common.count(2, MAX_SUBJECTS),
-        default=9,
         help="simulated subjects with --pilot adaptive (default 9, the thesis' participants)",
     )
     exp.add_argument(
@@ -228,10 +229,11 @@ def _cmd_run(args: argparse.Namespace) -> int:
         for n, parts in out["variance_deg2"].items():
             print(f"  var({n}) " + ", ".join(f"{k} {v:.3f}" for k, v in parts.items()) + " deg^2")
         print(
-            f"  disturbance loop: crossover {ol.crossover_d:.2f} rad/s, phase margin "
-            f"{ol.phase_margin_d:.1f} deg; target loop: {ol.crossover_t:.2f} rad/s, "
-            f"{ol.phase_margin_t:.1f} deg; felt-motion lag at crossover "
-            f"{ol.motion_lead_phase_deg:.1f} deg"
+            f"  the pilot model's loops through {cfg.name} (predicted, not measured from the "
+            f"runs): disturbance crossover {ol.crossover_d:.2f} rad/s, phase margin "
+            f"{ol.phase_margin_d:.1f} deg; target {ol.crossover_t:.2f} rad/s, "
+            f"{ol.phase_margin_t:.1f} deg; felt motion's phase against the attitude at the "
+            f"disturbance crossover {ol.motion_lead_phase_deg:+.1f} deg (negative: behind)"
         )
     return 0
 
@@ -280,6 +282,12 @@ def _cmd_experiment(args: argparse.Namespace) -> int:
         if given and args.pilot != "adaptive":
             raise UsageError(f"{flag} chooses what adaptive subjects adapt: give it with "
                              "--pilot adaptive")  # fmt: skip
+    if args.subjects is not None and args.pilot != "adaptive":
+        raise UsageError("--subjects counts adaptive subjects; the fixed pilot is one model "
+                         "(--runs sets its runs per condition): give it with --pilot "
+                         "adaptive")  # fmt: skip
+    if args.subjects is None:
+        args.subjects = DEFAULT_SUBJECTS
     if args.runs is not None and args.pilot == "adaptive":
         raise UsageError("--runs sets the fixed pilot's runs per condition; adaptive subjects "
                          "fly five repetitions per condition, as the thesis' participants "
@@ -371,21 +379,24 @@ def _cmd_identify(args: argparse.Namespace) -> int:
     cfg = motion.config
     felt = w.get("theta_felt", w["theta"])
     fd, ft = pitch_task()
-    fc = fc_estimate(w["e"][None], w["u"][None], felt[None], fd, ft, w["fd"], w["ft"])
-    arx = select_orders(
-        *(decimate(s, rate, ARX_RATE_HZ) for s in (w["u"], w["e"], felt)), rate_hz=ARX_RATE_HZ
-    )
-    h_pe, h_px = arx.responses(fc.omega_rad_s)
-    mle = fit_pitch_pilot(
-        w["ft"],
-        w["fd"],
-        w["u"],
-        cfg,
-        rate,
-        hold=not args.continuous_loop,
-        progress=common.progress(args),
-        intervals=args.intervals,
-    )
+    try:  # the analyses' refusals name the file they refuse
+        fc = fc_estimate(w["e"][None], w["u"][None], felt[None], fd, ft, w["fd"], w["ft"])
+        arx = select_orders(
+            *(decimate(s, rate, ARX_RATE_HZ) for s in (w["u"], w["e"], felt)), rate_hz=ARX_RATE_HZ
+        )
+        h_pe, h_px = arx.responses(fc.omega_rad_s)
+        mle = fit_pitch_pilot(
+            w["ft"],
+            w["fd"],
+            w["u"],
+            cfg,
+            rate,
+            hold=not args.continuous_loop,
+            progress=common.progress(args),
+            intervals=args.intervals,
+        )
+    except SignalError as e:
+        raise SignalError(f"{args.csv}: {e}") from None
     out = {
         "omega_rad_s": fc.omega_rad_s.tolist(),
         "fc": {
@@ -408,7 +419,8 @@ def _cmd_identify(args: argparse.Namespace) -> int:
         p = mle.pilot
         loop = "continuous" if args.continuous_loop else f"held over each {1e3 / rate:g} ms"
         print(
-            f"{args.csv}: MLE fit (Eq 6.5-6.7, closed loop through {cfg.name}, u {loop}), "
+            f"{args.csv}: MLE fit (Eq 6.5-6.7, closed loop through {cfg.name}'s pitch "
+            f"response, u {loop}), "
             f"VAF {mle.vaf_percent:.1f} %"
         )
         print("  " + motion.format())

@@ -289,9 +289,11 @@ def line_data(
     top = np.sort(power)[::-1][:MAX_LINES]
     if power.sum() <= 0 or top.sum() < (1 - 1e-6) * power.sum():
         raise SignalError(
-            f"the window ({n} samples at {rate_hz:g} Hz = {n / rate_hz:.3f} s) does not hold "
-            f"whole periods of the forcing functions (their lines leak into every bin); give "
-            f"81.92 s at a rate that makes it a whole number of samples (e.g. 100 Hz)"
+            f"the forcing functions are not periodic in the window ({n} samples at {rate_hz:g} "
+            f"Hz = {n / rate_hz:.3f} s): their power leaks off their lines into every bin. The "
+            f"thesis' repeat every 81.92 s: give a window of whole periods at a rate that makes "
+            f"it a whole number of samples (e.g. 100 Hz), and check the time column's units "
+            f"and rate against the forcing functions'"
         )
     lines = np.flatnonzero(power > 1e-12 * power.max())
     lines = lines[lines > 0]
