@@ -149,8 +149,10 @@ def read_number_table(
 
 
 def _first_bad_line(path: Path, header: tuple[str, ...]) -> str | None:
-    """Say where a CSV of numbers after its header first is not one, as rows and lines are
-    counted in the other messages (row 1 is line 2); None if no line is found wrong."""
+    """Say where a CSV of numbers first is not one after its header; None if no line is.
+
+    Rows and lines are counted as in the other messages: row 1 is line 2.
+    """
     with path.open(encoding=ENCODING) as fh:
         fh.readline()
         for row, line in enumerate(fh, start=1):
