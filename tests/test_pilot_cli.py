@@ -92,8 +92,7 @@ def test_a_malformed_pilot_csv_names_the_problem(capsys, tmp_path):
         ("0,0,0,0,0,0\n0.01,0,0,x,0,0\n", "row 2 (line 3): e is 'x', not a number"),
         ("0,0,0,0,0,0\n0.01,0,0\n", "row 2 (line 3) has 3 values, the header 6"),
         ("0,0,0,0,0,0\n0,0,0,0,0,0\n", "row 2 (0 s) is not after row 1 (0 s)"),
-        ("0,0,0,0,0,0\n0.01,0,0,0,0,0\n0.025,0,0,0,0,0\n0.03,0,0,0,0,0\n",
-         "row 3 is at 0.025 s"),
+        ("0,0,0,0,0,0\n0.01,0,0,0,0,0\n0.025,0,0,0,0,0\n0.03,0,0,0,0,0\n", "row 3 is at 0.025 s"),
     ],
 )
 def test_a_bad_pilot_csv_row_is_named_as_its_row_and_line(capsys, tmp_path, rows, message):
