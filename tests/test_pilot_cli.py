@@ -74,6 +74,45 @@ def test_bad_input_is_one_line_and_exit_2(capsys, argv, message):
     assert message in err and err.count("\n") == 1
 
 
+def test_repetitions_are_written_one_file_each_and_identified_together(capsys, tmp_path):
+    """`pilot run --runs 3 --out` writes three files; `identify` on all three fits them as
+    repetitions: the same estimate as the library's fit of the three runs' u."""
+    import numpy as np
+
+    from twin.chain.config import motion_system
+    from twin.pilot.experiment import pitch_remnant_scale
+    from twin.pilot.mle import fit_pitch_pilot
+    from twin.pilot.pitch import PitchPilot, simulate_pitch
+    from twin.pilot.records import read_pilot_csv, write_pilot_csv
+
+    out = tmp_path / "rep.csv"
+    assert main(["pilot", "run", "condition-8", "--runs", "3", "--out", str(out), "--quiet"]) == 0
+    files = [tmp_path / f"rep-{k}.csv" for k in (1, 2, 3)]
+    assert sorted(tmp_path.iterdir()) == files  # nothing else, no partial files
+    capsys.readouterr()
+    assert main(["pilot", "identify", *map(str, files), "--config", "condition-8", "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out, parse_constant=_no_constant)
+    assert doc["runs"] == list(map(str, files))
+    cfg, pilot = motion_system("condition-8"), PitchPilot()
+    r = simulate_pitch(pilot, cfg, 3, 0, pitch_remnant_scale(pilot, 0.15, 0))
+    n = 8192
+    fit = fit_pitch_pilot(r.ft[-n:], r.fd[-n:], r.u[:, -n:], cfg)
+    for name, value in doc["mle"]["parameters"].items():  # the CSVs keep 10 significant figures
+        assert value == pytest.approx(getattr(fit.pilot, name), rel=1e-4, abs=1e-6), name
+    # a repetition must share the forcing functions and the time grid
+    d = read_pilot_csv(files[1])
+    write_pilot_csv(files[1], {**{k: v for k, v in d.items() if k != "rate_hz"},
+                               "ft": 1.1 * d["ft"]})  # fmt: skip
+    assert main(["pilot", "identify", *map(str, files)]) == 2
+    assert f"{files[1]}: ft differs from {files[0]}'s" in capsys.readouterr().err
+    write_pilot_csv(files[1], {**{k: v for k, v in d.items() if k != "rate_hz"},
+                               "t": 2 * d["t"]})  # fmt: skip
+    assert main(["pilot", "identify", str(files[0]), str(files[1])]) == 2
+    assert "repetitions must share the time grid" in capsys.readouterr().err
+    assert doc["mle"]["crlb_sd"]["k_v"] == pytest.approx(fit.crlb["k_v"], rel=1e-3)
+    assert np.isfinite(fit.crlb["k_v"])
+
+
 def test_a_malformed_pilot_csv_names_the_problem(capsys, tmp_path):
     bad = tmp_path / "bad.csv"
     bad.write_text("t,ft,fd,e,u\n0,0,0,0,0\n")

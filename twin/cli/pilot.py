@@ -42,7 +42,11 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
             ),
             common.overrides_parent(imu=False),
             common.seed_parent("seed of the remnant and the noise"),
-            common.out_parent("write the first run as a twin-pilot/1 CSV here", "CSV"),
+            common.out_parent(
+                "write the run as a twin-pilot/1 CSV here; with --runs N, N files beside it "
+                "named STEM-1 ... STEM-N (repetitions for `twin pilot identify`)",
+                "CSV",
+            ),
             common.rrd_parent("save e, u, theta, forcing functions and felt motion (.rrd)"),
             common.json_parent(),
             common.quiet_parent(),
@@ -124,7 +128,14 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
         parents=[common.overrides_parent(imu=False), common.json_parent(), common.quiet_parent()],
         help="FC, ARX and MLE on a twin-pilot/1 CSV",
     )
-    ide.add_argument("csv", metavar="RUN_CSV", help="t,ft,fd,e,u,theta[,theta_felt] (rad)")
+    ide.add_argument(
+        "csv",
+        metavar="RUN_CSV",
+        nargs="+",
+        help="t,ft,fd,e,u,theta[,theta_felt] (rad); several: repetitions of one condition "
+        "(the same t, ft and fd, as `pilot run --runs N --out` writes them), averaged at the "
+        "forcing functions' lines as the thesis averaged its five (§6.3.4)",
+    )
     ide.add_argument(
         "--config",
         default=None,
@@ -181,7 +192,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
     from twin.pilot.experiment import pitch_remnant_scale
     from twin.pilot.forcing import pitch_task
     from twin.pilot.pitch import PitchPilot, open_loops, simulate_pitch, variance_decomposition
-    from twin.pilot.records import write_pilot_csv
+    from twin.pilot.records import write_pilot_runs
 
     if not 0 <= args.remnant < 1:
         raise SignalError(f"--remnant must be in [0, 1); got {args.remnant}")
@@ -205,18 +216,11 @@ def _cmd_run(args: argparse.Namespace) -> int:
         "open_loops": ol.__dict__,
     }
     if args.out:
-        write_pilot_csv(
-            args.out,
-            {
-                "t": r.t,
-                "ft": r.ft,
-                "fd": r.fd,
-                "e": r.e[0],
-                "u": r.u[0],
-                "theta": r.theta[0],
-                "theta_felt": r.theta_felt[0],
-            },
-        )
+        written = write_pilot_runs(args.out, {"t": r.t, "ft": r.ft, "fd": r.fd, "e": r.e,
+                                              "u": r.u, "theta": r.theta,
+                                              "theta_felt": r.theta_felt})  # fmt: skip
+        if len(written) > 1:
+            progress(f"{len(written)} runs written: {written[0]} ... {written[-1]}")
     if args.rrd:
         from twin.record.pilot import record_pilot
 
@@ -341,26 +345,25 @@ def _replication(args: argparse.Namespace) -> int:
     return 0
 
 
-def _cmd_identify(args: argparse.Namespace) -> int:
-    from twin.errors import SignalError, UsageError
-    from twin.pilot.arx import ARX_RATE_HZ, decimate, select_orders
-    from twin.pilot.fc import fc_estimate
-    from twin.pilot.felt_motion import match_motion
-    from twin.pilot.forcing import MEASUREMENT_S, pitch_task
-    from twin.pilot.mle import LOWER, PARAMETERS, UPPER, fit_pitch_pilot
+def _pilot_window(path: str) -> tuple[str, dict, dict, float]:
+    """Read a twin-pilot/1 run; return its name, columns, last 81.92 s and rate [Hz].
+
+    Raises
+    ------
+    SignalError
+        Naming the file: shorter than the window, or without excitation in it.
+
+    """
+    from twin.errors import SignalError
+    from twin.pilot.forcing import MEASUREMENT_S
     from twin.pilot.records import read_pilot_csv
 
-    overridden = common.overrides_given(args)
-    if overridden and args.config is None:
-        raise UsageError(f"{', '.join(overridden)} {'change' if overridden[1:] else 'changes'} "
-                         "a configuration: give it with --config")  # fmt: skip
-    given = None if args.config is None else common.configured(args.config, args)
-    d = read_pilot_csv(args.csv)
+    d = read_pilot_csv(path)
     rate = float(d["rate_hz"])
     n = round(MEASUREMENT_S * rate)
     if d["t"].size < n:
         raise SignalError(
-            f"{args.csv}: needs at least {MEASUREMENT_S} s of data ({n} samples at {rate:g} Hz); "
+            f"{path}: needs at least {MEASUREMENT_S} s of data ({n} samples at {rate:g} Hz); "
             f"has {d['t'].size} samples"
         )
     w = {k: v[-n:] for k, v in d.items() if k != "rate_hz"}
@@ -368,27 +371,60 @@ def _cmd_identify(args: argparse.Namespace) -> int:
     flat = [k for k in ("ft", "fd", "e", "u", felt) if np.ptp(w[k]) == 0]
     if flat:
         raise SignalError(
-            f"{args.csv}: the run carries no excitation: {', '.join(flat)} constant over the "
+            f"{path}: the run carries no excitation: {', '.join(flat)} constant over the "
             f"last {MEASUREMENT_S} s (a tracking run has the Table 6.2 forcing functions in ft "
             "and fd, the pilot's e and u, and the motion the pilot felt)"
         )
+    return path, d, w, rate
+
+
+def _cmd_identify(args: argparse.Namespace) -> int:
+    from twin.errors import SignalError, UsageError
+    from twin.pilot.arx import ARX_RATE_HZ, decimate, select_orders
+    from twin.pilot.fc import fc_estimate
+    from twin.pilot.felt_motion import match_motion
+    from twin.pilot.forcing import pitch_task
+    from twin.pilot.mle import LOWER, PARAMETERS, UPPER, fit_pitch_pilot
+
+    overridden = common.overrides_given(args)
+    if overridden and args.config is None:
+        raise UsageError(f"{', '.join(overridden)} {'change' if overridden[1:] else 'changes'} "
+                         "a configuration: give it with --config")  # fmt: skip
+    given = None if args.config is None else common.configured(args.config, args)
+    runs = [_pilot_window(path) for path in args.csv]
+    name, d, w, rate = runs[0]
+    for other, _, ow, orate in runs[1:]:
+        if orate != rate or ow["t"].size != w["t"].size:
+            raise SignalError(f"{other}: {orate:g} Hz, {ow['t'].size} samples in the window; "
+                              f"{name} has {rate:g} Hz, {w['t'].size}: repetitions must share "
+                              "the time grid")  # fmt: skip
+        differ = [k for k in ("ft", "fd") if not np.allclose(ow[k], w[k], rtol=1e-6, atol=1e-9)]
+        if differ:
+            verb = "differ" if differ[1:] else "differs"
+            raise SignalError(f"{other}: {' and '.join(differ)} {verb} from {name}'s: "
+                              "repetitions must share the forcing functions (the thesis' five "
+                              "runs per condition did)")  # fmt: skip
+    label = name if len(runs) == 1 else f"{name} and {len(runs) - 1} more"
     try:
         motion = match_motion(d, given)
     except SignalError as e:
-        raise SignalError(f"{args.csv}: {e}") from None
+        raise SignalError(f"{name}: {e}") from None
     cfg = motion.config
-    felt = w.get("theta_felt", w["theta"])
+    felt_key = "theta_felt" if "theta_felt" in w else "theta"
+    # the repetitions' mean: FC and ARX of the averaged run (linear: the lines' average)
+    mean = {k: np.mean([r[2][k] for r in runs], axis=0) for k in ("e", "u", felt_key)}
+    u_runs = np.array([r[2]["u"] for r in runs]) if len(runs) > 1 else w["u"]
     fd, ft = pitch_task()
     try:  # the analyses' refusals name the file they refuse
-        fc = fc_estimate(w["e"][None], w["u"][None], felt[None], fd, ft, w["fd"], w["ft"])
-        arx = select_orders(
-            *(decimate(s, rate, ARX_RATE_HZ) for s in (w["u"], w["e"], felt)), rate_hz=ARX_RATE_HZ
-        )
+        fc = fc_estimate(mean["e"][None], mean["u"][None], mean[felt_key][None], fd, ft,
+                         w["fd"], w["ft"])  # fmt: skip
+        arx = select_orders(*(decimate(mean[k], rate, ARX_RATE_HZ) for k in ("u", "e", felt_key)),
+                            rate_hz=ARX_RATE_HZ)  # fmt: skip
         h_pe, h_px = arx.responses(fc.omega_rad_s)
         mle = fit_pitch_pilot(
             w["ft"],
             w["fd"],
-            w["u"],
+            u_runs,
             cfg,
             rate,
             hold=not args.continuous_loop,
@@ -396,8 +432,9 @@ def _cmd_identify(args: argparse.Namespace) -> int:
             intervals=args.intervals,
         )
     except SignalError as e:
-        raise SignalError(f"{args.csv}: {e}") from None
+        raise SignalError(f"{label}: {e}") from None
     out = {
+        "runs": [str(r[0]) for r in runs],
         "omega_rad_s": fc.omega_rad_s.tolist(),
         "fc": {
             "h_pe_gain": np.abs(fc.h_pe[0]).tolist(),
@@ -418,10 +455,10 @@ def _cmd_identify(args: argparse.Namespace) -> int:
     else:
         p = mle.pilot
         loop = "continuous" if args.continuous_loop else f"held over each {1e3 / rate:g} ms"
+        reps = "" if len(runs) == 1 else f", {len(runs)} repetitions averaged"
         print(
-            f"{args.csv}: MLE fit (Eq 6.5-6.7, closed loop through {cfg.name}'s pitch "
-            f"response, u {loop}), "
-            f"VAF {mle.vaf_percent:.1f} %"
+            f"{label}: MLE fit (Eq 6.5-6.7, closed loop through {cfg.name}'s pitch "
+            f"response, u {loop}{reps}), VAF {mle.vaf_percent:.1f} %"
         )
         print("  " + motion.format())
         own_sd = mle.crlb_at_estimate or mle.crlb

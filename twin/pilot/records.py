@@ -4,11 +4,13 @@ Header ``t,ft,fd,e,u,theta`` and optionally ``theta_felt`` (rad; time in s, unif
 increasing): target and disturbance forcing functions, tracking error, control signal, pitch
 attitude, and the attitude the motion system gave the pilot (if known). The analysis uses the
 last 81.92 s (whole periods of the Table 6.2 forcing functions at 100 Hz). Written to a
-temporary name and renamed, so a failed write leaves nothing.
+temporary name and renamed, so a failed write leaves nothing. Repetitions of one condition
+(the thesis flew five, §6.3.4) are one file each, sharing t, ft and fd.
 """
 
 from __future__ import annotations
 
+from contextlib import ExitStack
 from pathlib import Path
 
 import numpy as np
@@ -29,11 +31,45 @@ MAX_VALUE = {c: 10.0 for c in (*COLUMNS[1:], *OPTIONAL)}
 
 def write_pilot_csv(path: str | Path, columns: dict[str, FloatArray]) -> Path:
     """Write a ``twin-pilot/1`` CSV (``columns`` holds COLUMNS and maybe theta_felt)."""
+    return write_pilot_runs(path, columns)[0]
+
+
+def repetition_paths(path: str | Path, runs: int) -> list[Path]:
+    """Return the files of ``runs`` repetitions: ``path`` itself for one, else ``stem-1``..."""
+    p = Path(path)
+    if runs == 1:
+        return [p]
+    return [p.with_name(f"{p.stem}-{k}{p.suffix}") for k in range(1, runs + 1)]
+
+
+def write_pilot_runs(path: str | Path, columns: dict[str, FloatArray]) -> list[Path]:
+    """Write each run of ``columns`` as a ``twin-pilot/1`` CSV; all of them or none.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file of a single run; repetitions go beside it as ``stem-1.csv``, ``stem-2.csv``...
+    columns : dict of str to ndarray
+        COLUMNS and maybe theta_felt; t, ft and fd of shape (n,), the others (n,) for one run
+        or (runs, n).
+
+    Returns
+    -------
+    list of Path
+        The files written.
+
+    """
+    shared = ("t", "ft", "fd")
+    runs = max(np.atleast_2d(v).shape[0] for k, v in columns.items() if k not in shared)
     names = [*COLUMNS, *(c for c in OPTIONAL if c in columns)]
-    data = np.column_stack([np.asarray(columns[n], dtype=float) for n in names])
-    with replacing_file(path) as tmp:
-        np.savetxt(tmp, data, delimiter=",", header=",".join(names), comments="", fmt="%.10g")
-    return Path(path)
+    paths = repetition_paths(path, runs)
+    with ExitStack() as stack:  # every file appears only once all are complete
+        for k, final in enumerate(paths):
+            tmp = stack.enter_context(replacing_file(final))
+            data = np.column_stack([np.asarray(columns[n], dtype=float) if n in shared
+                                    else np.atleast_2d(columns[n])[k] for n in names])  # fmt: skip
+            np.savetxt(tmp, data, delimiter=",", header=",".join(names), comments="", fmt="%.10g")
+    return paths
 
 
 def read_pilot_csv(path: str | Path) -> dict[str, FloatArray]:
