@@ -250,3 +250,17 @@ def test_a_nearly_singular_information_is_singular_whatever_inv_returns():
     assert np.isinf(sd[2:]).all()
     free = np.sqrt(np.diag(np.linalg.inv(jac[:, :2].T @ jac[:, :2])))
     assert np.all(np.isfinite(sd[:2])) and np.all(sd[:2] >= free * (1 - 1e-9))
+
+
+def test_a_null_vector_blurred_by_finite_differences_leaves_the_others_seen():
+    """The null direction of two equal columns picks up shares of 1e-5 on the others (as the
+    finite differences leave them): only the pair is unseen, the others keep about the bound
+    they have with the pair's sum fitted in its place."""
+    rng = np.random.default_rng(1)
+    jac = rng.normal(size=(200, 4))
+    jac[:, 3] = jac[:, 2] + 1e-5 * jac[:, 0] + 1e-9 * rng.normal(size=200)
+    sd = _bounds(jac)
+    assert np.isinf(sd[2:]).all()
+    merged = np.column_stack([jac[:, 0], jac[:, 1], jac[:, 2] + jac[:, 3]])
+    own = np.sqrt(np.diag(np.linalg.inv(merged.T @ merged)))[:2]
+    assert sd[:2] == pytest.approx(own, rel=1e-3)

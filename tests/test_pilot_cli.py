@@ -109,6 +109,32 @@ def test_repetitions_are_written_one_file_each_and_identified_together(capsys, t
                                "t": 2 * d["t"]})  # fmt: skip
     assert main(["pilot", "identify", str(files[0]), str(files[1])]) == 2
     assert "repetitions must share the time grid" in capsys.readouterr().err
+    # the same file twice, the same run under two names, a column missing in one, a run
+    # whose felt motion is another motion system's: refused, naming the file
+    cols = {k: v for k, v in d.items() if k != "rate_hz"}
+    copy, bare, fixed = (tmp_path / f"{n}.csv" for n in ("copy", "bare", "fixed"))
+    first = read_pilot_csv(files[0])
+    write_pilot_csv(copy, {k: v for k, v in first.items() if k != "rate_hz"})
+    write_pilot_csv(bare, {k: v for k, v in cols.items() if k != "theta_felt"})
+    write_pilot_csv(fixed, {**cols, "theta_felt": cols["theta"]})
+    for given, message in (
+        ([files[0], f"{tmp_path}/./{files[0].name}"], "again: give each repetition once"),
+        ([files[0], copy], "the same run twice is not a repetition"),
+        ([files[0], bare], "repetitions must have the same columns"),
+        ([files[0], fixed], "repetitions must be flown through one motion system"),
+    ):
+        assert main(["pilot", "identify", *map(str, given)]) == 2
+        err = capsys.readouterr().err
+        assert message in err and err.count("\n") == 1
+    # a later run with fewer repetitions says which older files beside them are not its own
+    assert main(["pilot", "run", "condition-8", "--runs", "2", "--out", str(out), "--quiet"]) == 0
+    assert f"{files[2]} beside them is from an earlier run" in capsys.readouterr().err
+    # every output file is checked before the runs are flown
+    (tmp_path / "sx-2.csv").mkdir()
+    assert main(["pilot", "run", "condition-8", "--runs", "2", "--out",
+                 str(tmp_path / "sx.csv")]) == 2  # fmt: skip
+    assert "sx-2.csv: is a folder" in capsys.readouterr().err
+    assert not (tmp_path / "sx-1.csv").exists()
     assert doc["mle"]["crlb_sd"]["k_v"] == pytest.approx(fit.crlb["k_v"], rel=1e-3)
     assert np.isfinite(fit.crlb["k_v"])
 
@@ -131,6 +157,10 @@ def test_a_malformed_pilot_csv_names_the_problem(capsys, tmp_path):
         ("0,0,0,0,0,0\n0.01,0,0,x,0,0\n", "row 2 (line 3): e is 'x', not a number"),
         ("0,0,0,0,0,0\n0.01,0,0\n", "row 2 (line 3) has 3 values, the header 6"),
         ("0,0,0,0,0,0\n0,0,0,0,0,0\n", "row 2 (0 s) is not after row 1 (0 s)"),
+        # blank and comment lines are no rows (as numpy reads the file); lines still count
+        ("0,0,0,0,0,0\n\n0.01,0,0,nan,0,0\n", "row 2 (line 4): e is nan"),
+        ("# a note\n0,0,0,0,0,0\n0.01,0,0,x,0,0\n", "row 2 (line 4): e is 'x', not a number"),
+        ("0,0,0,0,0,0\n0.01,0,0,1_0,0,0\n", "row 2 (line 3): e is '1_0', not a number"),
         ("0,0,0,0,0,0\n0.01,0,0,0,0,0\n0.025,0,0,0,0,0\n0.03,0,0,0,0,0\n", "row 3 is at 0.025 s"),
     ],
 )

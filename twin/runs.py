@@ -22,7 +22,7 @@ from __future__ import annotations
 import json
 import shutil
 import warnings
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from types import TracebackType
@@ -141,33 +141,52 @@ def read_number_table(
     if bad.any():
         row, col = np.argwhere(bad)[0]
         raise RunFormatError(
-            f"{path}: row {row + 1} (line {row + 2}): {got[col]} is {data[row, col]}; "
+            f"{path}: {_where(path, int(row) + 1)}: {got[col]} is {data[row, col]}; "
             "all values must be finite"
         )
     check_values(data, got, str(path), limits)
     return data, got
 
 
-def _first_bad_line(path: Path, header: tuple[str, ...]) -> str | None:
-    """Say where a CSV of numbers first is not one after its header; None if no line is.
+def _data_lines(path: Path) -> Iterator[tuple[int, int, str]]:
+    """Yield (row, line, text) of each data row after the header, as numpy.loadtxt reads them.
 
-    Rows and lines are counted as in the other messages: row 1 is line 2.
+    Comments and blank lines are no rows; row 1 is the first data row, line 1 the header.
     """
     with path.open(encoding=ENCODING) as fh:
         fh.readline()
-        for row, line in enumerate(fh, start=1):
-            if not line.strip():
-                continue
-            cells = [c.strip() for c in line.rstrip("\n").split(",")]
-            where = f"row {row} (line {row + 1})"
-            if len(cells) != len(header):
-                return f"{where} has {len(cells)} values, the header {len(header)}"
-            for name, cell in zip(header, cells, strict=True):
-                try:
-                    float(cell)
-                except ValueError:
-                    shown = repr(cell[:40]) if cell else "empty"
-                    return f"{where}: {name} is {shown}, not a number"
+        row = 0
+        for number, line in enumerate(fh, start=2):
+            text = line.split("#", 1)[0]
+            if text.strip():
+                row += 1
+                yield row, number, text
+
+
+def _where(path: Path, row: int) -> str:
+    """Return 'row R (line L)' for data row ``row`` (from 1) of ``path``."""
+    line = next((n for r, n, _ in _data_lines(path) if r == row), row + 1)
+    return f"row {row} (line {line})"
+
+
+def _first_bad_line(path: Path, header: tuple[str, ...]) -> str | None:
+    """Say where a CSV of numbers first is not one after its header; None if no line is.
+
+    Rows and lines are counted as in the other messages (:func:`_data_lines`).
+    """
+    for row, line, text in _data_lines(path):
+        cells = [c.strip() for c in text.split(",")]
+        where = f"row {row} (line {line})"
+        if len(cells) != len(header):
+            return f"{where} has {len(cells)} values, the header {len(header)}"
+        for name, cell in zip(header, cells, strict=True):
+            try:
+                if "_" in cell:  # float() takes 1_0, loadtxt does not
+                    raise ValueError(cell)
+                float(cell)
+            except ValueError:
+                shown = repr(cell[:40]) if cell else "empty"
+                return f"{where}: {name} is {shown}, not a number"
     return None
 
 

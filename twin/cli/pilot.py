@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -189,13 +190,17 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
 
 def _cmd_run(args: argparse.Namespace) -> int:
     from twin.errors import SignalError
+    from twin.lifecycle import check_output_file
     from twin.pilot.experiment import pitch_remnant_scale
     from twin.pilot.forcing import pitch_task
     from twin.pilot.pitch import PitchPilot, open_loops, simulate_pitch, variance_decomposition
-    from twin.pilot.records import write_pilot_runs
+    from twin.pilot.records import repetition_paths, stale_repetitions, write_pilot_runs
 
     if not 0 <= args.remnant < 1:
         raise SignalError(f"--remnant must be in [0, 1); got {args.remnant}")
+    if args.out:  # every file the runs will go to, before the work
+        for path in repetition_paths(args.out, args.runs):
+            check_output_file(path)
     cfg = common.configured(args.config, args)
     pilot = PitchPilot()
     progress = common.progress(args)
@@ -221,6 +226,11 @@ def _cmd_run(args: argparse.Namespace) -> int:
                                               "theta_felt": r.theta_felt})  # fmt: skip
         if len(written) > 1:
             progress(f"{len(written)} runs written: {written[0]} ... {written[-1]}")
+        older = stale_repetitions(args.out, written)
+        if older:
+            verb = "are" if older[1:] else "is"
+            print(f"note: {', '.join(map(str, older))} beside them {verb} from an earlier run, "
+                  "not this one", file=sys.stderr)  # fmt: skip
     if args.rrd:
         from twin.record.pilot import record_pilot
 
@@ -382,7 +392,7 @@ def _cmd_identify(args: argparse.Namespace) -> int:
     from twin.errors import SignalError, UsageError
     from twin.pilot.arx import ARX_RATE_HZ, decimate, select_orders
     from twin.pilot.fc import fc_estimate
-    from twin.pilot.felt_motion import match_motion
+    from twin.pilot.felt_motion import felt_mismatch, match_motion
     from twin.pilot.forcing import pitch_task
     from twin.pilot.mle import LOWER, PARAMETERS, UPPER, fit_pitch_pilot
 
@@ -391,10 +401,21 @@ def _cmd_identify(args: argparse.Namespace) -> int:
         raise UsageError(f"{', '.join(overridden)} {'change' if overridden[1:] else 'changes'} "
                          "a configuration: give it with --config")  # fmt: skip
     given = None if args.config is None else common.configured(args.config, args)
+    seen: dict[Path, str] = {}
+    for path in args.csv:
+        resolved = Path(path).resolve()
+        if resolved in seen:
+            again = "given twice" if seen[resolved] == path else f"{seen[resolved]} again"
+            raise UsageError(f"{path} is {again}: give each repetition once")
+        seen[resolved] = path
     runs = [_pilot_window(path) for path in args.csv]
     name, d, w, rate = runs[0]
-    for other, _, ow, orate in runs[1:]:
-        if orate != rate or ow["t"].size != w["t"].size:
+    for other, od, ow, orate in runs[1:]:
+        if set(od) != set(d):
+            cols = [",".join(k for k in x if k != "rate_hz") for x in (od, d)]
+            raise SignalError(f"{other}: columns {cols[0]}; {name} has {cols[1]}: repetitions "
+                              "must have the same columns")  # fmt: skip
+        if not np.isclose(orate, rate, rtol=1e-9) or ow["t"].size != w["t"].size:
             raise SignalError(f"{other}: {orate:g} Hz, {ow['t'].size} samples in the window; "
                               f"{name} has {rate:g} Hz, {w['t'].size}: repetitions must share "
                               "the time grid")  # fmt: skip
@@ -404,12 +425,24 @@ def _cmd_identify(args: argparse.Namespace) -> int:
             raise SignalError(f"{other}: {' and '.join(differ)} {verb} from {name}'s: "
                               "repetitions must share the forcing functions (the thesis' five "
                               "runs per condition did)")  # fmt: skip
+        if np.array_equal(ow["u"], w["u"]):
+            raise SignalError(f"{other}: u is {name}'s, sample for sample: the same run twice "
+                              "is not a repetition")  # fmt: skip
     label = name if len(runs) == 1 else f"{name} and {len(runs) - 1} more"
     try:
         motion = match_motion(d, given)
     except SignalError as e:
         raise SignalError(f"{name}: {e}") from None
     cfg = motion.config
+    if motion.mismatch is not None:  # every repetition felt the motion system the first did
+        for other, od, _, _ in runs[1:]:
+            off = felt_mismatch(od["theta"], od["theta_felt"], rate, cfg)
+            if off > max(2 * motion.mismatch, motion.mismatch + 0.01):
+                raise SignalError(
+                    f"{other}: theta_felt differs from {cfg.name}'s response to theta by "
+                    f"{off:.1%} rms, {name}'s by {motion.mismatch:.1%}: repetitions must be "
+                    "flown through one motion system"
+                )
     felt_key = "theta_felt" if "theta_felt" in w else "theta"
     # the repetitions' mean: FC and ARX of the averaged run (linear: the lines' average)
     mean = {k: np.mean([r[2][k] for r in runs], axis=0) for k in ("e", "u", felt_key)}

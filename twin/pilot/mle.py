@@ -213,6 +213,9 @@ IDENTIFIABLE_REL_SD = 1 / 3
 #: Eigenvalues of the Fisher information below this fraction of the largest count as zero: the
 #: data do not see those directions (a bound of infinity for the parameters in them).
 SINGULAR_REL = 1e-12
+#: A parameter whose share of a null vector of the (unit-diagonal) information exceeds this is
+#: in the null space: unseen, an infinite bound.
+NULL_SHARE = 1e-3
 #: Most lines the forcing functions may have (Table 6.2: 10 + 10).
 MAX_LINES = 64
 #: Fewest neighbouring bins on each side of a line whose power estimates the remnant there,
@@ -384,18 +387,27 @@ def _bounds(jac: FloatArray) -> FloatArray:
     the pair's columns proportional; at t_lag = 0 a lag acts as a delay, so t_lag's column and
     tau_v's are equal) the parameters in its null space get an infinite bound
     and the others theirs from the pseudo-inverse, not a bound of zero or all infinite.
+    Singular is decided on the information scaled to unit diagonal (so not by the parameters'
+    units, nor by whether ``inv`` happens to fail: one BLAS build returned a finite bound of
+    5e4 s at t_lag = 0 where another raised), and a parameter is in the null space where its
+    share of a null vector exceeds :data:`NULL_SHARE` (the finite differences leave shares of
+    1e-6 to 1e-5 on the parameters outside it).
     """
     info = jac.T @ jac
-    eig, vec = np.linalg.eigh(info)
-    # singular by the eigenvalues, not by whether inv() fails: rounding decides that, and one
-    # BLAS returns a finite bound of 5e4 s where another raises or gives a negative variance
-    null = eig <= max(eig.max(), 0.0) * SINGULAR_REL
-    if not null.any():  # well-conditioned (cond < 1e12): inv() as before, same bits
-        var = np.diag(np.linalg.inv(info))
-        if np.all(var > 0) and np.all(np.isfinite(var)):
-            return np.sqrt(var)
-    unseen = (np.abs(vec[:, null]) > 1e-6).any(axis=1)
-    var = (vec[:, ~null] ** 2 / eig[~null]).sum(axis=1)
+    scale = np.sqrt(np.diag(info))
+    if np.all(scale > 0):
+        eig, vec = np.linalg.eigh(info / np.outer(scale, scale))
+        null = eig <= max(eig.max(), 0.0) * SINGULAR_REL
+        if not null.any():  # well-conditioned: inv() as before, the same bits
+            var = np.diag(np.linalg.inv(info))
+            if np.all(var > 0) and np.all(np.isfinite(var)):
+                return np.sqrt(var)
+    else:  # a column of zeros: that parameter moves nothing
+        scale = np.where(scale > 0, scale, 1.0)
+        eig, vec = np.linalg.eigh(info / np.outer(scale, scale))
+        null = eig <= max(eig.max(), 0.0) * SINGULAR_REL
+    unseen = (np.abs(vec[:, null]) > NULL_SHARE).any(axis=1)
+    var = (vec[:, ~null] ** 2 / eig[~null]).sum(axis=1) / scale**2
     return np.where(unseen, np.inf, np.sqrt(var))
 
 

@@ -10,6 +10,7 @@ temporary name and renamed, so a failed write leaves nothing. Repetitions of one
 
 from __future__ import annotations
 
+import re
 from contextlib import ExitStack
 from pathlib import Path
 
@@ -42,8 +43,24 @@ def repetition_paths(path: str | Path, runs: int) -> list[Path]:
     return [p.with_name(f"{p.stem}-{k}{p.suffix}") for k in range(1, runs + 1)]
 
 
+def stale_repetitions(path: str | Path, written: list[Path]) -> list[Path]:
+    """Return the files beside ``path`` named as its repetitions but not in ``written``.
+
+    Such a ``stem-K`` file was left by an earlier run, and a glob such as ``stem-*.csv``
+    would take it.
+    """
+    p = Path(path)
+    pattern = re.compile(rf"{re.escape(p.stem)}-[0-9]+")
+    return sorted(q for q in p.parent.glob(f"{p.stem}-*{p.suffix}")
+                  if pattern.fullmatch(q.stem) and q not in written)  # fmt: skip
+
+
 def write_pilot_runs(path: str | Path, columns: dict[str, FloatArray]) -> list[Path]:
     """Write each run of ``columns`` as a ``twin-pilot/1`` CSV; all of them or none.
+
+    Every file is written under a hidden name first and renamed only once all are complete, so
+    an error while writing leaves none; an error in the renaming itself (a full disk cannot
+    cause one) could leave the later files renamed.
 
     Parameters
     ----------
