@@ -502,6 +502,8 @@ def _cmd_identify(args: argparse.Namespace) -> int:
                 span = "  2-sd interval " + _interval_text(name, *mle.intervals[name])
             if name in mle.on_range_bound:
                 sd_text = "at the end of its range: no sd"
+            elif not np.isfinite(sd):  # JSON: null
+                sd_text = "no finite sd: the data do not pin it down here"
             elif own_sd[name] == sd:
                 sd_text = f"CRLB sd {sd:.4f}"
             else:
