@@ -33,6 +33,7 @@ from twin.jsonable import plain
 from twin.pilot.minima import SAME_PREDICTION, competing, distinct, vuong_z, widened
 from twin.pilot.pitch import PitchPilot, aircraft, motion_response
 from twin.pilot.profile import inward_point, likelihood_interval, profile_fit
+from twin.pilot.profile_wald import profile_wald_sd
 from twin.pilot.selection import selected_bounds
 from twin.plotting import finish, pyplot
 from twin.progress import ProgressFn
@@ -85,7 +86,9 @@ class PilotFit:
         truth may sit in any of them) and each point of ``on_range_bound`` and ``range_end``
         (a point's parameters on an end of their range count as points there), after the
         widening for the minima the data ruled out (:mod:`twin.pilot.selection`; it starts
-        from the bound at the estimate). JSON ``crlb_sd``;
+        from the bound at the estimate); for the lead-lag pair where it counts as
+        identifiable, at least the sd along the likelihood's valley
+        (:mod:`twin.pilot.profile_wald`). JSON ``crlb_sd``;
         an unbounded sd (a parameter the data do not see, or one on its range's bound) is
         infinite, null in the JSON.
     vaf_percent : float
@@ -216,6 +219,9 @@ SINGULAR_REL = 1e-12
 #: A parameter whose share of a null vector of the (unit-diagonal) information exceeds this is
 #: in the null space: unseen, an infinite bound.
 NULL_SHARE = 1e-3
+#: The parameters whose bound changes steeply along the likelihood's valley (the lead-lag
+#: pair, whose net lead the data pin down: :mod:`twin.pilot.profile_wald`), by index.
+VALLEY = (PARAMETERS.index("t_lead"), PARAMETERS.index("t_lag"))
 #: Most lines the forcing functions may have (Table 6.2: 10 + 10).
 MAX_LINES = 64
 #: Fewest neighbouring bins on each side of a line whose power estimates the remnant there,
@@ -582,6 +588,11 @@ def fit_pitch_pilot(
     spread = [np.where(np.isin(np.arange(x.size), h), 0.0, _held_bounds(problem.jacobian(x), h))
               for x, h in ((x, _on_bound(residual, x)) for x in points)]  # fmt: skip
     reported = widened(best.x, selected, points, spread)
+    for k in VALLEY:  # where the pair counts as identifiable, its bound along the valley
+        if k not in on_bound and reported[k] < IDENTIFIABLE_REL_SD * abs(best.x[k]):
+            sd = profile_wald_sd(residual, lambda v, k=k: _bounds(problem.jacobian(v))[k],
+                                 best.x, k, LOWER, UPPER)  # fmt: skip
+            reported[k] = max(reported[k], sd)
     fitted = make(best.x)
     mean_u = problem.u if problem.u.ndim == 1 else problem.u.mean(axis=0)
     u_hat = model_output(fitted, problem.ft, problem.fd, config, rate_hz, hold)
