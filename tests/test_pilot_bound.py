@@ -139,7 +139,9 @@ def test_a_lag_on_its_bound_is_not_identifiable_and_widens_what_moves_with_it():
     fit = fit_pitch_pilot(r.ft, r.fd, r.u[0], CFG)
     assert fit.competing == ()  # the widening below is the profile point's alone
     assert list(fit.on_range_bound) == ["t_lag"]
-    assert fit.unidentifiable == ("t_lag",)
+    # t_lead's sd is also taken along the likelihood's valley (twin.pilot.profile_wald), with
+    # t_lag free to leave zero there: wider here, enough to flag it from this one run
+    assert set(fit.unidentifiable) - {"t_lead"} == {"t_lag"}
     assert fit.crlb["t_lag"] == np.inf
     out = fit.to_dict()
     assert out["crlb_sd"]["t_lag"] is None and set(out["on_range_bound"]) == {"t_lag"}
@@ -150,7 +152,10 @@ def test_a_lag_on_its_bound_is_not_identifiable_and_widens_what_moves_with_it():
         est = getattr(fit.pilot, name)
         half = abs(getattr(point, name) - est) / 2
         cover = max(fit.crlb_at_estimate[name], at_point[name] + half)
-        assert fit.crlb[name] == pytest.approx(cover, rel=0.02), name
+        if name == "t_lead":  # the valley can only widen it
+            assert fit.crlb[name] >= cover * (1 - 0.02), name
+        else:
+            assert fit.crlb[name] == pytest.approx(cover, rel=0.02), name
         assert abs(est - getattr(truth, name)) <= 2 * fit.crlb[name], name
     # the widening is not cosmetic: tau_v moves with the lag along the valley
     assert fit.crlb["tau_v"] > 2 * fit.crlb_at_estimate["tau_v"]
