@@ -401,17 +401,13 @@ def _bounds(jac: FloatArray) -> FloatArray:
     """
     info = jac.T @ jac
     scale = np.sqrt(np.diag(info))
-    if np.all(scale > 0):
-        eig, vec = np.linalg.eigh(info / np.outer(scale, scale))
-        null = eig <= max(eig.max(), 0.0) * SINGULAR_REL
-        if not null.any():  # well-conditioned: inv() as before, the same bits
-            var = np.diag(np.linalg.inv(info))
-            if np.all(var > 0) and np.all(np.isfinite(var)):
-                return np.sqrt(var)
-    else:  # a column of zeros: that parameter moves nothing
-        scale = np.where(scale > 0, scale, 1.0)
-        eig, vec = np.linalg.eigh(info / np.outer(scale, scale))
-        null = eig <= max(eig.max(), 0.0) * SINGULAR_REL
+    scale = np.where(scale > 0, scale, 1.0)  # a column of zeros: its parameter moves nothing
+    eig, vec = np.linalg.eigh(info / np.outer(scale, scale))
+    null = eig <= max(eig.max(), 0.0) * SINGULAR_REL
+    if not null.any():  # well-conditioned: inv() as before, the same bits
+        var = np.diag(np.linalg.inv(info))
+        if np.all(var > 0) and np.all(np.isfinite(var)):
+            return np.sqrt(var)
     unseen = (np.abs(vec[:, null]) > NULL_SHARE).any(axis=1)
     var = (vec[:, ~null] ** 2 / eig[~null]).sum(axis=1) / scale**2
     return np.where(unseen, np.inf, np.sqrt(var))
