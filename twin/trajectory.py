@@ -27,6 +27,7 @@ from scipy.interpolate import CubicSpline
 
 from twin.errors import SignalError
 from twin.frames import DOF_NAMES
+from twin.kernels import cubic_jets
 
 FloatArray = NDArray[np.float64]
 
@@ -180,20 +181,20 @@ class Trajectory(UniformGrid):
         # interval index on the uniform grid, and the block holding it
         index = np.minimum(((inside - self.t0) * self.rate_hz).astype(int), self.n - 2)
         blocks = index // SPLINE_BLOCK
-        out = [np.empty((tt.size, self.values.shape[1])) for _ in range(order + 1)]
+        out = [np.empty((tt.size, self.values.shape[1])) for _ in range(3)]
         present = np.unique(blocks)
         for b in present:
-            sel = slice(None) if present.size == 1 else blocks == b
             spline = self.block_spline(int(b))
             first = round((spline.x[0] - self.t0) * self.rate_hz)
-            i = index[sel] - first
-            tau = (inside[sel] - spline.x[i])[:, None]
-            c3, c2, c1, c0 = spline.c[:, i]  # highest power first
-            out[0][sel] = ((c3 * tau + c2) * tau + c1) * tau + c0
-            if order >= 1:
-                out[1][sel] = (3 * c3 * tau + 2 * c2) * tau + c1
-            if order >= 2:
-                out[2][sel] = 6 * c3 * tau + 2 * c2
+            if present.size == 1:  # Horner in tau = t - x[i], highest power first
+                cubic_jets(spline.c, spline.x, index - first, inside, order, *out)
+                continue
+            sel = blocks == b
+            part = [np.empty((int(sel.sum()), self.values.shape[1])) for _ in range(3)]
+            cubic_jets(spline.c, spline.x, index[sel] - first, inside[sel], order, *part)
+            for d in range(order + 1):
+                out[d][sel] = part[d]
+        out = out[: order + 1]
         outside = (tt < self.t0) | (tt > t_end)
         if outside.any():
             for d in out[1:]:
@@ -283,6 +284,14 @@ def interp_columns(x: ArrayLike, xp: ArrayLike, fp: ArrayLike) -> FloatArray:
     """
     xx, grid, values = np.asarray(x, float), np.asarray(xp, float), np.asarray(fp, float)
     if xx.size and grid.size:
+        # a run of consecutive sample times (the IMU reading a platform at its own rate),
+        # strictly increasing one past its end: each is the last of its equals, so the same
+        # samples as below, without the search per point
+        first = max(int(np.searchsorted(grid, xx[0], "right")) - 1, 0)
+        window = grid[first : first + xx.size + 1]
+        if (window.size >= xx.size and np.array_equal(window[: xx.size], xx)
+                and bool(np.all(window[1:] > window[:-1]))):  # fmt: skip
+            return values[first : first + xx.size].copy()
         # the last of equal sample times, as numpy.interp takes it
         pos = np.clip(np.searchsorted(grid, xx, "right") - 1, 0, grid.size - 1)
         if np.array_equal(grid[pos], xx):

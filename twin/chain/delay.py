@@ -15,7 +15,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from twin.chain.block import Block, ComplexArray
-from twin.chain.jets import held, hermite_eval
+from twin.chain.jets import held, hermite_samples
 from twin.errors import SignalError
 
 FloatArray = NDArray[np.float64]
@@ -83,12 +83,11 @@ class Delay(Block):
         out = np.empty_like(jets)
         idx = depth + np.arange(n)
         for (m, f), cols in _groups(whole, frac).items():
-            late = ext[:, idx - m][:, :, cols]
             if f == 0.0:
-                out[:, :, cols] = late
-            else:
-                early = ext[:, idx - m - 1][:, :, cols]
-                out[:, :, cols] = hermite_eval(early, late, 1.0 - f, h)
+                out[:, :, cols] = ext[:, idx - m][:, :, cols]
+            else:  # the quintic from m + 1 to m samples back (hermite_eval's arithmetic)
+                at = hermite_samples(ext[:, :, cols], idx - m - 1, 1.0 - f, h)
+                out[:, :, cols] = np.moveaxis(at, 0, -1)
         return out, (whole, frac, h, ext[:, -depth:].copy())
 
 

@@ -19,6 +19,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy import signal
 
+from twin import kernels
 from twin.chain.response import GRAVITY_BASE, PlatformResponse
 from twin.errors import SignalError
 from twin.frames import rotation_matrix
@@ -43,20 +44,21 @@ def specific_force(response: PlatformResponse, mount: ArrayLike) -> FloatArray:
         Position of the sensor in the cabin frame, relative to the UGP [m].
 
     """
-    r = np.asarray(mount, dtype=float)
+    return _truth(response, mount)[:, :3]
+
+
+def _truth(
+    response: PlatformResponse, mount: ArrayLike, out: FloatArray | None = None
+) -> FloatArray:
+    """Return what an ideal IMU at ``mount`` reads: specific force and rate, shape (n, 6)."""
     T = response.rotation
     if T is None:
         T = rotation_matrix(response.pose[:, 3:])
-    f = np.einsum("nji,nj->ni", T, response.acceleration - GRAVITY_BASE)
-    w, wd = response.omega, response.omega_dot
-    return f + _cross(wd, r) + _cross(w, _cross(w, r))
-
-
-def _cross(a: FloatArray, b: FloatArray) -> FloatArray:
-    """``numpy.cross`` of (n, 3) rows with one or n vectors: the same products, less overhead."""
-    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
-    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
-    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
+    if out is None:
+        out = np.empty((len(response.t), 6))
+    kernels.specific_force(T, response.acceleration, response.omega, response.omega_dot,
+                           np.asarray(mount, dtype=float), GRAVITY_BASE, out)  # fmt: skip
+    return out
 
 
 @dataclass(frozen=True)
@@ -168,11 +170,12 @@ class VirtualImu:
 
     def feed(self, response: PlatformResponse) -> ImuRecord:
         """Return the IMU samples that fall within this chunk (and the gap before it)."""
-        truth = np.hstack([specific_force(response, self.spec.position_m), response.omega])
-        t = response.t
+        t, carried = response.t, int(self._carry is not None)
+        truth = np.empty((carried + t.size, 6))  # the last chunk's last sample first
         if self._carry is not None:
             t = np.concatenate([self._carry[0], t])
-            truth = np.vstack([self._carry[1], truth])
+            truth[0] = self._carry[1]
+        _truth(response, self.spec.position_m, truth[carried:])
         if self._next == 0 and self._carry is None:
             self._t0 = float(t[0])
         last = int(np.floor((t[-1] - self._t0) * self.spec.rate_hz + 1e-9))
@@ -180,14 +183,13 @@ class VirtualImu:
         ti = self._t0 + idx / self.spec.rate_hz
         values = interp_columns(ti, t, truth)
         self._next = last + 1
-        self._carry = (t[-1:], truth[-1:])
-        values += self._bias
+        self._carry = (t[-1:].copy(), truth[-1].copy())
+        values = np.ascontiguousarray(values)  # a fresh array: the errors go in place
         sd = np.repeat([self.spec.accel_noise_sd, self.spec.gyro_noise_sd], 3)
-        values += self._rng.standard_normal(values.shape) * sd
+        noise = self._rng.standard_normal(values.shape)
         rng = np.repeat([self.spec.accel_range, self.spec.gyro_range], 3)
-        hit = np.abs(values) > rng
-        values = np.clip(values, -rng, rng)
-        return ImuRecord(ti, values[:, :3], values[:, 3:], int(hit.any(axis=1).sum()))
+        hit = kernels.sensor_errors(values, self._bias, noise, sd, rng)
+        return ImuRecord(ti, values[:, :3], values[:, 3:], hit)
 
     @staticmethod
     def concatenate(parts: list[ImuRecord]) -> ImuRecord:

@@ -13,12 +13,12 @@ import numpy as np
 from numpy.typing import NDArray
 
 from twin.chain.limits import ActuatorLimits, LimitReport
-from twin.chain.response import PlatformResponse, rigid_motion
+from twin.chain.response import PlatformResponse
 from twin.chain.stepping import Platform, PlatformState, Reference
-from twin.frames import rotation_matrix
+from twin.kernels import limit_suspects, rigid_cabin
 from twin.platform.facts import load_facts
 from twin.platform.geometry import load_geometry
-from twin.platform.kinematics import leg_rates
+from twin.platform.kinematics import as_pose, leg_rates
 
 FloatArray = NDArray[np.float64]
 
@@ -56,13 +56,25 @@ class ReducedPlatform(Platform):
         self._radius = float(np.linalg.norm(self.geometry.cabin_gimbals, axis=1).max())
 
     def _advance(self, ref: Reference, state: PlatformState) -> PlatformResponse:
-        """Put the cabin where the reference says; count the limits it would break."""
+        """Put the cabin where the reference says; count the limits it would break.
+
+        Attitude, angular motion and leg lengths come from one compiled pass
+        (:func:`twin.kernels.rigid_cabin`: the arithmetic of
+        :func:`~twin.frames.rotation_matrix`, :func:`~twin.chain.response.rigid_motion` and
+        :func:`~twin.platform.kinematics.leg_rates`, the same bits).
+        """
         runs, m = ref.pose.shape[:2]
-        flat = [a.reshape(runs * m, 6) for a in (ref.pose, ref.rate, ref.acc)]
-        pose, rate, acc = flat
-        rotation = rotation_matrix(pose[:, 3:])  # once, for the legs, the motion and the IMU
-        lengths, _, _ = leg_rates(self.geometry, pose, rotation=rotation)
-        motion = rigid_motion(pose, rate, acc, rotation)
+        pose, rate, acc = (a.reshape(runs * m, 6) for a in (ref.pose, ref.rate, ref.acc))
+        pose = as_pose(pose)
+        angles = pose[:, 3:]  # cos and sin as rotation_matrix and angular_motion take them
+        trig = np.array([f(angles[:, k]) for k in range(3) for f in (np.cos, np.sin)])
+        n = pose.shape[0]
+        rotation, lengths = np.empty((n, 3, 3)), np.empty((n, 6))
+        omega, omega_dot = np.empty((n, 3)), np.empty((n, 3))
+        g = self.geometry
+        rigid_cabin(pose, rate, acc, trig, g.cabin_gimbals, g.base_gimbals, g.neutral_ugp,
+                    rotation, omega, omega_dot, lengths)  # fmt: skip
+        motion = (rate[:, :3].copy(), acc[:, :3].copy(), omega, omega_dot)
         self._check_limits(np.tile(ref.t, runs), pose, rate, acc, lengths, motion, rotation,
                            state.report)  # fmt: skip
         shaped = [x.reshape(runs, m, -1) for x in (*motion, lengths)]
@@ -84,30 +96,19 @@ class ReducedPlatform(Platform):
 
         Per sample, |l_dot| <= |c_dot| + |omega| r and |l_ddot| <= |c_ddot| + (|omega_dot| +
         |omega|^2) r + (|c_dot| + |omega| r)^2 / l_min, with r the largest cabin-gimbal radius
-        and l_min the shortest leg. Samples whose bounds stay inside the limits cannot break
-        them; the rest (and any out of stroke) get the exact leg velocities and accelerations.
-        The counts equal those of checking every sample exactly.
+        and l_min the shortest leg (:func:`twin.kernels.limit_suspects`). Samples whose
+        bounds stay inside the limits cannot break them; the rest (and any out of stroke) get
+        the exact leg velocities and accelerations. The counts equal those of checking every
+        sample exactly.
         """
         if t.size == 0:
             return
-        velocity, acceleration, omega, omega_dot = motion
-        w = _norm(omega)
-        v_bound = _norm(velocity) + w * self._radius
-        a_bound = (
-            _norm(acceleration)
-            + (_norm(omega_dot) + w**2) * self._radius
-            + v_bound**2 / lengths.min(axis=1)
-        )
         lim = self.limits
-        suspect = (v_bound > lim.max_velocity * 0.999) | (a_bound > lim.max_acceleration * 0.999)
-        suspect |= ((lengths < lim.leg_min) | (lengths > lim.leg_max)).any(axis=1)
+        suspect = np.empty(t.size, dtype=bool)
+        limit_suspects(*motion, lengths, self._radius, lim.max_velocity * 0.999,
+                       lim.max_acceleration * 0.999, lim.leg_min, lim.leg_max, suspect)  # fmt: skip
         rows = np.flatnonzero(suspect)
         if rows.size == 0:
             return
         _, vel, lacc = leg_rates(self.geometry, pose[rows], rate[rows], acc[rows], rotation[rows])
         lim.check(t[rows], lengths[rows], vel, lacc, report)
-
-
-def _norm(v: FloatArray) -> FloatArray:
-    """Row norms of an (n, 3) array (faster than numpy.linalg.norm for short rows)."""
-    return np.sqrt(v[:, 0] ** 2 + v[:, 1] ** 2 + v[:, 2] ** 2)
