@@ -21,22 +21,51 @@ thread runs meanwhile.
 
 from __future__ import annotations
 
+import functools
+import threading
 from collections.abc import Callable
 from typing import Any
 
-import numba
 import numpy as np
 from numpy.typing import NDArray
 
 FloatArray = NDArray[np.float64]
 
 
-def _jit(func: Callable[..., Any]) -> Any:
-    """Compile ``func`` lazily (on its first call), cached on disk where a cache can be kept."""
+class _Kernel:
+    """A numba kernel compiled on its first call.
+
+    numba (and LLVM: about 0.2 s and 100 MB) loads then, not with ``twin``: a command that runs
+    no chain does not pay for it.
+    """
+
+    def __init__(self, func: Callable[..., Any]) -> None:
+        functools.update_wrapper(self, func)
+        self._compiled: Callable[..., Any] | None = None
+        self._lock = threading.Lock()
+
+    def __call__(self, *args: Any) -> Any:
+        """Run the compiled kernel (compiling, or loading it from the cache, the first time)."""
+        compiled = self._compiled
+        if compiled is None:
+            with self._lock:
+                if self._compiled is None:
+                    self._compiled = _compile(self.__wrapped__)  # type: ignore[attr-defined]
+                compiled = self._compiled
+        return compiled(*args)
+
+
+def _compile(func: Callable[..., Any]) -> Callable[..., Any]:
+    """Compile ``func`` with numba, cached on disk where a cache can be kept."""
+    import numba
+
     try:
         return numba.njit(cache=True, nogil=True, error_model="numpy")(func)
     except RuntimeError:  # numba finds no writable cache directory: compile in each process
         return numba.njit(nogil=True, error_model="numpy")(func)
+
+
+_jit = _Kernel
 
 
 @_jit
@@ -189,24 +218,22 @@ def limit_suspects(
     (|c_dot| + |omega| r)^2 / l_min; ``max_velocity`` and ``max_acceleration`` are the
     thresholds the bounds are compared with.
     """
+
+    def norm(v: FloatArray) -> float:  # sqrt(v0^2 + v1^2 + v2^2), summed in that order
+        return np.sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
+
     for q in range(lengths.shape[0]):
-        w = _norm3(omega[q])
-        v_bound = _norm3(velocity[q]) + w * radius
+        w = norm(omega[q])
+        v_bound = norm(velocity[q]) + w * radius
         lmin = lengths[q, 0]
         stroke = False
         for leg in range(6):
             x = lengths[q, leg]
             lmin = min(lmin, x)
             stroke = stroke or x < leg_min[leg] or x > leg_max[leg]
-        a_bound = (_norm3(acceleration[q]) + (_norm3(omega_dot[q]) + w * w) * radius
+        a_bound = (norm(acceleration[q]) + (norm(omega_dot[q]) + w * w) * radius
                    + v_bound * v_bound / lmin)  # fmt: skip
         out[q] = v_bound > max_velocity or a_bound > max_acceleration or stroke
-
-
-@numba.njit(inline="always")
-def _norm3(v: FloatArray) -> float:
-    """sqrt(v0^2 + v1^2 + v2^2), summed in that order."""
-    return np.sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
 
 
 @_jit
