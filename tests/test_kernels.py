@@ -23,7 +23,7 @@ from twin.trajectory import Trajectory, interp_columns
 
 
 def same_bits(a: np.ndarray, b: np.ndarray) -> bool:
-    """Equal bit patterns (so -0.0 differs from 0.0, and NaNs must match)."""
+    """Equal bit patterns (so -0.0 differs from 0.0; a NaN is compared as its bits)."""
     a, b = np.ascontiguousarray(a, float), np.ascontiguousarray(b, float)
     return a.shape == b.shape and bool((a.view(np.int64) == b.view(np.int64)).all())
 
@@ -187,3 +187,18 @@ def test_interp_columns_on_the_sample_times_takes_the_samples():
     between = grid[10:30] + 0.3 / 819.2
     want = np.column_stack([np.interp(between, grid, values[:, k]) for k in range(6)])
     assert same_bits(interp_columns(between, grid, values), want)
+
+
+def test_the_quintic_refuses_an_interval_outside_the_samples():
+    jets = np.zeros((1, 30, 6, 3))
+    with pytest.raises(IndexError, match=r"0\.\.28"):
+        hermite_samples(jets, np.array([29]), np.array([0.5]), 0.01)
+    with pytest.raises(IndexError, match=r"got -1\.\.3"):
+        hermite_samples(jets, np.array([-1, 3]), np.array([0.5, 0.5]), 0.01)
+
+
+def test_a_kernel_pickles_as_its_name():
+    import pickle
+
+    again = pickle.loads(pickle.dumps(kernels.sensor_errors))
+    assert again is kernels.sensor_errors

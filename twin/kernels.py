@@ -9,9 +9,12 @@ products and sums in one pass per sample, with numba.
 the same operands, in the same order, and numba compiles without ``fastmath``: LLVM then
 neither reassociates nor fuses a multiply and an add (an FMA rounds once where NumPy rounds
 twice), so every result is the IEEE double NumPy gives (``tests/test_kernels.py`` compares
-them on random data, ``tests/test_stored_figures.py`` whole seeded runs). What is *not*
-moved here: transcendental functions (NumPy's SIMD ``sin`` and ``cos`` need not match the C
-library's in the last bit), matrix products (BLAS) and NumPy's pairwise sums.
+them on random data, ``tests/test_stored_figures.py`` whole seeded runs; only a NaN's sign
+bit, which IEEE leaves open, may differ). What is *not* moved here: transcendental functions
+(NumPy's SIMD ``sin``, ``cos`` and ``pow`` need not match the C library's in the last bit),
+matrix products (BLAS), NumPy's pairwise sums and an ``einsum`` over a contiguous axis (its
+order follows the CPU's SIMD lanes; one over a strided axis, as ``"nji,nj->ni"``, sums in
+order from zero and is replaced).
 
 Compiled on first use, a few seconds once per machine, and cached beside this file
 (``__pycache__``; numba falls back to its user-wide cache where that is not writable, and to
@@ -35,14 +38,19 @@ FloatArray = NDArray[np.float64]
 class _Kernel:
     """A numba kernel compiled on its first call.
 
-    numba (and LLVM: about 0.2 s and 100 MB) loads then, not with ``twin``: a command that runs
-    no chain does not pay for it.
+    numba (and LLVM: about 0.2 s and 100 MB, more with the kernels loaded) loads then, not with
+    ``twin``: a command that runs no chain does not pay for it. Pickled by name (a Dask task
+    may hold one), as a function is.
     """
 
     def __init__(self, func: Callable[..., Any]) -> None:
         functools.update_wrapper(self, func)
         self._compiled: Callable[..., Any] | None = None
         self._lock = threading.Lock()
+
+    def __reduce__(self) -> str:
+        """Pickle as the module-level name it is bound to."""
+        return self.__qualname__
 
     def __call__(self, *args: Any) -> Any:
         """Run the compiled kernel (compiling, or loading it from the cache, the first time)."""

@@ -283,7 +283,7 @@ def interp_columns(x: ArrayLike, xp: ArrayLike, fp: ArrayLike) -> FloatArray:
 
     """
     xx, grid, values = np.asarray(x, float), np.asarray(xp, float), np.asarray(fp, float)
-    if xx.size and grid.size:
+    if xx.ndim == 1 and grid.ndim == 1 and xx.size and grid.size:
         # a run of consecutive sample times (the IMU reading a platform at its own rate),
         # strictly increasing one past its end: each is the last of its equals, so the same
         # samples as below, without the search per point

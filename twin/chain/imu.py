@@ -54,10 +54,13 @@ def _truth(
     T = response.rotation
     if T is None:
         T = rotation_matrix(response.pose[:, 3:])
+    r = np.asarray(mount, dtype=float)
+    if r.shape != (3,):
+        raise SignalError(f"an IMU mount is one point, shape (3,) [m]; got shape {r.shape}")
     if out is None:
         out = np.empty((len(response.t), 6))
     kernels.specific_force(T, response.acceleration, response.omega, response.omega_dot,
-                           np.asarray(mount, dtype=float), GRAVITY_BASE, out)  # fmt: skip
+                           r, GRAVITY_BASE, out)  # fmt: skip
     return out
 
 

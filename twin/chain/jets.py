@@ -136,6 +136,13 @@ def hermite_samples(jets: FloatArray, k: NDArray[np.intp], s: FloatArray, h: flo
     """
     jets = np.ascontiguousarray(jets, dtype=float)
     kk = np.ascontiguousarray(k, dtype=np.intp)
+    if kk.ndim != 1:
+        raise IndexError(f"interval indices must be 1-D; got shape {kk.shape}")
+    if kk.size and (kk.min() < 0 or kk.max() >= jets.shape[1] - 1):
+        raise IndexError(
+            f"interval indices must be in 0..{jets.shape[1] - 2} (from sample k to k + 1 of "
+            f"{jets.shape[1]}); got {kk.min()}..{kk.max()}"
+        )
     ss = np.asarray(s, float)
     unscaled = _weights_unscaled(ss, 2)  # (m, 3, 6), or (3, 6) for one s at every point
     if ss.ndim == 0:
