@@ -15,8 +15,8 @@ from twin import kernels
 from twin.chain.imu import specific_force
 from twin.chain.jets import hermite_eval, hermite_samples
 from twin.chain.reduced import ReducedPlatform
-from twin.chain.response import GRAVITY_BASE, PlatformResponse, rigid_motion
-from twin.frames import rotation_matrix
+from twin.chain.response import GRAVITY_BASE, PlatformResponse
+from twin.frames import angular_motion, rotation_matrix
 from twin.platform.geometry import load_geometry
 from twin.platform.kinematics import leg_rates
 from twin.trajectory import Trajectory, interp_columns
@@ -32,6 +32,14 @@ def _cross(a, b):
     a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
     b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
     return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
+
+
+def rigid_motion(pose, rate, acc, T):
+    """The NumPy the rigid-cabin kernel replaced: velocities, and omega in cabin axes (Eq A.4)."""
+    omega_b, omega_dot_b = angular_motion(pose[:, 3:], rate[:, 3:], acc[:, 3:])
+    omega = np.einsum("nji,nj->ni", T, omega_b)
+    omega_dot = np.einsum("nji,nj->ni", T, omega_dot_b)
+    return rate[:, :3].copy(), acc[:, :3].copy(), omega, omega_dot
 
 
 def test_same_bits_tells_signed_zeros_apart():

@@ -148,8 +148,8 @@ def rigid_cabin(
     """Compute a rigid cabin's attitude, angular motion and leg lengths along a pose path.
 
     The arithmetic of :func:`twin.frames.rotation_matrix` (T, Eq A.2),
-    :func:`twin.frames.angular_motion` and the ``einsum`` of
-    :func:`twin.chain.response.rigid_motion` (omega and omega_dot in cabin axes, Eq A.4),
+    :func:`twin.frames.angular_motion` turned into cabin axes as
+    ``einsum("nji,nj->ni", T, omega_b)`` (omega and omega_dot, Eq A.4),
     and the lengths of :func:`twin.platform.kinematics.leg_rates`, per sample.
 
     Parameters

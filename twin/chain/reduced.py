@@ -60,7 +60,7 @@ class ReducedPlatform(Platform):
 
         Attitude, angular motion and leg lengths come from one compiled pass
         (:func:`twin.kernels.rigid_cabin`: the arithmetic of
-        :func:`~twin.frames.rotation_matrix`, :func:`~twin.chain.response.rigid_motion` and
+        :func:`~twin.frames.rotation_matrix`, :func:`~twin.frames.angular_motion` and
         :func:`~twin.platform.kinematics.leg_rates`, the same bits).
         """
         runs, m = ref.pose.shape[:2]

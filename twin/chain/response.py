@@ -8,8 +8,6 @@ from dataclasses import dataclass, fields
 import numpy as np
 from numpy.typing import NDArray
 
-from twin.frames import angular_motion, rotation_matrix
-
 FloatArray = NDArray[np.float64]
 
 #: Gravity vector in the thesis base frame (z down) [m/s^2].
@@ -85,28 +83,3 @@ class PlatformResponse:
             missing = any(a is None for a in arrays)  # e.g. a rotation some chunks dropped
             out[f.name] = None if missing else np.concatenate(arrays)
         return cls(**out)
-
-
-def rigid_motion(
-    pose: FloatArray, rate: FloatArray, acc: FloatArray, rotation: FloatArray | None = None
-) -> tuple[FloatArray, ...]:
-    """Cabin velocities and accelerations of a pose trajectory with exact derivatives.
-
-    Parameters
-    ----------
-    pose, rate, acc : ndarray, shape (n, 6)
-        Pose offsets and their first and second time derivatives (Euler-angle rates).
-    rotation : ndarray, shape (n, 3, 3), optional
-        T_c^b of the poses if already computed.
-
-    Returns
-    -------
-    velocity, acceleration, omega, omega_dot : ndarray, shape (n, 3)
-        Linear (base axes) and angular (cabin axes, Eq A.4) motion.
-
-    """
-    T = rotation_matrix(pose[:, 3:]) if rotation is None else rotation
-    omega_b, omega_dot_b = angular_motion(pose[:, 3:], rate[:, 3:], acc[:, 3:])
-    omega = np.einsum("nji,nj->ni", T, omega_b)
-    omega_dot = np.einsum("nji,nj->ni", T, omega_dot_b)
-    return rate[:, :3].copy(), acc[:, :3].copy(), omega, omega_dot
