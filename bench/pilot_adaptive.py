@@ -41,6 +41,16 @@
    measures (Table 6.7: F 35.8, lower behind the filter). And Table 6.7's tau_m (F 140.1,
    "close to zero" behind the filter): the adapted pilot of conditions 1 and 5 flown 20 times
    each (15 % remnant) and fitted: is tau_m identifiable, and where do its estimates land?
+6. Designing the next experiment on the twin's subjects (``--design-only``; about 40 min
+   with ``--design-subjects 18``):
+   section 1's 20 populations pooled (180 subjects, :mod:`twin.pilot.design`) tell how often
+   an experiment of N subjects agrees with the thesis on each effect, and from how many
+   subjects it agrees on all of the acceptance's at once (every filter effect of the JSON
+   contract found, delay and noise not found on either crossover) in 80 %; then
+   ``DESIGN_CHECK_POPULATIONS`` fresh populations (seeds from 100) of ``--design-subjects``
+   subjects (default: the fewest with which it does, or nine) are flown, and their
+   agreements counted beside the prediction: is the design right about experiments it did
+   not pool?
 """
 
 import argparse
@@ -54,10 +64,17 @@ from statsmodels.stats.proportion import proportion_confint
 
 from twin.chain.config import motion_system
 from twin.pilot.adapt import ADAPTED, EQUALISATION, SPEED_ACCURACY, adapt
+from twin.pilot.design import ACCEPTANCE, MAX_SUBJECTS, Design, design
 from twin.pilot.experiment import pitch_remnant_scale
 from twin.pilot.mle import PARAMETERS, bound_at, fit_pitch_pilot
 from twin.pilot.pitch import PitchPilot, simulate_pitch
-from twin.pilot.population import ADAPTATION_SD, filter_effect, run_population, subjects
+from twin.pilot.population import (
+    ADAPTATION_SD,
+    PopulationResult,
+    filter_effect,
+    run_population,
+    subjects,
+)
 from twin.pilot.replication import run_populations
 from twin.tasks.engine import Engine
 from twin.thesis import TABLES_6_4_TO_6_7
@@ -81,6 +98,8 @@ VISUAL_DELAY = (
 )
 #: Populations of section 5.
 VISUAL_DELAY_POPULATIONS = 10
+#: Fresh populations flown to check section 6's design, and their first seed.
+DESIGN_CHECK_POPULATIONS, DESIGN_CHECK_SEED = 20, 100
 
 
 def main(
@@ -104,7 +123,7 @@ def main(
     run_population(6, 0, scheduler="local:2")
     wall = time.perf_counter() - t0
     print(f"adaptive experiment, 6 subjects, 2 workers: {wall:.1f} s (goal <= 60 s)")
-    populations(ADAPTATION_SD, POPULATIONS)
+    design_check(populations(ADAPTATION_SD, POPULATIONS))
     populations(ADAPTATION_SD / 2, POPULATIONS // 2)
     subject_effects()
     coverage(runs, intervals, coverage_seed)
@@ -112,11 +131,11 @@ def main(
     visual_delay()
 
 
-def populations(sd: float, n: int, adapted: tuple[str, ...] = ADAPTED) -> None:
+def populations(sd: float, n: int, adapted: tuple[str, ...] = ADAPTED) -> list[PopulationResult]:
     """Section 1: agreement with Tables 6.4-6.7 over seeded populations, beside the agreement
-    the thesis' own F predicts (:mod:`twin.pilot.replication`)."""
-    rep, _ = run_populations(n, SUBJECTS, 0, scheduler="local:2", run_to_run_sd=sd,
-                             adapted=adapted)  # fmt: skip
+    the thesis' own F predicts (:mod:`twin.pilot.replication`); returns the populations."""
+    rep, results = run_populations(n, SUBJECTS, 0, scheduler="local:2", run_to_run_sd=sd,
+                                   adapted=adapted)  # fmt: skip
     full = sum(e.agreed == e.populations for e in rep.effects)
     print(f"{n} populations of {SUBJECTS} subjects (the thesis' nine), run-to-run variation "
           f"{sd:.0%}: {full} of {len(rep.effects)} main effects agree with Tables 6.4-6.7 in "
@@ -126,6 +145,51 @@ def populations(sd: float, n: int, adapted: tuple[str, ...] = ADAPTED) -> None:
         Path("out").mkdir(exist_ok=True)
         rep.plot(FIGURE)
         print(f"figure: {FIGURE}")
+    return results
+
+
+def design_check(pool: list[PopulationResult], subjects_n: int | None = None) -> None:
+    """Section 6: the design from the pooled populations, checked on fresh populations."""
+    plan = design(pool)
+    print(plan.format_table())
+    Path("out").mkdir(exist_ok=True)
+    plan.plot("out/bench-chapter6-subjects.png")
+    win = plan.acceptance_window()
+    n = subjects_n or (win[0] if win else SUBJECTS)
+    plan.at(n)  # refuses a size beyond the design before anything flies
+    t0 = time.perf_counter()
+    _, fresh = run_populations(DESIGN_CHECK_POPULATIONS, n, DESIGN_CHECK_SEED,
+                               scheduler="local:2")  # fmt: skip
+    print(f"\n{DESIGN_CHECK_POPULATIONS} fresh populations of {n} subjects (seeds "
+          f"{DESIGN_CHECK_SEED}-{DESIGN_CHECK_SEED + DESIGN_CHECK_POPULATIONS - 1}, "
+          f"{time.perf_counter() - t0:.0f} s)")  # fmt: skip
+    compare_design(plan, fresh)
+
+
+def compare_design(plan: Design, fresh: list[PopulationResult]) -> None:
+    """Print the agreements of ``fresh`` populations beside ``plan``'s prediction for them.
+
+    The prediction with its 5-95 % over the pool's resamples, the flown share with its 95 %
+    Wilson interval; ``<- apart`` where the two intervals do not meet.
+    """
+    n = len({r["subject"] for r in fresh[0].rows})
+    agree = [r.agreement() for r in fresh]
+
+    def line(name: str, predicted: float, spread: np.ndarray, hits: int) -> str:
+        lo, hi = proportion_confint(hits, len(fresh), method="wilson")
+        apart = spread[0] > hi + 1e-9 or spread[1] < lo - 1e-9
+        return (f"  {name:37s} predicted {predicted:4.2f} ({spread[0]:.2f}-{spread[1]:.2f})  "
+                f"flown {hits:2d}/{len(fresh)} ({lo:.2f}-{hi:.2f})"
+                + ("  <- apart" if apart else ""))  # fmt: skip
+
+    print(f"agreements of {len(fresh)} populations of {n} beside the design's prediction "
+          "(5-95 % over the pool's resamples; flown: 95 % Wilson interval)")  # fmt: skip
+    spread = plan.spread_at(n)
+    for k, (m, f) in enumerate(plan.effects):
+        print(line(f"{m} {f}", plan.at(n)[k], spread[:, k], sum(a[m][f] for a in agree)))
+    both = sum(all(a[m][f] for m, f in ACCEPTANCE) for a in agree)
+    print(line("acceptance, all at once", plan.acceptance_at(n),
+               plan.acceptance_spread[:, n - plan.sizes[0]], both))  # fmt: skip
 
 
 def visual_delay() -> None:
@@ -329,16 +393,28 @@ if __name__ == "__main__":
                         help="section 5 only (about 25 min)")  # fmt: skip
     parser.add_argument("--motion-delay-only", action="store_true",
                         help="section 5's tau_m fits only (about 1.5 min)")  # fmt: skip
+    parser.add_argument("--design-only", action="store_true",
+                        help="section 1's populations and section 6's design and its check "
+                             "(about 45 min)")  # fmt: skip
+    parser.add_argument("--design-subjects", type=int, default=None,
+                        help="subjects per population of section 6's check (default: from "
+                             "how many the design says the acceptance holds in 80 %%, or "
+                             "9)")  # fmt: skip
     parser.add_argument("--no-intervals", action="store_true",
                         help="fit without the likelihood-ratio intervals (and their rule): "
                              "about 6x faster")  # fmt: skip
     args = parser.parse_args()
     if args.coverage_runs < 1:
         parser.error(f"--coverage-runs must be at least 1; got {args.coverage_runs}")
+    if args.design_subjects is not None and not 2 <= args.design_subjects <= MAX_SUBJECTS:
+        parser.error(f"--design-subjects must be 2 to {MAX_SUBJECTS}; got {args.design_subjects}")
     if args.coverage_seed < 0:
         parser.error(f"--coverage-seed must be a seed >= 0; got {args.coverage_seed}")
     if args.motion_delay_only:
         motion_delay()
+        raise SystemExit(0)
+    if args.design_only:
+        design_check(populations(ADAPTATION_SD, POPULATIONS), args.design_subjects)
         raise SystemExit(0)
     main(
         args.coverage_runs,

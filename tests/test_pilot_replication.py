@@ -7,15 +7,15 @@ import json
 
 import numpy as np
 import pytest
+from planted import planted_rows
 from scipy import stats
 
 from twin.cli.main import main
 from twin.errors import SignalError
 from twin.pilot import population, replication
 from twin.pilot.adapt import ADAPTED
-from twin.pilot.population import COMPARED, PopulationResult, anova, compared, levels
+from twin.pilot.population import PopulationResult, anova, compared
 from twin.pilot.replication import agreement_probability, replicate, run_populations
-from twin.thesis import TABLE_6_3, TABLES_6_4_TO_6_7
 
 
 @pytest.mark.parametrize(("f", "significant"), [(5.98, True), (15.0, True), (4.67, False),
@@ -42,31 +42,6 @@ def test_the_agreement_probability_grows_with_the_subjects_and_refuses_bad_input
             agreement_probability(bad, True)
     with pytest.raises(SignalError, match="at least 2 subjects"):
         agreement_probability(5.0, True, 1)
-
-
-#: Noise per cell of the planted rows; a factor's marginal means (four cells each) then differ
-#: by noise of sd NOISE * sqrt(1 / 2) per subject.
-NOISE = 0.3
-
-
-def planted_rows(seed: int, subjects: int = 9, reversed_measure: str = "k_v") -> list[dict]:
-    """Rows with every filter effect planted at the thesis' own standardised size and direction
-    (d_z = sqrt(F / 9): the effect is d_z times the marginal difference's noise sd), no delay
-    or noise effect, and ``reversed_measure``'s filter effect reversed; subject offsets sd 1."""
-    rng = np.random.default_rng(seed)
-    rows = []
-    for s in range(1, subjects + 1):
-        offset = rng.normal(0, 1)
-        for n in TABLE_6_3:
-            lv = levels(n)
-            values = {}
-            for m in COMPARED:
-                f, direction = TABLES_6_4_TO_6_7[m]["filter"]
-                size = np.sqrt(f / 9) * NOISE * np.sqrt(0.5) * (-1.0 if direction == "-" else 1.0)
-                size *= -1.0 if m == reversed_measure else 1.0
-                values[m] = offset + size * lv["filter"] + rng.normal(0, NOISE)
-            rows.append({"subject": s, "condition": n, **lv, **values})
-    return rows
 
 
 def test_a_replication_of_planted_populations_flags_only_a_reversed_effect(tmp_path):
@@ -199,7 +174,12 @@ def test_cli_populations_json_and_figure(monkeypatch, tmp_path, capsys):
     default = set(compared(ADAPTED))  # tau_v only where the subjects adapt it
     assert set(doc["per_population"][0]["anova"]) == set(doc["replication"]) == default
     assert doc["replication"]["k_v"]["filter"]["populations"] == 2
-    assert png.stat().st_size > 10_000
+    assert doc["design"] is None  # six subjects pooled: too few to design on
+    assert png.stat().st_size > 10_000 and not (tmp_path / "rep-subjects.png").exists()
     assert main(["pilot", "experiment", "--pilot", "adaptive", "--populations", "2",
                  "--subjects", "3", "--scheduler", "inline"]) == 0  # fmt: skip
-    assert "calibrated for populations of 9, the thesis' size; with 3" in capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert "calibrated for populations of 9, the thesis' size; with 3" in out
+    assert (
+        "(no design of experiments: it pools at least 40 subjects; these populations have 6)" in out
+    )

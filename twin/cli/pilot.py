@@ -87,7 +87,8 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
         help="save the measures per condition as Fig 6.5-6.9 (fixed pilot); with --pilot "
         "adaptive, the ANOVA's effects beside the thesis' here and the measures per condition "
         "over subjects in PNG's name + '-conditions.png'; with --populations, the standardised "
-        "effects over populations beside the thesis'",
+        "effects over populations beside the thesis', and in PNG's name + '-subjects.png' how "
+        "often an experiment of 2 to 60 subjects finds each filter effect",
     )
     exp.add_argument(
         "--pilot",
@@ -108,8 +109,9 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
         type=common.count(1, MAX_POPULATIONS),
         help="with --pilot adaptive: seeded populations (seeds SEED, SEED + 1, ...); from 2 on, "
         "each effect's standardised size over populations (median, 5-95 %%) beside the "
-        "thesis', and whether the thesis is a plausible draw of them (default 1; 20 for a "
-        "distribution: about 23 min on two cores)",
+        "thesis', and whether the thesis is a plausible draw of them; with 40 subjects or "
+        "more in all, how many subjects an experiment needs to find each effect "
+        "(twin.pilot.design) (default 1; 20 for a distribution: about 13 min on two cores)",
     )
     exp.set_defaults(func=_cmd_experiment)
     ada = cmds.add_parser(
@@ -340,18 +342,31 @@ def _cmd_experiment(args: argparse.Namespace) -> int:
 
 
 def _replication(args: argparse.Namespace) -> int:
+    from twin.pilot.design import MIN_POOL, design
     from twin.pilot.replication import run_populations
 
     with common.engine(args) as engine:
         rep, results = run_populations(args.populations, args.subjects, args.seed,
                                        common.progress(args), engine, _adapted(args))  # fmt: skip
+    pooled = args.populations * args.subjects
+    plan = design(results) if pooled >= MIN_POOL else None
     if args.plot:
-        pyplot().close(rep.plot(args.plot))
+        plt = pyplot()
+        plt.close(rep.plot(args.plot))
+        if plan is not None:
+            plot = Path(args.plot)
+            plt.close(plan.plot(str(plot.with_name(f"{plot.stem}-subjects.png"))))
     if args.json:  # the summary, and each population's ANOVA as a single one prints it
         per = [{"seed": r.seed, "anova": r.anova, "agreement": r.agreement()} for r in results]
-        print(json.dumps({**rep.to_dict(), "per_population": per}, indent=2))
+        out = {**rep.to_dict(), "per_population": per,
+               "design": None if plan is None else plan.to_dict()}  # fmt: skip
+        print(json.dumps(out, indent=2))
     else:
         print(rep.format_table())
+        print()
+        print(plan.format_table() if plan is not None else
+              f"(no design of experiments: it pools at least {MIN_POOL} subjects; these "
+              f"populations have {pooled})")  # fmt: skip
     return 0
 
 

@@ -34,6 +34,9 @@ compares, per measure and main effect, the twin's populations with the thesis' o
   Not a test: the thesis' F is itself a draw (its 95 % interval for var(u)'s F 15.0 allows
   agreement probabilities from 0.17 to 1).
 
+The converse, how many subjects an experiment needs to find each effect if the twin is
+right, pools the populations' subjects: :mod:`twin.pilot.design`.
+
 Examples
 --------
 >>> round(agreement_probability(5.98, significant=True), 2)   # Table 6.5, target crossover
@@ -371,6 +374,35 @@ def _seed_list(seeds: Sequence[int]) -> str:
     return ", ".join(map(str, s))
 
 
+def alike(results: Sequence[PopulationResult]) -> int:
+    """Check that populations are distinct draws flown alike; return their subjects each.
+
+    Raises
+    ------
+    SignalError
+        No populations, repeated seeds, or populations that differ in subjects, adapted
+        parameters, run-to-run variation or measures.
+
+    """
+    if not results:
+        raise SignalError("no populations given: fly some first")
+    seeds = [r.seed for r in results]
+    if len(set(seeds)) != len(seeds):
+        raise SignalError(
+            f"a replication or design needs distinct populations; seeds {seeds} repeat"
+        )
+    first = results[0]
+    subjects = len({r["subject"] for r in first.rows})
+    want = (subjects, first.adapted, first.run_to_run_sd, tuple(first.anova))
+    for r in results[1:]:
+        got = (len({row["subject"] for row in r.rows}), r.adapted, r.run_to_run_sd,
+               tuple(r.anova))  # fmt: skip
+        if got != want:
+            raise SignalError(f"populations differ in subjects, adapted parameters, run-to-run "
+                              f"variation or measures: {got} vs {want}")  # fmt: skip
+    return subjects
+
+
 def replicate(results: Sequence[PopulationResult]) -> Replication:
     """Summarise populations flown with the same settings (:func:`run_populations`).
 
@@ -393,18 +425,9 @@ def replicate(results: Sequence[PopulationResult]) -> Replication:
     """
     if len(results) < 2:
         raise SignalError(f"a replication needs at least 2 populations; got {len(results)}")
-    seeds = [r.seed for r in results]
-    if len(set(seeds)) != len(seeds):
-        raise SignalError(f"a replication needs distinct populations; seeds {seeds} repeat")
+    subjects = alike(results)
     first = results[0]
-    subjects = len({r["subject"] for r in first.rows})
-    want = (subjects, first.adapted, first.run_to_run_sd, tuple(first.anova))
-    for r in results[1:]:
-        got = (len({row["subject"] for row in r.rows}), r.adapted, r.run_to_run_sd,
-               tuple(r.anova))  # fmt: skip
-        if got != want:
-            raise SignalError(f"populations differ in subjects, adapted parameters, run-to-run "
-                              f"variation or measures: {got} vs {want}")  # fmt: skip
+    seeds = [r.seed for r in results]
     agreements = [r.agreement() for r in results]
     effects = []
     for measure in first.anova:
