@@ -388,8 +388,8 @@ class Design:
         ]
         for k, (m, f) in enumerate(self.effects):
             if self.found(k):
-                lo, hi = self.needed_spread(k)
-                twin = f"{_count(self.needed(k), last)} ({_count(lo, last)}-{_count(hi, last)})"
+                lo, hi = (_count(x, last) for x in self.needed_spread(k))
+                twin = _count(self.needed(k), last) + (f" ({lo} to {hi})" if lo != hi else "")
                 th = _count(self.thesis_needed(k), last)
             else:  # the thesis found no effect: up to how many subjects the twin's stays out
                 lost = self.lost_from(k)
