@@ -444,7 +444,7 @@ if __name__ == "__main__":
                              "thesis did (about 70 s)")  # fmt: skip
     parser.add_argument("--design-only", action="store_true",
                         help="section 1's populations and section 6's design and its check "
-                             "(about 45 min)")  # fmt: skip
+                             "(about 40 min with --design-subjects 18)")  # fmt: skip
     parser.add_argument("--design-subjects", type=int, default=None,
                         help="subjects per population of section 6's check (default: from "
                              "how many the design says the acceptance holds in 80 %%, or "

@@ -110,8 +110,9 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
         help="with --pilot adaptive: seeded populations (seeds SEED, SEED + 1, ...); from 2 on, "
         "each effect's standardised size over populations (median, 5-95 %%) beside the "
         "thesis', and whether the thesis is a plausible draw of them; with 40 subjects or "
-        "more in all, how many subjects an experiment needs to find each effect "
-        "(twin.pilot.design) (default 1; 20 for a distribution: about 13 min on two cores)",
+        "more in all, how many subjects an experiment needs to find each effect, for "
+        "experiments of up to half the subjects flown, at most 60 (twin.pilot.design) "
+        "(default 1; 20 for a distribution: about 13 min on two cores)",
     )
     exp.set_defaults(func=_cmd_experiment)
     ada = cmds.add_parser(

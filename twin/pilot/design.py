@@ -3,7 +3,7 @@
 The replication (:mod:`twin.pilot.replication`) asks whether the thesis' nine participants are
 a plausible draw of the twin's populations. The engineer planning the next experiment asks the
 converse: if the twin is right, how many participants will show each effect (p < 0.05 in the
-twin's direction), and will the effects the thesis did not find stay out? And one population of
+thesis' direction), and will the effects the thesis did not find stay out? And one population of
 nine that misses an effect, or the thesis' experiment itself, is it a surprise?
 
 Each main effect of the 2 x 2 x 2 within-subject design (Table 6.3) is a paired comparison:
