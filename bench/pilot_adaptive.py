@@ -193,7 +193,7 @@ def compare_design(plan: Design, fresh: list[PopulationResult]) -> None:
         print(line(f"{m} {f}", plan.at(n)[k], spread[:, k], sum(a[m][f] for a in agree)))
     both = sum(all(a[m][f] for m, f in ACCEPTANCE) for a in agree)
     print(line("acceptance, all at once", plan.acceptance_at(n),
-               plan.acceptance_spread[:, n - plan.sizes[0]], both))  # fmt: skip
+               plan.acceptance_spread_at(n), both))  # fmt: skip
 
 
 def visual_delay() -> None:
@@ -230,11 +230,10 @@ def measured_as_the_thesis(subject: Subject) -> dict[str, dict[str, float]]:
     of its condition-1 control power) and identified as the thesis did: the MLE on the
     averaged repetitions. Returns per condition the estimates and what was unidentifiable."""
     effect = filter_effect(subject)
+    pilots = [replace(subject.limitations, **{k: effect[k][i] for k in ADAPTED}) for i in (0, 1)]
+    scale = pitch_remnant_scale(pilots[0])
     out = {}
-    scale = None
-    for i, n in enumerate((1, 5)):
-        pilot = replace(subject.limitations, **{k: effect[k][i] for k in ADAPTED})
-        scale = pitch_remnant_scale(pilot) if scale is None else scale
+    for pilot, n in zip(pilots, (1, 5), strict=True):
         config = motion_system(f"condition-{n}")
         runs = simulate_pitch(pilot, config, REPETITIONS, 1000 * subject.number + n, scale)
         fit = fit_pitch_pilot(runs.ft, runs.fd, runs.u, config)

@@ -125,6 +125,7 @@ def test_a_design_on_planted_subjects_recovers_their_effects(planted, tmp_path):
         lo, hi = d.spread_at(9)[:, k]
         assert lo - 0.1 <= d.at(9)[k] <= hi + 0.1, (m, f)
     target = d.effects.index(("crossover_target_rad_s", "filter"))
+    assert np.array_equal(d.acceptance_spread_at(9), d.acceptance_spread[:, 7])
     lo, hi = d.spread_at(9)[:, target]
     assert hi - lo > 0.05  # F 5.98 at nine: which subjects the pool holds matters
     assert d.needed(target) is not None and d.needed(target) > 9  # F 5.98: 57 % at nine

@@ -283,8 +283,8 @@ class Design:
         """
         if not self.found(k):
             return None, None
-        hi, lo = (subjects_for(self.spread[i, :, k], power, self.sizes[0]) for i in (1, 0))
-        return hi, lo
+        fewest, most = (subjects_for(self.spread[i, :, k], power, self.sizes[0]) for i in (1, 0))
+        return fewest, most
 
     def lost_from(self, k: int, power: float = POWER) -> int | None:
         """Subjects from which an effect the thesis did not find no longer agrees at ``power``.
@@ -332,6 +332,11 @@ class Design:
         self.at(n)  # checks n
         return self.spread[:, n - self.sizes[0]]
 
+    def acceptance_spread_at(self, n: int) -> FloatArray:
+        """5 % and 95 % of the acceptance's probability for ``n`` subjects, shape (2,)."""
+        self.at(n)  # checks n
+        return self.acceptance_spread[:, n - self.sizes[0]]
+
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready: ``{"design": {MEASURE: {FACTOR: {...}}}, "acceptance": {...}, ...}``.
 
@@ -361,7 +366,7 @@ class Design:
             }  # fmt: skip
         win = self.acceptance_window()
         nine = self.acceptance_at(THESIS_SUBJECTS) if THESIS_SUBJECTS in self.sizes else None
-        flown = None if n is None else self.acceptance_spread[:, n - 2].tolist()
+        flown = None if n is None else self.acceptance_spread_at(n).tolist()
         return {"design": out, "pool": self.differences.shape[0],
                 "populations": self.populations, "subjects_per_population": self.subjects,
                 "draws": self.draws, "sizes": [self.sizes[0], self.sizes[-1]],
@@ -409,7 +414,7 @@ class Design:
         if n is None:
             flown = "-"
         else:
-            lo_a, hi_a = self.acceptance_spread[:, n - 2]
+            lo_a, hi_a = self.acceptance_spread_at(n)
             flown = f"{self.acceptance_at(n):.0%}, {lo_a:.0%}-{hi_a:.0%}"
         nine = self.acceptance_at(THESIS_SUBJECTS) if THESIS_SUBJECTS in self.sizes else None
         lines += [
