@@ -28,7 +28,7 @@ from numpy.typing import NDArray
 from twin.chain.config import MotionSystem, motion_system
 from twin.chain.imu import ImuRecord, ImuSpec, postprocess
 from twin.chain.simulate import MODELS, Run, Simulation, prepare
-from twin.errors import SignalError, UnknownPlatformError
+from twin.errors import RunFormatError, SignalError, UnknownPlatformError
 from twin.frames import DOF_NAMES, dof_index
 from twin.runs import RecordedRun, read_run
 from twin.signals import check_signal
@@ -38,6 +38,11 @@ FloatArray = NDArray[np.float64]
 G = 9.81
 #: Rate of the post-processed signals (App. C.2.3) [Hz].
 ANALYSIS_RATE_HZ = 100.0
+#: Least time [s] the IMU record and the commands must cover together to be measured.
+MIN_OVERLAP_S = 1.0
+#: A command's first or last speed or acceleration above this share of the run's largest is
+#: "moving".
+MOVING_REL = 0.01
 
 
 @dataclass(frozen=True, eq=False)
@@ -73,11 +78,30 @@ class Measurement:
 def from_imu(
     commands: Trajectory, imu: ImuRecord, source: str, config: MotionSystem, meta: dict
 ) -> Measurement:
-    """Post-process IMU samples (App. C.2.3) and pair them with the commanded accelerations."""
+    """Post-process IMU samples (App. C.2.3) and pair them with the commanded accelerations.
+
+    Only the time both cover is kept: a recorder that logs the IMU before the commands start
+    or after they end (a platform at rest) is common, and the commands say nothing there.
+
+    Raises
+    ------
+    SignalError
+        The two cover less than :data:`MIN_OVERLAP_S` together.
+
+    """
     p = postprocess(imu, ANALYSIS_RATE_HZ)
-    t = p.t
+    start, end = commands.t0, commands.t0 + commands.duration
+    keep = (p.t >= start - 1e-9) & (p.t <= end + 1e-9)
+    if p.t[keep].size < 2 or p.t[keep][-1] - p.t[keep][0] < MIN_OVERLAP_S:
+        raise SignalError(
+            f"{source}: the IMU record ({p.t[0]:.2f}-{p.t[-1]:.2f} s) and the commands "
+            f"({start:.2f}-{end:.2f} s) overlap for less than {MIN_OVERLAP_S:g} s; both must "
+            "cover the test, on one clock"
+        )
+    t = p.t[keep]
     acc = commands.at(t, 2)
-    measured = np.hstack([p.accel + np.array([0.0, 0.0, G]), p.angular_acceleration])
+    measured = np.hstack([p.accel[keep] + np.array([0.0, 0.0, G]),
+                          p.angular_acceleration[keep]])  # fmt: skip
     return Measurement(t, acc, measured, commands, source, config, meta)
 
 
@@ -93,8 +117,60 @@ def from_run(run: RecordedRun | str | Path) -> Measurement:
     """Return the :class:`Measurement` of a recorded ``twin-run/1`` folder (validated)."""
     rec = run if isinstance(run, RecordedRun) else read_run(run)
     config = run_config(rec)
+    _check_not_cut(rec)
     imu = ImuRecord(rec.imu_t, rec.imu[:, :3], rec.imu[:, 3:])
-    return from_imu(rec.commands, imu, str(rec.path), config, dict(rec.meta))
+    m = from_imu(rec.commands, imu, str(rec.path), config, dict(rec.meta))
+    window = m.meta.get("signal", {}).get("window_s")
+    if window is not None and not (m.t[0] - 1e-6 <= window[0] and window[1] <= m.t[-1] + 1e-6):
+        raise RunFormatError(
+            f"{rec.path}/meta.json: signal.window_s [{window[0]:g}, {window[1]:g}] s is not "
+            f"covered by both the commands ({rec.commands.t0:g}-"
+            f"{rec.commands.t0 + rec.commands.duration:g} s) and imu.csv ({rec.imu_t[0]:g}-"
+            f"{rec.imu_t[-1]:g} s); a file cut short, or a window from another run"
+        )
+    return m
+
+
+def _check_not_cut(rec: RecordedRun) -> None:
+    """Refuse a commands file or an IMU record that stops while the platform moves.
+
+    An IMU logged beyond the commands is common (the platform at rest before and after the
+    test), and only the time both cover is measured; but where one file goes on beyond the
+    other and the commands are moving at the edge of the time both cover (speed or
+    acceleration above :data:`MOVING_REL` of the run's largest), the test was cut midway: a
+    file cut short, whose measurement would pair the IMU with the wrong commands. (A hold,
+    the platform kept at a pose, has neither speed nor acceleration.)
+    """
+    c = rec.commands
+    if c.n < 3:
+        return
+    first, last = c.t0, c.t0 + c.duration
+    speed, acc = np.diff(c.values, axis=0), np.diff(c.values, 2, axis=0)
+    tops = [np.abs(d).max(axis=0) for d in (speed, acc)]
+
+    def moving(t: float) -> tuple[float, str]:
+        """Return the commands' largest relative speed or acceleration at ``t``, its DOF."""
+        row = int(np.clip(round((t - c.t0) * c.rate_hz), 0, c.n - 3))
+        rel = np.maximum(*(np.abs(d[row]) / np.where(top > 0, top, np.inf)
+                           for d, top in zip((speed, acc), tops, strict=True)))  # fmt: skip
+        return float(rel.max()), c.names[int(np.argmax(rel))]
+
+    imu = f"{rec.path}/imu.csv"
+    cmd = f"{rec.path}/commands.csv"
+    edges = (
+        (first - rec.imu_t[0], first, f"{cmd} starts at {first:g} s"),
+        (rec.imu_t[-1] - last, last, f"{cmd} ends at {last:g} s"),
+        (rec.imu_t[0] - first, rec.imu_t[0], f"{imu} starts at {rec.imu_t[0]:g} s"),
+        (last - rec.imu_t[-1], rec.imu_t[-1], f"{imu} ends at {rec.imu_t[-1]:g} s"),
+    )
+    for gap, when, what in edges:
+        rel, dof = moving(when)
+        if gap > MIN_OVERLAP_S and rel > MOVING_REL:
+            raise RunFormatError(
+                f"{what} with {dof} moving, while the commands cover {first:g}-{last:g} s and "
+                f"the IMU {rec.imu_t[0]:g}-{rec.imu_t[-1]:g} s: a file looks cut short; give "
+                "the whole file, or cut the other to the time both cover"
+            )
 
 
 @dataclass(frozen=True)
