@@ -70,7 +70,7 @@ from twin.pilot.adapt import ADAPTED, EQUALISATION, SPEED_ACCURACY, adapt
 from twin.pilot.design import ACCEPTANCE, MAX_SUBJECTS, Design, design
 from twin.pilot.experiment import pitch_remnant_scale
 from twin.pilot.mle import PARAMETERS, bound_at, fit_pitch_pilot
-from twin.pilot.pitch import PitchPilot, simulate_pitch
+from twin.pilot.pitch import Feedthrough, PitchPilot, simulate_pitch
 from twin.pilot.population import (
     ADAPTATION_SD,
     PopulationResult,
@@ -225,34 +225,45 @@ def motion_delay(runs: int = 20) -> None:
               f"{np.sum(tau_m < 0.05)}; K_m {_spread(k_m)}")  # fmt: skip
 
 
-def measured_as_the_thesis(subject: Subject) -> dict[str, dict[str, float]]:
+def measured_as_the_thesis(subject: Subject, feedthrough: float = 0.0) -> dict[str, dict]:
     """One subject adapted to conditions 1 and 5, flown five repetitions each (15 % remnant
     of its condition-1 control power) and identified as the thesis did: the MLE on the
-    averaged repetitions. Returns per condition the estimates and what was unidentifiable."""
+    averaged repetitions. With ``feedthrough`` > 0 the subject also has a passive path from
+    the felt motion to the stick, that share of its condition-1 motion response at 3 rad/s
+    (:class:`twin.pilot.pitch.Feedthrough`, the same in both conditions; not adapted to).
+    Returns per condition the estimates, what was unidentifiable and chi-square per degree
+    of freedom."""
     effect = filter_effect(subject)
     pilots = [replace(subject.limitations, **{k: effect[k][i] for k in ADAPTED}) for i in (0, 1)]
     scale = pitch_remnant_scale(pilots[0])
+    path = Feedthrough.relative(feedthrough, pilots[0]) if feedthrough else None
     out = {}
     for pilot, n in zip(pilots, (1, 5), strict=True):
         config = motion_system(f"condition-{n}")
-        runs = simulate_pitch(pilot, config, REPETITIONS, 1000 * subject.number + n, scale)
+        runs = simulate_pitch(pilot, config, REPETITIONS, 1000 * subject.number + n, scale,
+                              feedthrough=path)  # fmt: skip
         fit = fit_pitch_pilot(runs.ft, runs.fd, runs.u, config)
         out[n] = {**{k: getattr(fit.pilot, k) for k in PARAMETERS},
-                  "unidentifiable": list(fit.unidentifiable)}  # fmt: skip
+                  "unidentifiable": list(fit.unidentifiable),
+                  "chi2_per_dof": fit.evidence["fit"]["ratio"]}  # fmt: skip
     return out
 
 
-def motion_delay_measured(n_subjects: int = 18) -> None:
+def motion_delay_measured(n_subjects: int = 18, feedthrough: float = 0.0) -> None:
     """Section 5: Table 6.7's tau_m as the thesis measured it - the twin's subjects' runs
-    identified by the MLE - beside the thesis' F (140.1, lower behind the filter)."""
+    identified by the MLE - beside the thesis' F (140.1, lower behind the filter); with
+    ``feedthrough``, subjects who also have a passive path of that relative size."""
     subs = subjects(n_subjects, 0)
     with Engine("local:2") as engine:
-        done = engine.map(measured_as_the_thesis, [(s,) for s in subs],
+        done = engine.map(measured_as_the_thesis, [(s, feedthrough) for s in subs],
                           [{"subject": s.number} for s in subs], "subjects").values()  # fmt: skip
+    extra = (f", each with a passive feedthrough {feedthrough:g} of its condition-1 motion "
+             "response at 3 rad/s (an assumption)") if feedthrough else ""  # fmt: skip
     print(f"\nTable 6.7 measured as the thesis did: {n_subjects} subjects adapted to conditions "
-          "1 and 5, five repetitions each (15 % remnant), the MLE on their average; median "
-          "(5-95 %) per condition and d_z of the paired differences (condition 5 - 1)")  # fmt: skip
-    for k in ("tau_m", "k_m", "t_lead", "k_v", "tau_v"):
+          f"1 and 5{extra}, five repetitions each (15 % remnant), the MLE on their average; "
+          "median (5-95 %) per condition and d_z of the paired differences "
+          "(condition 5 - 1)")  # fmt: skip
+    for k in PARAMETERS:
         a = np.array([[d[1][k], d[5][k]] for d in done])
         diff = a[:, 1] - a[:, 0]
         thesis = TABLES_6_4_TO_6_7.get(k, {}).get("filter")
@@ -262,6 +273,9 @@ def motion_delay_measured(n_subjects: int = 18) -> None:
                                         f"{np.sqrt(thesis[0] / 9):.2f}")  # fmt: skip
         print(f"  {k:7s} condition 1 {_spread(a[:, 0])}, condition 5 {_spread(a[:, 1])}; d_z "
               f"{diff.mean() / diff.std(ddof=1):+.2f}{th}")  # fmt: skip
+    print("  goodness of fit, chi-square per degree of freedom (about 1 where the model holds): "
+          + "; ".join(f"condition {n} {_spread(np.array([d[n]['chi2_per_dof'] for d in done]))}"
+                      for n in (1, 5)))  # fmt: skip
     flagged = sum("tau_m" in d[5]["unidentifiable"] for d in done)
     print(f"  tau_m not identifiable behind the filter in {flagged} of {n_subjects} subjects "
           f"(condition 1: {sum('tau_m' in d[1]['unidentifiable'] for d in done)})")  # fmt: skip
@@ -441,6 +455,10 @@ if __name__ == "__main__":
     parser.add_argument("--motion-delay-only", action="store_true",
                         help="section 5's tau_m fits only, and 18 subjects measured as the "
                              "thesis did (about 70 s)")  # fmt: skip
+    parser.add_argument("--feedthrough", type=float, nargs="+", default=[0.0], metavar="R",
+                        help="with --motion-delay-only: measure the subjects once per R, each "
+                             "with a passive pitch-to-stick path R of its motion response at 3 "
+                             "rad/s (default 0: none; about 2 min more each)")  # fmt: skip
     parser.add_argument("--design-only", action="store_true",
                         help="section 1's populations and section 6's design and its check "
                              "(about 40 min with --design-subjects 18)")  # fmt: skip
@@ -456,11 +474,14 @@ if __name__ == "__main__":
         parser.error(f"--coverage-runs must be at least 1; got {args.coverage_runs}")
     if args.design_subjects is not None and not 2 <= args.design_subjects <= MAX_SUBJECTS:
         parser.error(f"--design-subjects must be 2 to {MAX_SUBJECTS}; got {args.design_subjects}")
+    if not all(np.isfinite(r) and 0 <= r <= 2 for r in args.feedthrough):
+        parser.error(f"--feedthrough ratios must be 0 to 2; got {args.feedthrough}")
     if args.coverage_seed < 0:
         parser.error(f"--coverage-seed must be a seed >= 0; got {args.coverage_seed}")
     if args.motion_delay_only:
         motion_delay()
-        motion_delay_measured()
+        for ratio in args.feedthrough:
+            motion_delay_measured(feedthrough=ratio)
         raise SystemExit(0)
     if args.design_only:
         design_check(populations(ADAPTATION_SD, POPULATIONS), args.design_subjects)

@@ -578,6 +578,7 @@ def fit_pitch_pilot(
             for r, _ in ruled
         ],
         "range_end": {name: rise for name, (_, rise) in ends.items()},
+        "fit": goodness_of_fit(chi2, best_r.size - (len(PARAMETERS) - len(on_bound))),
     }
     points = [*(r.x for r in rivals), *inward.values(), *(x for x, _ in ends.values())]
     # a point's own parameters on an end are held there, and spread nothing about it
@@ -619,6 +620,20 @@ def fit_pitch_pilot(
                     ranges, tuple(make(r.x) for r in rivals), at_estimate,
                     {name: make(x) for name, x in inward.items()},
                     {name: make(x) for name, (x, _) in ends.items()}, evidence)  # fmt: skip
+
+
+def goodness_of_fit(chi2: float, dof: int) -> dict[str, float]:
+    """Return the best fit's chi-square against the remnant: ``{"chi2", "dof", "ratio", "p"}``.
+
+    ``ratio`` is chi-square per degree of freedom (line residuals, two per line, less the free
+    parameters); ``p`` the chance of one at least this large were the model the pilot and
+    the remnant all that is left at the lines (chi-square with ``dof`` degrees of freedom).
+    """
+    from scipy.stats import chi2 as chi2_dist
+
+    dof = max(int(dof), 1)
+    return {"chi2": chi2, "dof": float(dof), "ratio": chi2 / dof,
+            "p": float(chi2_dist.sf(chi2, dof))}  # fmt: skip
 
 
 def _ruled_out(

@@ -38,9 +38,9 @@ from twin.chain.stepping import Platform
 from twin.chain.stream import ChainStream
 from twin.errors import SignalError
 from twin.pilot.forcing import MEASUREMENT_S, RATE_HZ, RUN_IN_S, ForcingFunction, pitch_task
-from twin.pilot.loop import Remnant, _Filter
+from twin.pilot.loop import Remnant, _bilinear, _Filter
 from twin.pilot.model import neuromuscular
-from twin.pilot.pitch_loop import HEAVE, PITCH, PitchLoop, fly
+from twin.pilot.pitch_loop import HEAVE, PITCH, PitchLoop, WithPassive, fly
 from twin.progress import ProgressFn
 
 FloatArray = NDArray[np.float64]
@@ -54,6 +54,8 @@ STICK_GAIN, PILOT_STATION_M, DISPLAY_DELAY_S = -0.2865, 3.2, 0.025
 MARGIN_POINTS = 500
 #: Most runs one call flies (about 0.3 MB and 0.02 s a run on the reduced platform).
 MAX_RUNS = 1000
+#: Gravity [m/s^2] (the tilt a passive path feels, :class:`Feedthrough`).
+G = 9.81
 
 
 @dataclass(frozen=True)
@@ -102,6 +104,55 @@ class PitchPilot:
         """Eq 6.7: response to the felt pitch attitude."""
         s = 1j * np.asarray(w, dtype=float)
         return self.k_m * s * np.exp(-s * self.tau_m) * self.nm(w)
+
+
+@dataclass(frozen=True)
+class Feedthrough:
+    """A passive path from the felt pitch motion to the stick, not in Eq 6.5-6.7.
+
+    Biodynamic feedthrough: the specific force along the stick at the hand moves the arm,
+    whose admittance is taken as the pilot's neuromuscular system (Eq 6.6), with no neural
+    delay (one loop sample, the loop's step). For a hand ``height_m`` above the pitch axis
+    the force per felt attitude is h s^2 - g (the tangential acceleration of the hand, less
+    the tilt of gravity), so the stick moves by
+
+        u_b = -gain (h s^2 - g) H_nm(s) theta_felt,
+
+    in phase with the attitude at every frequency (|h s^2 - g| = h w^2 + g), where Eq 6.7's
+    K_m s e^{-s tau_m} lags it by 90 deg plus the delay: the MLE of Eq 6.5-6.7 can only
+    absorb it in biased parameters (``evidence["fit"]`` of :func:`twin.pilot.mle.fit_pitch_pilot`
+    shows the misfit). An assumption for exploring what the thesis' estimates may hold
+    (Venrooij et al. measured such paths; no value for the SRS side-stick is given), not a
+    measured property of the SRS.
+
+    Attributes
+    ----------
+    gain : float
+        Stick per specific force [u per m/s^2], >= 0.
+    height_m : float
+        Height of the hand above the pitch axis [m], >= 0.
+
+    """
+
+    gain: float
+    height_m: float = 1.0
+
+    def __post_init__(self) -> None:
+        """Check the gain and height."""
+        for name in ("gain", "height_m"):
+            v = getattr(self, name)
+            if not (np.isfinite(v) and v >= 0):
+                raise SignalError(f"feedthrough {name} must be a finite number >= 0; got {v}")
+
+    @classmethod
+    def relative(cls, ratio: float, pilot: PitchPilot, w: float = 3.0, height_m: float = 1.0
+                 ) -> Feedthrough:  # fmt: skip
+        """Return the path whose magnitude at ``w`` [rad/s] is ``ratio`` of ``pilot``'s Eq 6.7."""
+        return cls(ratio * pilot.k_m * w / (height_m * w**2 + G), height_m)
+
+    def numerator(self, w2: float) -> FloatArray:
+        """Return -u_b / theta_felt's numerator over H_nm's denominator (``w2``: omega_nm^2)."""
+        return self.gain * w2 * np.array([self.height_m, 0.0, -G])
 
 
 def aircraft(w: ArrayLike) -> ComplexArray:
@@ -208,6 +259,7 @@ def simulate_pitch(
     rate_hz: float = RATE_HZ,
     model: str = "reduced",
     progress: ProgressFn | None = None,
+    feedthrough: Feedthrough | None = None,
 ) -> PitchRuns:
     """Fly the pitch task through a motion configuration (run-in 8.08 s, window 81.92 s).
 
@@ -230,10 +282,14 @@ def simulate_pitch(
         configuration's whole chain (:class:`twin.chain.stream.ChainStream`, as open loop).
     progress : callable, optional
         Called with the flown time about every 2 % of the run (:mod:`twin.progress`).
+    feedthrough : Feedthrough, optional
+        A passive path from the felt motion to the stick beside the pilot's (none by
+        default; with one the loop is stepped one sample at a time, about 3x slower).
 
     """
     cfg = motion_system(config) if isinstance(config, str) else config
-    loop = pitch_loop(pilot, cfg, runs, seed, remnant_scale, rate_hz, model, progress)
+    loop = pitch_loop(pilot, cfg, runs, seed, remnant_scale, rate_hz, model, progress,
+                      feedthrough)  # fmt: skip
     out, start, t = fly(loop), loop.start, loop.t
     window = slice(start, t.size)
     return PitchRuns(t[window] - t[start], out["e"], out["u"], out["theta"], out["theta_felt"],
@@ -249,6 +305,7 @@ def pitch_loop(
     rate_hz: float,
     model: str,
     progress: ProgressFn | None = None,
+    feedthrough: Feedthrough | None = None,
 ) -> PitchLoop:
     """Return what :func:`simulate_pitch` flies (the arguments are its own), ready to fly."""
     if model not in ("reduced", "full"):
@@ -281,6 +338,10 @@ def pitch_loop(
     jet_x = np.stack([c_c[0], c_c[0] @ a_c, c_c[0] @ a_c @ a_c])  # (3, nx)
     jet_u = np.array([0.0, float(c_c[0] @ b_c[:, 0]), float(c_c[0] @ a_c @ b_c[:, 0])])
     d_v, d_m = round((pilot.tau_v + DISPLAY_DELAY_S) * rate_hz), round(pilot.tau_m * rate_hz)
+    if feedthrough is not None:
+        # the passive path acts one sample late, the pilot's motion channel d_m late
+        passive = _Filter(*_bilinear(feedthrough.numerator(w2), nm_den, rate_hz), runs)
+        pm, d_m = WithPassive(pm, d_m, passive, runs), 1
     return PitchLoop(pe, pm, d_v, d_m, remnant, chain, felt_attitude, ad, bd, jet_x, jet_u,
                      PILOT_STATION_M, t, f_t, f_d, dt, start, progress)  # fmt: skip
 

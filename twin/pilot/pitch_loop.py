@@ -33,15 +33,43 @@ FloatArray = NDArray[np.float64]
 PITCH, HEAVE = DOF_NAMES.index("pitch"), DOF_NAMES.index("heave")
 
 
+class WithPassive:
+    """A pilot's motion channel ``d_active`` samples late beside a passive path one sample late.
+
+    Stepped by the loop as a motion channel with a delay of one sample (so the loop steps
+    one sample at a time): the active channel's extra ``d_active - 1`` samples are kept here.
+    ``active`` None: the passive path alone (a pilot who does not use the motion).
+    """
+
+    def __init__(self, active: _Filter | None, d_active: int, passive: _Filter, runs: int):
+        self.active, self.passive = active, passive
+        self.late = np.zeros((max(d_active - 1, 0), runs))  # the active channel's input queue
+        self.z = passive.z
+
+    def step(self, x: FloatArray) -> FloatArray:
+        """Return the output for one felt sample of every run (one sample late), (runs,)."""
+        y = self.passive.step(x)
+        if self.active is None:
+            return y
+        if len(self.late):
+            x, self.late = self.late[0], np.vstack([self.late[1:], x[None, :]])
+        return y + self.active.step(x)
+
+    def block(self, x: FloatArray) -> FloatArray:
+        """Return the outputs for samples ``x``, shape (samples, runs)."""
+        return np.stack([self.step(row) for row in x])
+
+
 @dataclass
 class PitchLoop:
     """What one flight of the pitch loop steps (built by ``simulate_pitch``).
 
     Attributes
     ----------
-    pe, pm : _Filter, _Filter or None
+    pe, pm : _Filter, _Filter, WithPassive or None
         The pilot's visual channel on the displayed error and motion channel on the felt
-        attitude (None: the pilot does not use the motion).
+        attitude (None: the pilot does not use the motion; :class:`WithPassive` with a
+        passive path beside it).
     d_v, d_m : int
         Their delays [samples] (the visual one with the display's).
     remnant : Remnant or None
@@ -68,7 +96,7 @@ class PitchLoop:
     """
 
     pe: _Filter
-    pm: _Filter | None
+    pm: _Filter | WithPassive | None
     d_v: int
     d_m: int
     remnant: Remnant | None
