@@ -6,8 +6,10 @@ names the cases a user met, with the message each must give.)
 
 from __future__ import annotations
 
+import errno
 import inspect
 import json
+import os
 import shutil
 from pathlib import Path
 
@@ -63,6 +65,53 @@ def test_missing_folders_of_an_output_file_are_made(tmp_path, run):
     rrd = tmp_path / "new" / "deeper" / "run.rrd"
     assert main([*REST, "--out", str(tmp_path / "o"), "--rrd", str(rrd)]) == 0
     assert rrd.is_file() and not list(rrd.parent.glob(".*"))
+
+
+def _full_disk_on(monkeypatch: pytest.MonkeyPatch, name: str) -> None:
+    """Make writing a run folder's ``name`` fail as on a full disk: its rows, then its close.
+
+    (A real full disk refuses the buffered rows again when the file is closed.)
+    """
+    import twin.runs
+
+    write_rows = twin.runs._write_rows
+    full = OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+    def write_or_fail(fh, t, values, block=8192):
+        if Path(fh.name).name != name:
+            return write_rows(fh, t, values, block)
+        close, failed = fh.close, []
+
+        def close_once():
+            close()
+            if not failed:  # once: the garbage collector may close it again
+                failed.append(True)
+                raise full
+
+        fh.close = close_once
+        fh.write("0.01,0.5")  # part of a row, left in the buffer
+        raise full
+
+    monkeypatch.setattr(twin.runs, "_write_rows", write_or_fail)
+
+
+def test_a_full_disk_leaves_nothing_and_names_the_file(tmp_path, capsys, monkeypatch):
+    """simulate, import and agard report on a full disk: the file named, no staging folder."""
+    run = tmp_path / "in"
+    assert main([*REST[:-3], "--signal", "rest-6", "--quiet", "--out", str(run)]) == 0
+    _full_disk_on(monkeypatch, "imu.csv")
+    out = tmp_path / "out"
+    imported = ["import", str(run / "commands.csv"), str(run / "imu.csv"), "--platform", "srs",
+                "--clock-offset", "0", "--imu-position", "0", "0", "0", "--quiet"]  # fmt: skip
+    report = ["agard", "report", "srs", "--model", "reduced", "--dof", "heave", "--quiet"]
+    for argv, file in [
+        (REST, f"{out}/imu.csv"),
+        (imported, f"{out}/imu.csv"),
+        (report, f"{out}/runs/00-multisine1-heave/imu.csv"),
+    ]:
+        message = f"twin: error: {file}: cannot be written (No space left on device)\n"
+        _one_line(capsys, [*argv, "--out", str(out)], message)
+        assert sorted(p.name for p in tmp_path.iterdir()) == ["in"], argv
 
 
 def _edited_run(run: Path, where: Path, edit) -> Path:
@@ -150,7 +199,7 @@ def test_binary_files_are_refused_and_a_byte_order_mark_is_read(tmp_path, capsys
 def test_odd_numbers_on_the_command_line(capsys, tmp_path):
     cases = [
         (["pilot", "run", "condition-1", "--seed", "-1"], "seed must be an integer >= 0"),
-        (["pilot", "lead", "srs", "--margin-deg", "nan"], "margin_deg"),
+        (["pilot", "lead", "srs", "--margin-deg", "nan"], "--margin-deg (lag allowed"),
         (["pilot", "lead", "srs", "--margin-deg", "1e9"], "in [0, 90]"),
         (["simulate", "srs", "--signal", "rest-1", "--delay-ms", "1e300"], "[0, 10000]"),
         (["simulate", "srs", "--signal", "rest-1", "--break-hz", "1e-300"], "0 (no filter) or in"),
@@ -165,6 +214,49 @@ def test_odd_numbers_on_the_command_line(capsys, tmp_path):
         _one_line(capsys, argv, message)
 
 
+def test_options_are_named_as_typed_not_by_the_librarys_names(capsys, run):
+    """The command line names the option (--max-hz), the library its parameter (max_hz)."""
+    from twin.diagnose.diagnosis import diagnose
+    from twin.errors import SignalError
+
+    cases = [
+        (["pilot", "adapt", "mpi", "--weight", "-1"], "--weight (the control weight r) must be "
+         "> 0; got -1.0"),
+        (["pilot", "lead", "srs", "--margin-deg", "100"], "--margin-deg (lag allowed behind an "
+         "integrator) must be a number in [0, 90]; got 100.0"),
+        (["diagnose", str(run), "--max-hz", "100"], "--max-hz must be in (0.5, 45] Hz"),
+        (["diagnose", str(run), "--each", "--max-hz", "100"], "--max-hz must be in (0.5, 45]"),
+        (["diagnose", str(run), "--imu-noise", "0"], "--imu-noise (factor on the data sheet) "
+         "must be a number in [0.001, 1000]; got 0.0"),
+    ]  # fmt: skip
+    for argv, message in cases:
+        _one_line(capsys, argv, f"twin: error: {message}")
+    with pytest.raises(SignalError, match=r"^max_hz must be in \(0.5, 45\] Hz"):
+        diagnose([run], max_hz=100)
+
+
+def test_a_signal_says_what_is_allowed(capsys, tmp_path, run):
+    """A rest duration that is no number or too long, a commands file missing or misnamed."""
+    from twin.cli.simulate import signal_help
+
+    sim = ["simulate", "srs", "--model", "reduced", "--quiet", "--out", str(tmp_path / "o"),
+           "--signal"]  # fmt: skip
+    positive = "the duration must be a positive number of seconds (rest-SECONDS, e.g. rest-60)"
+    for name in ("rest-nan", "rest--5", "rest-abc", "rest-inf", "rest-"):
+        _one_line(capsys, [*sim, name], f"twin: error: {name}: {positive}; got ")
+    _one_line(capsys, [*sim, "rest-1e9"], "twin: error: rest-1e9: a run of 1e+09 s needs about ",
+              " s fit here); simulate it in shorter pieces")  # fmt: skip
+    missing = tmp_path / "my" / "commands.csv"
+    allowed = f"no such file or folder; --signal takes {signal_help()}\n"
+    _one_line(capsys, [*sim, str(missing)], f"twin: error: {missing}: {allowed}")
+    misnamed = tmp_path / "cmd.csv"
+    shutil.copy(run / "commands.csv", misnamed)
+    _one_line(capsys, [*sim, str(misnamed)], f"twin: error: {misnamed}: a commands file must be "
+              "named commands.csv, as in a twin-run/1 folder (t,x,y,z,roll,pitch,yaw; uniform "
+              "time at any rate); got 'cmd.csv'")  # fmt: skip
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["cmd.csv"]
+
+
 def test_a_run_longer_than_memory_is_refused_with_its_size(tmp_path, capsys):
     out = tmp_path / "o"
     argv = [
@@ -177,7 +269,7 @@ def test_a_run_longer_than_memory_is_refused_with_its_size(tmp_path, capsys):
         "--out",
         str(out),
     ]
-    err = _one_line(capsys, argv, "rest-1e+08: a run of 1e+08 s needs about ", "TiB of memory")
+    err = _one_line(capsys, argv, "rest-100000000: a run of 1e+08 s needs about ", "TiB of memory")
     assert "are available" in err and not out.exists()
 
 

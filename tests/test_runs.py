@@ -2,14 +2,19 @@
 
 import json
 import shutil
+import signal
+import subprocess
+import sys
+import time
 
 import numpy as np
 import pytest
 
 from twin.cli.main import main
-from twin.errors import RunFormatError
+from twin.errors import RunFormatError, SignalError
 from twin.record import read_entities
 from twin.runs import read_run
+from twin.trajectory import uniform_rate
 
 
 @pytest.fixture(scope="module")
@@ -102,10 +107,35 @@ def test_rate_mismatch_with_meta_is_rejected(run_dir, tmp_path):
     meta = json.loads((d / "meta.json").read_text())
     meta["imu"]["rate_hz"] = 1000.0
     (d / "meta.json").write_text(json.dumps(meta))
-    with pytest.raises(
-        RunFormatError, match=r"imu\.csv: sampled at 819\.2 Hz but meta\.json says 1000"
-    ):
+    with pytest.raises(RunFormatError) as e:
         read_run(d)
+    assert str(e.value) == f"{d}/imu.csv: sampled at 819.2 Hz but meta.json says 1000 Hz"
+
+
+def test_a_time_glitch_is_named_at_its_row_in_the_file(run_dir, tmp_path):
+    """Rows 501 on 3 ms late: the message names row 501 (not a row where the mean step,
+    pulled by the glitch, first leaves the grid) and the file by its path."""
+    d = _copy(run_dir, tmp_path)
+    path = d / "commands.csv"
+    rows = np.loadtxt(path, delimiter=",", skiprows=1)
+    rows[500:, 0] += 0.003
+    np.savetxt(path, rows, delimiter=",", fmt="%.10g", header="t,x,y,z,roll,pitch,yaw",
+               comments="")  # fmt: skip
+    with pytest.raises(RunFormatError) as e:
+        read_run(d)
+    assert str(e.value).startswith(f"{path}: time steps must be uniform: row 501 is at 5.003 s, ")
+    assert "0.013 s after row 500 (4.99 s)" in str(e.value)
+    assert "the typical step is 0.01 s" in str(e.value)
+
+
+def test_a_drifting_clock_is_named_where_it_leaves_the_grid():
+    """Steps growing from 10 ms by 0.01 us each (each within 1 % of the typical step), so
+    the times bow off the uniform grid: first by more than 1 % of a step at row 22."""
+    t = np.concatenate([[0.0], np.cumsum(0.01 + 1e-8 * np.arange(1000))])
+    with pytest.raises(SignalError, match=r"^x.csv: time steps must be uniform \(mean 0.010005 "
+                       r"s\); row 22 is at 0.210002 s, -0.000103 s off the grid, more than 1 % "
+                       "of a step: the clock drifts$"):  # fmt: skip
+        uniform_rate(t, "x.csv")
 
 
 def test_commands_file_drives_a_run_at_its_own_rate(run_dir, tmp_path, capsys):
@@ -154,3 +184,29 @@ def test_raw_imu_records_every_sample(tmp_path):
     assert main(["simulate", "srs", "--signal", "rest-2", "--model", "reduced", "--out",
                  str(out), "--rrd", str(rrd), "--raw-imu", "--quiet"]) == 0  # fmt: skip
     assert read_entities(rrd)["/imu/gyro/q"] == len(read_run(out).imu_t) + 1  # + style row
+
+
+def _interrupted_run(out) -> subprocess.Popen:
+    """Start a long full-model run and Ctrl-C it once its chunks are being written."""
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "twin.cli", "simulate", "mpi", "--signal", "rest-600", "--out",
+         str(out), "--quiet"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )  # fmt: skip
+    deadline = time.monotonic() + 60
+    while not any(p.stat().st_size for p in out.parent.glob(".run.*/actuators.csv")):
+        assert proc.poll() is None and time.monotonic() < deadline, proc.communicate()
+        time.sleep(0.02)
+    time.sleep(0.3)  # a few chunks on: the physics of the next rolls in its thread
+    proc.send_signal(signal.SIGINT)
+    return proc
+
+
+def test_ctrl_c_during_a_full_model_run_exits_130(tmp_path):
+    """Ctrl-C while the full model's physics rolls in its thread: 'interrupted', exit 130,
+    nothing left; before, MuJoCo went on in C while Python exited (exit 139, Segmentation
+    fault). Two runs at once, interrupted at different moments of their chunks."""
+    procs = [_interrupted_run(tmp_path / f"{k}" / "run") for k in range(2)]
+    for k, proc in enumerate(procs):
+        out, err = proc.communicate(timeout=60)
+        assert (proc.returncode, out, err) == (130, "", "twin: interrupted\n")
+        assert not any((tmp_path / f"{k}").iterdir())

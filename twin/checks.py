@@ -206,7 +206,7 @@ def check_duration(duration_s: float, what: str, error: type[Exception] = DataEr
     if have is not None and need > have:
         raise error(
             f"{what}: a run of {duration_s:g} s needs about {_size(need)} of memory (about 1 MB "
-            f"per simulated second) and {_size(have)} are available; simulate it in shorter "
-            "pieces"
+            f"per simulated second) and {_size(have)} are available (at most about "
+            f"{have / BYTES_PER_RUN_S:,.0f} s fit here); simulate it in shorter pieces"
         )
     return duration_s

@@ -1,5 +1,7 @@
 """Exceptions raised by the twin: each names what was wrong and what is allowed."""
 
+from os import PathLike
+
 
 class TwinError(Exception):
     """Base class of every error the twin raises on bad input or failed computation."""
@@ -54,3 +56,25 @@ class UsageError(TwinError, ValueError):
 
 class ConfigError(SignalError):
     """A motion-system configuration (name, file or override) that is malformed."""
+
+
+class OutputError(UsageError):
+    """An output file or folder that cannot be written (disk full, permission denied, ...).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The output as the user named it (not the hidden name it is written under).
+    reason : str
+        Why it cannot be written, as the operating system says.
+
+    """
+
+    def __init__(self, path: str | PathLike[str], reason: str) -> None:
+        super().__init__(f"{path}: cannot be written ({reason})")
+        self.path = path
+        self.reason = reason
+
+    def __reduce__(self) -> tuple[type, tuple[str | PathLike[str], str]]:
+        """Pickle by path and reason (a task's error crosses processes)."""
+        return type(self), (self.path, self.reason)

@@ -3,15 +3,18 @@
 :class:`CloseOrAbort` gives a class with ``close()`` (finish: rename the output into place)
 and ``abort()`` (remove the partial output) its context-manager methods, so that leaving the
 block by an exception leaves nothing half-written; :func:`staging_dir` is the hidden folder
-such an output is written into before it is renamed into place, :func:`replacing_dir`
-the ``with`` block that writes a report folder that way and :func:`replacing_file` the one
-for a single file. :func:`check_output_file`, :func:`check_output_dir` and
-:func:`check_writable` refuse an output path before any work (the command line calls them
-while parsing, :mod:`twin.cli.common`).
+such an output is written into before it is renamed into place, :class:`StagedFolder` such a
+folder's life (every output folder goes through it: a report by :func:`replacing_dir`, a run
+by :class:`~twin.runs.RunWriter`) and :func:`replacing_file` the ``with`` block for a single
+file. A file that cannot be written (a full disk, ...) is an :class:`~twin.errors.OutputError`
+naming it by its final path (:func:`writing`). :func:`check_output_file`,
+:func:`check_output_dir` and :func:`check_writable` refuse an output path before any work
+(the command line calls them while parsing, :mod:`twin.cli.common`).
 """
 
 from __future__ import annotations
 
+import errno
 import os
 import shutil
 import tempfile
@@ -21,7 +24,29 @@ from contextlib import contextmanager, suppress
 from pathlib import Path
 from typing import Self
 
-from twin.errors import UsageError
+from twin.errors import OutputError, UsageError
+
+#: Errors of writing that the operating system reports without a file name (a full disk or
+#: quota, a file too large): in a staged folder they are the folder's.
+_UNNAMED_WRITE_ERRORS = (errno.ENOSPC, errno.EDQUOT, errno.EFBIG)
+
+
+def cannot_write(path: str | Path, e: OSError) -> OutputError:
+    """Return the error for an output ``path`` the operating system refused to write (``e``)."""
+    return OutputError(path, e.strerror or str(e))
+
+
+@contextmanager
+def writing(path: str | Path) -> Iterator[Path]:
+    """Yield ``path``; an :class:`OSError` in the block becomes an ``OutputError`` naming it.
+
+    For a file written where the operating system's error would not name it (a write or
+    close on a full disk names no file).
+    """
+    try:
+        yield Path(path)
+    except OSError as e:
+        raise cannot_write(path, e) from None
 
 
 def staging_dir(final: Path) -> Path:
@@ -103,7 +128,7 @@ def replacing_file(final: str | Path) -> Iterator[Path]:
     except OSError as e:  # named by the user's path, not the hidden one
         with suppress(OSError):
             tmp.unlink(missing_ok=True)
-        raise UsageError(f"{final}: cannot be written ({e.strerror or e})") from None
+        raise cannot_write(final, e) from None
     except BaseException:
         with suppress(OSError):
             tmp.unlink(missing_ok=True)
@@ -130,9 +155,8 @@ def check_output_dir(final: str | Path, marker: str) -> None:
                          f"{marker}); give a new folder or remove it")  # fmt: skip
 
 
-@contextmanager
-def replacing_dir(final: str | Path, marker: str) -> Iterator[Path]:
-    """Yield a staging folder that replaces ``final`` when the block ends without an error.
+class StagedFolder:
+    """An output folder written under a hidden name beside ``final``, put there when complete.
 
     Parameters
     ----------
@@ -143,6 +167,13 @@ def replacing_dir(final: str | Path, marker: str) -> Iterator[Path]:
         is replaced only if it is empty or holds it (an earlier output of the same kind), so
         a user's own folder, the current folder or one holding the inputs is never removed.
 
+    Attributes
+    ----------
+    final : Path
+        The output folder.
+    tmp : Path
+        The hidden folder to write into (:func:`staging_dir`).
+
     Raises
     ------
     UsageError
@@ -150,17 +181,83 @@ def replacing_dir(final: str | Path, marker: str) -> Iterator[Path]:
         above it, or a non-empty folder that is not an earlier output of this kind.
 
     """
-    final = Path(final)
-    check_output_dir(final, marker)
-    tmp = staging_dir(final)
-    try:
-        yield tmp
-        if final.exists():
-            shutil.rmtree(final)
-        tmp.replace(final)
-    except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
+
+    def __init__(self, final: str | Path, marker: str) -> None:
+        self.final = Path(final)
+        check_output_dir(self.final, marker)
+        self.tmp = staging_dir(self.final)
+
+    def finish(self) -> None:
+        """Put the complete folder in place of ``final`` (an earlier output is replaced)."""
+        if self.final.exists():
+            shutil.rmtree(self.final)
+        self.tmp.replace(self.final)
+
+    def discard(self) -> None:
+        """Remove the hidden folder and all written into it."""
+        shutil.rmtree(self.tmp, ignore_errors=True)
+
+    @contextmanager
+    def removed_on_error(self) -> Iterator[None]:
+        """Discard the folder if the block raises; name a failed write by its final path.
+
+        An :class:`OSError` of a file in the hidden folder, or one that names no file but is
+        a full disk (:data:`_UNNAMED_WRITE_ERRORS`), becomes an ``OutputError`` naming the file
+        (or ``final``) where the user will look for it; an ``OutputError`` for a path in the
+        hidden folder (a staged output within this one) is named there too. Other errors
+        (an input that cannot be read, ...) pass as they are.
+        """
+        try:
+            yield
+        except BaseException as e:
+            self.discard()
+            named = self._named(e)
+            if named is None:
+                raise
+            raise named from None
+
+    def _named(self, e: BaseException) -> OutputError | None:
+        """Return ``e`` as an ``OutputError`` naming the final path, or None to keep ``e``."""
+        if isinstance(e, OutputError):
+            path, reason = e.path, e.reason
+        elif isinstance(e, OSError):
+            path, reason = e.filename, e.strerror or str(e)
+            if path is None and e.errno in _UNNAMED_WRITE_ERRORS:
+                return OutputError(self.final, reason)
+        else:
+            return None
+        if not isinstance(path, str | os.PathLike) or not Path(path).is_relative_to(self.tmp):
+            return None
+        return OutputError(self.final / Path(path).relative_to(self.tmp), reason)
+
+
+@contextmanager
+def replacing_dir(final: str | Path, marker: str) -> Iterator[Path]:
+    """Yield a staging folder that replaces ``final`` when the block ends without an error.
+
+    On an error the staging folder is removed; a file that could not be written is named by
+    its final path (:meth:`StagedFolder.removed_on_error`).
+
+    Parameters
+    ----------
+    final : str or Path
+        The output folder.
+    marker : str
+        A file every output of this kind holds (see :class:`StagedFolder`).
+
+    Raises
+    ------
+    UsageError
+        Before anything is written, for a ``final`` that cannot be replaced (see
+        :class:`StagedFolder`).
+    OutputError
+        For a file or folder that could not be written.
+
+    """
+    staged = StagedFolder(final, marker)
+    with staged.removed_on_error():
+        yield staged.tmp
+        staged.finish()
 
 
 class CloseOrAbort(ABC):
@@ -179,8 +276,12 @@ class CloseOrAbort(ABC):
         return self
 
     def __exit__(self, kind: object, exc: object, tb: object) -> None:
-        """Close, or abort on an exception."""
-        if kind is None:
-            self.close()
-        else:
+        """Close, or abort on an exception (also one of closing: a full disk, ...)."""
+        if kind is not None:
             self.abort()
+            return
+        try:
+            self.close()
+        except BaseException:
+            self.abort()
+            raise

@@ -20,19 +20,19 @@ into a temporary folder and renames it when complete, so a failed run leaves not
 from __future__ import annotations
 
 import json
-import shutil
 import warnings
 from collections.abc import Iterator, Mapping, Sequence
+from contextlib import contextmanager, suppress
 from dataclasses import dataclass
 from pathlib import Path
-from types import TracebackType
+from typing import TextIO
 
 import numpy as np
 from numpy.typing import NDArray
 
 from twin.checks import ENCODING, not_utf8, number, numbers, read_text
-from twin.errors import ConfigError, RunFormatError, SignalError
-from twin.lifecycle import check_output_dir, staging_dir
+from twin.errors import ConfigError, OutputError, RunFormatError, SignalError
+from twin.lifecycle import CloseOrAbort, StagedFolder, cannot_write, writing
 from twin.platform.facts import PLATFORMS
 from twin.trajectory import Trajectory, uniform_rate
 
@@ -90,7 +90,7 @@ def _read_csv(path: Path) -> FloatArray:
         raise RunFormatError(f"{path.parent}: missing {name}")
     data, _ = read_number_table(path, HEADERS[name])
     try:
-        uniform_rate(data[:, 0], name)
+        uniform_rate(data[:, 0], str(path))
     except SignalError as e:
         raise RunFormatError(str(e)) from None
     return data
@@ -217,10 +217,11 @@ def check_values(
         )
 
 
-def _check_rate(name: str, t: FloatArray, expected: float) -> None:
-    rate = uniform_rate(t, name)
+def _check_rate(path: Path, t: FloatArray, expected: float) -> None:
+    """Refuse a file (``path``, its times ``t``) not sampled at the rate meta.json states."""
+    rate = uniform_rate(t, str(path))
     if abs(rate / expected - 1) > RATE_TOLERANCE:
-        raise RunFormatError(f"{name}: sampled at {rate:.6g} Hz but meta.json says {expected:g} Hz")
+        raise RunFormatError(f"{path}: sampled at {rate:.6g} Hz but meta.json says {expected:g} Hz")
 
 
 def _check_meta(meta: object, path: Path) -> dict:
@@ -314,9 +315,9 @@ def read_run(folder: str | Path | RecordedRun) -> RecordedRun:
     except json.JSONDecodeError as e:
         raise RunFormatError(f"{meta_path}: not valid JSON ({e})") from None
     cmd = _read_csv(path / "commands.csv")
-    _check_rate("commands.csv", cmd[:, 0], float(meta["command_rate_hz"]))
+    _check_rate(path / "commands.csv", cmd[:, 0], float(meta["command_rate_hz"]))
     imu = _read_csv(path / "imu.csv")
-    _check_rate("imu.csv", imu[:, 0], float(meta["imu"]["rate_hz"]))
+    _check_rate(path / "imu.csv", imu[:, 0], float(meta["imu"]["rate_hz"]))
     act = None
     if (path / "actuators.csv").exists():
         act = _read_csv(path / "actuators.csv")
@@ -324,13 +325,27 @@ def read_run(folder: str | Path | RecordedRun) -> RecordedRun:
     return RecordedRun(path, meta, commands, imu[:, 0], imu[:, 1:], act)
 
 
+#: What a commands file is, as a run folder holds it (messages and help).
+COMMANDS_FILE = f"{','.join(HEADERS['commands.csv'])}; uniform time at any rate"
+
+
 def read_commands(path: str | Path) -> Trajectory:
-    """Read a ``commands.csv`` on its own (any rate, taken from its time column)."""
+    """Read a ``commands.csv`` on its own (any rate, taken from its time column).
+
+    Raises
+    ------
+    RunFormatError
+        For a file that is missing, not named ``commands.csv`` (the name says the format, as
+        in a ``twin-run/1`` folder) or not a valid one.
+
+    """
     p = Path(path)
     if not p.is_file():
-        raise RunFormatError(f"{p}: no such commands file")
+        raise RunFormatError(f"{p}: no such file; a commands file is a twin-run/1 commands.csv "
+                             f"({COMMANDS_FILE})")  # fmt: skip
     if p.name != "commands.csv":
-        raise RunFormatError(f"{p}: a commands file must be named commands.csv (twin-run/1)")
+        raise RunFormatError(f"{p}: a commands file must be named commands.csv, as in a "
+                             f"twin-run/1 folder ({COMMANDS_FILE}); got {p.name!r}")  # fmt: skip
     return _trajectory(_read_csv(p), p)
 
 
@@ -338,7 +353,7 @@ def _trajectory(cmd: FloatArray, path: Path) -> Trajectory:
     """Return the commands of a ``commands.csv`` (refused beyond :data:`MAX_COMMAND`)."""
     from twin.signals import check_physical
 
-    tr = Trajectory(uniform_rate(cmd[:, 0]), cmd[:, 1:], float(cmd[0, 0]))
+    tr = Trajectory(uniform_rate(cmd[:, 0], str(path)), cmd[:, 1:], float(cmd[0, 0]))
     try:
         check_physical(tr, str(path))
     except SignalError as e:
@@ -346,16 +361,17 @@ def _trajectory(cmd: FloatArray, path: Path) -> Trajectory:
     return tr
 
 
-def _write_rows(fh, t: FloatArray, values: FloatArray, block: int = 8192) -> None:
+def _write_rows(fh: TextIO, t: FloatArray, values: FloatArray, block: int = 8192) -> None:
     for k in range(0, len(t), block):  # in blocks: no whole-run copy
         rows = np.column_stack([t[k : k + block], values[k : k + block]])
         np.savetxt(fh, rows, delimiter=",", fmt="%.10g")
 
 
-class RunWriter:
+class RunWriter(CloseOrAbort):
     """Write a run folder incrementally; it appears under its name only when complete.
 
-    Use as a context manager: on an exception the temporary folder is removed.
+    Use as a context manager: on an exception (also one of finishing the folder) the
+    temporary folder is removed (:class:`~twin.lifecycle.StagedFolder`).
 
     Parameters
     ----------
@@ -367,6 +383,11 @@ class RunWriter:
         Replace an existing folder.
     files : sequence of str
         The CSV files the run has (``actuators.csv`` is optional in the format).
+
+    Raises
+    ------
+    OutputError
+        A file that cannot be written (a full disk, ...), named by its path in ``folder``.
 
     """
 
@@ -380,43 +401,53 @@ class RunWriter:
         self.folder = Path(folder)
         if self.folder.exists() and not overwrite:
             raise RunFormatError(f"{self.folder}: already exists (choose another --out)")
-        check_output_dir(self.folder, "meta.json")  # replaces only an earlier run folder
         self.meta = dict(meta, format=FORMAT)
         _check_meta(self.meta, self.folder)
-        self.tmp = staging_dir(self.folder)
-        self._files = {}
-        for name in files:
-            fh = (self.tmp / name).open("w")
-            fh.write(",".join(HEADERS[name]) + "\n")
-            self._files[name] = fh
-        self.overwrite = overwrite
+        self._staged = StagedFolder(self.folder, "meta.json")  # replaces only an earlier run
+        self.tmp = self._staged.tmp
+        self._files: dict[str, TextIO] = {}
+        with self._removed_on_error():
+            for name in files:
+                with writing(self.folder / name):
+                    self._files[name] = (self.tmp / name).open("w", encoding="utf-8")
+                    self._files[name].write(",".join(HEADERS[name]) + "\n")
 
     def write(self, name: str, t: FloatArray, values: FloatArray) -> None:
         """Append rows to ``commands.csv``, ``imu.csv`` or ``actuators.csv``."""
-        _write_rows(self._files[name], t, values)
+        with writing(self.folder / name):
+            _write_rows(self._files[name], t, values)
 
-    def __enter__(self) -> RunWriter:
-        """Enter the context."""
-        return self
+    def close(self) -> None:
+        """Finish: close the files, write ``meta.json`` and rename the folder into place."""
+        with self._removed_on_error():
+            self._close_files()
+            with writing(self.folder / "meta.json"):
+                (self.tmp / "meta.json").write_text(json.dumps(self.meta, indent=2) + "\n")
+            self._staged.finish()
 
-    def __exit__(
-        self,
-        kind: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
-    ) -> None:
-        """Finish (rename into place) or, on an exception, remove everything."""
-        for fh in self._files.values():
-            fh.close()
-        if kind is not None:
-            shutil.rmtree(self.tmp, ignore_errors=True)
-            return
-        try:
-            (self.tmp / "meta.json").write_text(json.dumps(self.meta, indent=2) + "\n")
-            if self.overwrite and self.folder.exists():
-                shutil.rmtree(self.folder)
-            self.tmp.rename(self.folder)
-        except OSError as e:
-            shutil.rmtree(self.tmp, ignore_errors=True)
-            why = e.strerror or str(e)
-            raise RunFormatError(f"{self.folder}: the run cannot be put there ({why})") from None
+    def abort(self) -> None:
+        """Remove everything written."""
+        with suppress(OutputError):
+            self._close_files()
+        self._staged.discard()
+
+    @contextmanager
+    def _removed_on_error(self) -> Iterator[None]:
+        """Within the block, an error aborts (a failed write named by its final path)."""
+        with self._staged.removed_on_error():
+            try:
+                yield
+            except BaseException:
+                self.abort()
+                raise
+
+    def _close_files(self) -> None:
+        """Close every file, even after one failed; raise the first failure, named."""
+        failed = None
+        for name, fh in self._files.items():
+            try:
+                fh.close()
+            except OSError as e:
+                failed = failed or cannot_write(self.folder / name, e)
+        if failed is not None:
+            raise failed

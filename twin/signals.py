@@ -456,18 +456,40 @@ def check_signal(commands: Trajectory, platform: str, what: str = "the signal") 
         raise SignalLimitError(f"{what} would break the {platform} limits: " + "; ".join(broken))
 
 
-def rest(duration_s: float, rate_hz: float = 100.0) -> Trajectory:
-    """Return neutral-pose commands for ``duration_s`` seconds (refused if a run cannot fit)."""
+#: What a rest signal's duration may be (messages).
+REST_DURATION = "the duration must be a positive number of seconds (rest-SECONDS, e.g. rest-60)"
+
+
+def rest(duration_s: float, rate_hz: float = 100.0, name: str | None = None) -> Trajectory:
+    """Return neutral-pose commands for ``duration_s`` seconds (refused if a run cannot fit).
+
+    Parameters
+    ----------
+    duration_s : float
+        Duration [s]: finite, > 0, at least one command sample, and a run of it must fit in
+        memory (:func:`twin.checks.check_duration`).
+    rate_hz : float
+        Command rate [Hz].
+    name : str, optional
+        The signal's name in messages (default ``rest-<duration>``).
+
+    Raises
+    ------
+    SignalError
+        Naming the signal, for a duration that is not allowed.
+
+    """
+    name = name or f"rest-{duration_s:g}"
     if not np.isfinite(duration_s) or duration_s <= 0:
-        raise SignalError(f"rest duration must be a positive number of seconds; got {duration_s}")
-    check_duration(duration_s, f"rest-{duration_s:g}", SignalError)
+        raise SignalError(f"{name}: {REST_DURATION}; got {duration_s}")
+    check_duration(duration_s, name, SignalError)
     if round(duration_s * rate_hz) < 1:
-        raise SignalError(f"rest-{duration_s:g}: shorter than one command sample "
+        raise SignalError(f"{name}: shorter than one command sample "
                           f"({1 / rate_hz:g} s at {rate_hz:g} Hz)")  # fmt: skip
     return Trajectory(rate_hz, np.zeros((round(duration_s * rate_hz) + 1, 6)))
 
 
-_BUILTIN = re.compile(r"^(?:multisine(?P<sig>[123])-(?P<dof>[a-z]+)|rest-(?P<dur>[0-9.]+))$")
+_BUILTIN = re.compile(r"^(?:multisine(?P<sig>[123])-(?P<dof>[a-z]+)|rest-(?P<dur>.*))$", re.S)
 
 #: Help text listing the built-in signal names.
 BUILTIN_HELP = (
@@ -491,12 +513,26 @@ def builtin_signal(name: str, rate_hz: float = 100.0) -> Trajectory:
     Raises
     ------
     SignalError
-        For an unknown name.
+        For an unknown name, or a rest duration that is no number or not allowed (see
+        :func:`rest`).
+
+    Examples
+    --------
+    >>> builtin_signal("rest-2").duration
+    2.0
+    >>> builtin_signal("rest-a")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    twin.errors.SignalError: rest-a: the duration must be a positive number of seconds ...
 
     """
     m = _BUILTIN.match(name)
     if m is None or (m["dof"] is not None and m["dof"] not in DOF_NAMES):
         raise SignalError(f"unknown signal {name!r}; built-in signals are {BUILTIN_HELP}")
     if m["dur"] is not None:
-        return rest(float(m["dur"]), rate_hz)
+        try:
+            duration = float(m["dur"])
+        except ValueError:
+            raise SignalError(f"{name}: {REST_DURATION}; got {m['dur']!r}") from None
+        return rest(duration, rate_hz, name)
     return describing_signal(int(m["sig"]), m["dof"], rate_hz).commands

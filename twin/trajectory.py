@@ -226,20 +226,34 @@ class Trajectory(UniformGrid):
 def uniform_rate(t: ArrayLike, what: str = "time column", tol: float = 0.01) -> float:
     """Return the sample rate of a uniform time grid, or raise naming the first bad row.
 
+    Two checks: every step must be within ``2 tol`` of the typical (median) step (two times
+    each ``tol`` off), which names a glitch (a dropped sample, a clock jump) at its row; and
+    every time within ``tol`` of a step of the uniform grid through the first and last time,
+    which names a clock that drifts by steps each small enough to pass.
+
     Parameters
     ----------
     t : array_like, shape (n,)
         Sample times [s].
     what : str
-        Name used in error messages (e.g. a file name).
+        Name used in error messages (e.g. a file's path).
     tol : float
         Allowed deviation of any time from the uniform grid, as a fraction of the step (so
-        times written with limited decimals still pass).
+        times written with limited decimals still pass); a step may deviate twice as much.
 
     Raises
     ------
     SignalError
         If fewer than 2 samples, a non-finite or non-increasing time, or non-uniform steps.
+
+    Examples
+    --------
+    >>> uniform_rate([0.0, 0.01, 0.02, 0.03])
+    100.0
+    >>> uniform_rate([0.0, 0.01, 0.02, 0.033, 0.043], "t.csv")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    twin.errors.SignalError: t.csv: time steps must be uniform: row 4 is at 0.033 s, ...
 
     """
     tt = np.asarray(t, dtype=float)
@@ -256,15 +270,25 @@ def uniform_rate(t: ArrayLike, what: str = "time column", tol: float = 0.01) -> 
             f"{what}: time must increase strictly; row {row} ({tt[row - 1]:.6g} s) is not "
             f"after row {row - 1} ({tt[row - 2]:.6g} s)"
         )
+    typical = float(np.median(d))
+    odd = np.abs(d - typical) > 2 * tol * typical
+    if odd.any():
+        row = int(np.argmax(odd)) + 2
+        raise SignalError(
+            f"{what}: time steps must be uniform: row {row} is at {tt[row - 1]:.6g} s, "
+            f"{d[row - 2]:.3g} s after row {row - 1} ({tt[row - 2]:.6g} s); the typical step "
+            f"is {typical:.6g} s and each must be within {200 * tol:g} % of it"
+        )
     step = (tt[-1] - tt[0]) / (tt.size - 1)
     off = np.abs(tt - (tt[0] + np.arange(tt.size) * step)) > tol * step
     if off.any():
         k = int(np.argmax(off))
         raise SignalError(
             f"{what}: time steps must be uniform (mean {step:.6g} s); row {k + 1} is at "
-            f"{tt[k]:.6g} s, {tt[k] - tt[0] - k * step:+.3g} s off the grid"
+            f"{tt[k]:.6g} s, {tt[k] - tt[0] - k * step:+.3g} s off the grid, more than "
+            f"{100 * tol:g} % of a step: the clock drifts"
         )
-    return 1.0 / step
+    return float(1.0 / step)
 
 
 def interp_columns(x: ArrayLike, xp: ArrayLike, fp: ArrayLike) -> FloatArray:

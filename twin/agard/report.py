@@ -21,7 +21,7 @@ import matplotlib.pyplot as plt
 from twin.agard import df, noise_level, omct, snr, threshold
 from twin.agard.session import Session
 from twin.frames import dof_index
-from twin.lifecycle import replacing_dir
+from twin.lifecycle import replacing_dir, writing
 from twin.measurement.measure import Bench
 from twin.progress import ProgressFn
 from twin.tasks.engine import Engine, using
@@ -68,11 +68,14 @@ def write_report(
                 ).values()
             for part in parts:
                 for name, data in part.files.items():
-                    (tmp / name).parent.mkdir(parents=True, exist_ok=True)
-                    (tmp / name).write_bytes(data)
+                    with writing(tmp / name) as path:
+                        path.parent.mkdir(parents=True, exist_ok=True)
+                        path.write_bytes(data)
         report, md = _assemble(bench, parts)
-        (tmp / "report.json").write_text(json.dumps(report, indent=2) + "\n")
-        (tmp / "summary.md").write_text(md)
+        with writing(tmp / "report.json") as path:
+            path.write_text(json.dumps(report, indent=2) + "\n")
+        with writing(tmp / "summary.md") as path:
+            path.write_text(md)
     return report
 
 
@@ -121,8 +124,11 @@ def _in_session(bench, dofs, tmp, rrd, progress, bounds) -> list[DofPart]:
 
 
 def _figure(fig, path: Path) -> str:
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    try:
+        with writing(path):
+            fig.savefig(path, dpi=120)
+    finally:
+        plt.close(fig)
     return path.name
 
 

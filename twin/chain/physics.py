@@ -107,30 +107,38 @@ class FullPlatform(Platform):
         Each row of the response is the state at the start of a physics step, whose control
         is the reference at that time; the step's end state starts the next row.
         """
-        if state.inner.rolling is not None:  # a submitted step's physics comes first
-            state.inner.rolling.join()
+        if state.inner.rolled is not None:  # a submitted step's physics comes first
+            state.inner.rolled.wait()
         return self._response(ref, self._roll(self._controls(ref, state), state.inner))
 
     def _start(self, ref: Reference, state: PlatformState) -> Callable[[], PlatformResponse]:
-        """Limit the legs now; roll the physics in a thread after the previous step's."""
+        """Limit the legs now; roll the physics in a thread after the previous step's.
+
+        Steps wait for each other by events, never by ``Thread.join``: under Python 3.11 a
+        join that Ctrl-C interrupts marks the thread ended while it still runs (bpo-45274),
+        so the next step would roll on the same ``MjData`` at the same time (a crash). The
+        thread is no daemon: at exit Python waits for its physics (at most this step and the
+        next) instead of tearing down while MuJoCo runs in C (a segmentation fault).
+        """
         phys: _Physics = state.inner
         controls = self._controls(ref, state)
-        before, box = phys.rolling, {}
+        before, done, box = phys.rolled, threading.Event(), {}
 
         def roll() -> None:
-            if before is not None:
-                before.join()
             try:
+                if before is not None:
+                    before.wait()
                 box["rows"] = self._roll(controls, phys)
             except BaseException as exc:  # handed to the finisher, raised in the caller
                 box["error"] = exc
+            finally:
+                done.set()
 
-        thread = threading.Thread(target=roll, name="mujoco-rollout", daemon=True)
-        phys.rolling = thread
-        thread.start()
+        phys.rolled = done
+        threading.Thread(target=roll, name="mujoco-rollout").start()
 
         def finish() -> PlatformResponse:
-            thread.join()
+            done.wait()
             if "error" in box:
                 raise box["error"]
             return self._response(ref, box["rows"])
@@ -213,4 +221,4 @@ class _Physics:
     states: FloatArray
     warm: FloatArray
     limiters: list[LimiterState]
-    rolling: threading.Thread | None = None  # the last step's physics, if rolled in a thread
+    rolled: threading.Event | None = None  # set when the last submitted step's physics is done

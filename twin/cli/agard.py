@@ -26,14 +26,14 @@ HELP = {
 }
 
 
-def _common() -> list[argparse.ArgumentParser]:
-    """Return the parent parsers every test (and the report) shares."""
+def _common(out: str) -> list[argparse.ArgumentParser]:
+    """Return the parent parsers every test (and the report) shares; ``out``: --out's help."""
     return [
         common.model_parent(),
         common.overrides_parent(),
         common.seed_parent("seed of the first run; run k uses seed + k"),
         common.json_parent(),
-        common.out_parent("folder for the runs (twin-run/1), result.json and figures"),
+        common.out_parent(out),
         common.rrd_parent("save every run to this Rerun recording"),
         common.quiet_parent(),
     ]
@@ -48,7 +48,12 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
     )
     tests = agard.add_subparsers(dest="test", required=True, parser_class=parser_class)
     for name in TESTS:
-        p = tests.add_parser(name, parents=_common(), help=HELP[name], description=HELP[name])
+        p = tests.add_parser(
+            name,
+            parents=_common("folder for the runs (twin-run/1), result.json and the figure"),
+            help=HELP[name],
+            description=HELP[name],
+        )
         p.add_argument(
             "target",
             metavar="PLATFORM_OR_CONFIG",
@@ -91,7 +96,13 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
         p.set_defaults(func=_cmd_test)
     rep = tests.add_parser(
         "report",
-        parents=[*_common(), common.scheduler_parent()],
+        parents=[
+            *_common(
+                "report folder: report.json, summary.md, a figure per test and DOF and the runs "
+                "(twin-run/1) under runs/ (default out/agard-CONFIG-MODEL)"
+            ),
+            common.scheduler_parent(),
+        ],
         help="run the whole suite and write a report folder",
         description="Run df, noise, threshold, omct and snr for each DOF and "
         "write report.json, summary.md and figures into a folder. Each DOF's suite is a task "

@@ -23,11 +23,12 @@ it prints on stderr only when stderr is a terminal and ``--quiet`` is not given.
 from __future__ import annotations
 
 import argparse
-from collections.abc import Callable
+from collections.abc import Callable, Iterator, Mapping
+from contextlib import contextmanager
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from twin.errors import UsageError
+from twin.errors import TwinError, UsageError
 from twin.lifecycle import check_output_file, check_writable
 from twin.progress import Progress
 
@@ -71,6 +72,38 @@ def count(lo: int, hi: int) -> Callable[[str], int]:
         return n
 
     return parse
+
+
+@contextmanager
+def options_named(names: Mapping[str, str]) -> Iterator[None]:
+    """Within the block, an error about a library parameter names the option the user typed.
+
+    The library's messages name its parameters (``max_hz must be in ...``), right for a caller
+    of the library; on the command line the user typed the option (``--max-hz``).
+
+    Parameters
+    ----------
+    names : mapping of str to str
+        A parameter's name as the library's message begins with it -> the option's text.
+
+    Examples
+    --------
+    >>> from twin.errors import SignalError
+    >>> with options_named({"max_hz": "--max-hz"}):
+    ...     raise SignalError("max_hz must be in (0.5, 45] Hz; got 100")
+    Traceback (most recent call last):
+    ...
+    twin.errors.SignalError: --max-hz must be in (0.5, 45] Hz; got 100
+
+    """
+    try:
+        yield
+    except TwinError as e:
+        text = str(e)
+        for name, option in names.items():
+            if text.startswith(f"{name} "):
+                raise type(e)(option + text[len(name) :]) from None
+        raise
 
 
 def json_parent(what: str = "the result") -> argparse.ArgumentParser:

@@ -104,9 +104,11 @@ def _cmd_each(args: argparse.Namespace) -> int:
 
 
 def _cmd_diagnose(args: argparse.Namespace) -> int:
-    from twin.diagnose.diagnosis import diagnose
+    from twin.diagnose.diagnosis import check_options, diagnose
     from twin.diagnose.report import write_report
 
+    with common.options_named({"max_hz": "--max-hz", "imu_noise": "--imu-noise"}):
+        check_options(args.max_hz, args.imu_noise)  # before any work, also of a batch
     if args.each:
         return _cmd_each(args)
     out = Path(args.out) if args.out else Path("out") / f"diagnose-{Path(args.runs[0]).name}"

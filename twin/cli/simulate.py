@@ -7,6 +7,7 @@ recording are :func:`twin.run_folder.run_meta` and :func:`twin.run_folder.execut
 from __future__ import annotations
 
 import argparse
+import os
 import time
 from pathlib import Path
 
@@ -14,23 +15,42 @@ from twin.cli import common
 from twin.trajectory import Trajectory
 
 
+def signal_help() -> str:
+    """Return what ``--signal`` takes (its help, and the message for a missing file)."""
+    from twin.runs import COMMANDS_FILE
+    from twin.signals import BUILTIN_HELP
+
+    return (f"a commands.csv (twin-run/1: {COMMANDS_FILE}), a run folder holding one, or a "
+            f"built-in: {BUILTIN_HELP}")  # fmt: skip
+
+
 def load_signal(spec: str, rate_hz: float = 100.0) -> Trajectory:
-    """Return commands from a ``commands.csv`` path (or a run folder) or a built-in name."""
+    """Return commands from a ``commands.csv`` path (or a run folder) or a built-in name.
+
+    Raises
+    ------
+    UsageError
+        For a path (a ``.csv``, a name with a folder in it, or a run folder without a
+        ``commands.csv``) that does not exist, saying what ``--signal`` takes.
+
+    """
+    from twin.errors import UsageError
     from twin.runs import read_commands
     from twin.signals import builtin_signal
 
     path = Path(spec)
     if path.is_dir():
         path = path / "commands.csv"
-    if path.suffix == ".csv" or path.exists():
-        return read_commands(path)
-    return builtin_signal(spec, rate_hz)
+    elif not path.exists() and path.suffix != ".csv" and "/" not in spec and os.sep not in spec:
+        return builtin_signal(spec, rate_hz)  # a name, not a path
+    if not path.exists():
+        raise UsageError(f"{path}: no such file or folder; --signal takes {signal_help()}")
+    return read_commands(path)
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
     """Add ``twin simulate`` to the ``twin`` parser."""
     from twin.chain.config import config_help
-    from twin.signals import BUILTIN_HELP
 
     p = sub.add_parser(
         "simulate",
@@ -51,7 +71,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "--signal",
         required=True,
         metavar="FILE_OR_NAME",
-        help=f"a commands.csv (any rate) or a built-in: {BUILTIN_HELP}",
+        help=signal_help(),
     )
     p.add_argument("--overwrite", action="store_true", help="replace an existing run folder")
     view = p.add_mutually_exclusive_group()

@@ -114,11 +114,51 @@ def fisher_std(
     }
 
 
-def _threshold(excess, a: float, b: float, xtol: float) -> float | None:
-    """Where ``excess`` crosses zero between a (no effect, negative) and b; None if never."""
-    if excess(b) < 0:
+#: Relative precision of a smallest detectable size, of its distance from no effect (so a
+#: delay of a few microseconds on quiet data is found as well as one of 30 ms).
+SIZE_RTOL = 1e-3
+
+
+def _threshold(excess, origin: float, to: float) -> float | None:
+    """Where ``excess`` crosses zero from ``origin`` (no effect) towards ``to``; None if never.
+
+    ``excess`` is negative at ``origin``; the crossing is found to :data:`SIZE_RTOL` of its
+    distance from ``origin``, however close to it.
+    """
+    if excess(to) < 0:
         return None
-    return float(optimize.brentq(excess, a, b, xtol=xtol))
+    step = to - origin
+    d = optimize.brentq(lambda d: excess(origin + d), 1e-9 * np.sign(step), step, xtol=1e-12,
+                        rtol=SIZE_RTOL)  # fmt: skip
+    return origin + float(d)
+
+
+def _decimals(distance: float, least: int) -> int:
+    """Return the decimals that show two significant digits of ``distance`` (>= ``least``)."""
+    if distance == 0 or not np.isfinite(distance):
+        return least
+    return max(least, 1 - int(np.floor(np.log10(abs(distance)))))
+
+
+def _delay_text(seconds: float) -> str:
+    """Return a delay (signed) in ms, or in µs below 1 ms: two significant digits at least."""
+    value, unit = (seconds * 1e3, "ms") if abs(seconds) >= 1e-3 else (seconds * 1e6, "µs")
+    return f"{value:+.{_decimals(value, 0)}f} {unit}"
+
+
+def _lead_text(seconds: float) -> str:
+    """Return a lead time constant as :func:`_delay_text` does, without the sign."""
+    return _delay_text(seconds).lstrip("+")
+
+
+def _gain_text(gain: float) -> str:
+    """Return a gain: three decimals, or as many as show two significant digits of gain - 1."""
+    return f"{gain:.{_decimals(gain - 1, 3)}f}"
+
+
+def _scale_text(scale: float) -> str:
+    """Return a noise scale: two decimals, or as many as show two significant digits of it - 1."""
+    return f"{scale:.{_decimals(scale - 1, 2)}f}"
 
 
 def smallest_detectable(
@@ -147,27 +187,27 @@ def smallest_detectable(
     out: dict[str, object] = {}
     d = excess_of("delay", "extra_delay_s")
     lo_d = -0.999 * float(base.case.config.delay_s)
-    less = _threshold(d, -1e-9, lo_d, 1e-5) if lo_d < -1e-6 else None
-    more = _threshold(d, 1e-9, 0.3, 1e-5)
+    less = _threshold(d, 0.0, lo_d) if lo_d < -1e-6 else None
+    more = _threshold(d, 0.0, 0.3)
     out["delay"] = {
         "parameter": "extra_delay_s",
         "values": [less, more],
-        "statement": _both("delay", less, more, lambda v: f"{v * 1e3:+.0f} ms"),
+        "statement": _both("delay", less, more, _delay_text),
     }
     g = excess_of("gain", "gain")
-    lo_g, hi_g = _threshold(g, 1 - 1e-9, 0.1, 1e-5), _threshold(g, 1 + 1e-9, 10.0, 1e-5)
+    lo_g, hi_g = _threshold(g, 1.0, 0.1), _threshold(g, 1.0, 10.0)
     out["gain"] = {
         "parameter": "gain",
         "values": [lo_g, hi_g],
-        "statement": _both("gain", lo_g, hi_g, lambda v: f"{v:.3f}"),
+        "statement": _both("gain", lo_g, hi_g, _gain_text),
     }
-    lead = _threshold(excess_of("lead", "time_constant_s"), 1e-9, 0.3, 1e-5)
+    lead = _threshold(excess_of("lead", "time_constant_s"), 0.0, 0.3)
     out["lead"] = {
         "parameter": "time_constant_s",
         "value": lead,
         "statement": "no lead up to 300 ms would have been found"
         if lead is None
-        else f"a lead above {lead * 1e3:.1f} ms would have been found",
+        else f"a lead above {_lead_text(lead)} would have been found",
     }
     for effect, name, extra, what in (
         ("platform_filter", "break_hz", None, "a platform filter (2nd order) breaking"),
@@ -190,11 +230,11 @@ def smallest_detectable(
         def nx(scale: float) -> float:
             return expected_noise_delta_bic(scale, segments, imu_known) - BIC_MARGIN
 
-        lo_n, hi_n = _threshold(nx, 1 - 1e-9, 0.01, 1e-4), _threshold(nx, 1 + 1e-9, 30.0, 1e-4)
+        lo_n, hi_n = _threshold(nx, 1.0, 0.01), _threshold(nx, 1.0, 30.0)
         out["noise"] = {
             "parameter": "scale",
             "values": [lo_n, hi_n],
-            "statement": _both("motion noise scale", lo_n, hi_n, lambda v: f"{v:.2f}"),
+            "statement": _both("motion noise scale", lo_n, hi_n, _scale_text),
         }
     return out
 

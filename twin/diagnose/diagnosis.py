@@ -255,6 +255,32 @@ class Diagnosis:
         return self.dofs[dof or next(iter(self.dofs))].plot(path, self.max_hz)
 
 
+def check_options(max_hz: float, imu_noise: float | None = None) -> None:
+    """Refuse a band or an IMU noise factor :func:`diagnose` cannot use, before any work.
+
+    Parameters
+    ----------
+    max_hz : float
+        Top of the analysis band [Hz]: in (0.5, 45].
+    imu_noise : float, optional
+        The IMU's noise over the data sheet's: in [0.001, 1000].
+
+    Raises
+    ------
+    SignalError
+        Naming the parameter (``max_hz``, ``imu_noise``) and its range.
+
+    """
+    if imu_noise is not None:  # a factor on the data sheet's noise densities
+        number(imu_noise, "imu_noise (factor on the data sheet)", lo=1e-3, hi=1e3,
+               error=SignalError)  # fmt: skip
+    if not np.isfinite(max_hz) or not 0.5 < max_hz <= 45.0:
+        raise SignalError(
+            f"max_hz must be in (0.5, 45] Hz (below the 50 Hz Nyquist frequency of the 100 Hz "
+            f"grid); got {max_hz}"
+        )
+
+
 def diagnose(
     runs: Sequence[str | Path | RecordedRun],
     config: str | MotionSystem | None = None,
@@ -295,14 +321,7 @@ def diagnose(
         recording at rest; by default it is fitted as a nuisance.
 
     """
-    if imu_noise is not None:  # a factor on the data sheet's noise densities
-        number(imu_noise, "imu_noise (factor on the data sheet)", lo=1e-3, hi=1e3,
-               error=SignalError)  # fmt: skip
-    if not np.isfinite(max_hz) or not 0.5 < max_hz <= 45.0:
-        raise SignalError(
-            f"max_hz must be in (0.5, 45] Hz (below the 50 Hz Nyquist frequency of the 100 Hz "
-            f"grid); got {max_hz}"
-        )
+    check_options(max_hz, imu_noise)
     case = load_case(runs, config, model, seed, dofs, realisations, progress)
     val = None
     if validate:
