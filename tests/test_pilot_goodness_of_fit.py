@@ -12,7 +12,7 @@ from twin.chain.config import motion_system
 from twin.errors import SignalError
 from twin.pilot.experiment import pitch_remnant_scale
 from twin.pilot.forcing import pitch_task
-from twin.pilot.mle import PARAMETERS, fit_pitch_pilot
+from twin.pilot.mle import PARAMETERS, fit_pitch_pilot, fit_text
 from twin.pilot.pitch import Feedthrough, PitchPilot, simulate_pitch
 
 CONFIG = motion_system("condition-8")
@@ -87,3 +87,10 @@ def test_a_feedthrough_needs_a_finite_gain_and_height_of_at_least_zero(bad):
         SignalError, match=r"feedthrough (gain|height_m) must be a finite number >= 0"
     ):
         Feedthrough(**bad)
+
+
+def test_the_fit_line_says_whether_the_model_holds_and_by_how_much_the_sds_are_too_narrow():
+    held = fit_text({"chi2": 35.0, "dof": 32.0, "ratio": 35 / 32, "p": 0.33})
+    assert "account for the data" in held and "does not" not in held
+    broken = fit_text({"chi2": 400.0, "dof": 32.0, "ratio": 12.5, "p": 1e-60})
+    assert "does not describe these data" in broken and "x3.5 (the square root" in broken

@@ -19,6 +19,7 @@ Examples
 
 from __future__ import annotations
 
+import re
 from collections.abc import Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
@@ -423,6 +424,25 @@ def _result(dof, f, h, cross, model, delay, source, noise) -> DfResult:
     )
 
 
+def joined_sources(sources: Sequence[str]) -> str:
+    """Return the sources of joined results in one phrase.
+
+    Runs of one simulated bench (``"mpi (full) run seed 0"``, ``... seed 1``) read
+    ``"mpi (full): runs with seeds 0, 1"``; other sources (run folders) are listed.
+    """
+    seeds: dict[str, list[int]] = {}
+    others = []
+    for source in dict.fromkeys(sources):
+        run = re.fullmatch(r"(.*) run seed (\d+)", source)
+        if run:
+            seeds.setdefault(run[1], []).append(int(run[2]))
+        else:
+            others.append(source)
+    joined = [f"{bench}: run{'s with seeds' if len(s) > 1 else ' with seed'} "
+              f"{', '.join(map(str, sorted(s)))}" for bench, s in seeds.items()]  # fmt: skip
+    return "; ".join(joined + sorted(others))
+
+
 def combine(results: Sequence[DfResult]) -> DfResult:
     """Join the describing functions of several runs of the same DOF (e.g. signals 1 and 2)."""
     if len({r.dof for r in results}) != 1:
@@ -434,7 +454,6 @@ def combine(results: Sequence[DfResult]) -> DfResult:
         return np.concatenate([getattr(r, name) for r in results])[order]
 
     cross = {d: np.concatenate([r.cross[d] for r in results])[order] for d in results[0].cross}
-    sources = "; ".join(sorted({r.source for r in results}))
     return _result(
         results[0].dof,
         f[order],
@@ -442,7 +461,7 @@ def combine(results: Sequence[DfResult]) -> DfResult:
         cross,
         join("model"),
         results[0].configured_delay_s,
-        sources,
+        joined_sources([r.source for r in results]),
         join("noise"),
     )
 

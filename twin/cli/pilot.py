@@ -33,7 +33,13 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
     """Add ``twin pilot`` and its subcommands to the ``twin`` parser."""
     from twin.chain.config import config_help
 
-    pilot = sub.add_parser("pilot", help="pilot-in-the-loop tasks and identification")
+    pilot = sub.add_parser(
+        "pilot",
+        help="pilot-in-the-loop tasks and identification",
+        description="Pilots in the loop (thesis Ch 2, 6, 7): fly the pitch task through a "
+        "motion configuration, run the Table 6.3 experiment, adapt the pilot to a configuration, "
+        "identify a pilot from recorded runs, Chapter 2's Monte-Carlo, the vestibular lead.",
+    )
     cmds = pilot.add_subparsers(dest="pilot_command", required=True, parser_class=parser_class)
     run = cmds.add_parser(
         "run",
@@ -53,6 +59,10 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
             common.quiet_parent(),
         ],
         help="fly the pitch task (§6.3) through a motion configuration",
+        description="Fly the pitch tracking task of §6.3 (the Table 6.2 forcing functions, the "
+        "pilot model of Eq 6.5-6.7 with remnant) through a motion configuration; print the "
+        "variances of e, u and theta and the pilot model's crossovers and phase margins, and "
+        "write the runs as twin-pilot/1 CSVs for `twin pilot identify` (--out).",
     )
     run.add_argument("config", metavar="CONFIG", help=config_help())
     run.add_argument("--runs", type=common.count(1, MAX_RUNS), default=1,
@@ -74,8 +84,13 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
             common.quiet_parent(),
             common.scheduler_parent(),
         ],
-        help="the eight Table 6.3 conditions, pilot fixed (their filter, delay and noise are the "
-        "experiment's factors: no overrides)",
+        help="the eight Table 6.3 conditions, flown by a fixed pilot model or (--pilot adaptive) "
+        "simulated subjects",
+        description="Fly the eight conditions of Table 6.3 (their filter, delay and noise are the "
+        "experiment's factors: no configuration overrides) with one fixed pilot model in every "
+        "condition (--pilot fixed, the default), or with simulated subjects who adapt their "
+        "equalisation and neuromuscular tuning to each motion system, analysed with the "
+        "thesis' repeated-measures ANOVA (--pilot adaptive).",
     )
     exp.add_argument("--runs", type=common.count(1, MAX_RUNS),
                      help=f"runs per condition of the fixed pilot (default 5; at most {MAX_RUNS}; "
@@ -98,7 +113,7 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
         "their equalisation and neuromuscular tuning to each motion system, with the thesis' "
         "repeated-measures ANOVA",
     )
-    _adaptation_options(exp)
+    _adaptation_options(exp, " (with --pilot adaptive)")
     exp.add_argument(
         "--subjects",
         type=common.count(2, MAX_SUBJECTS),
@@ -120,6 +135,10 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
         parents=[common.json_parent()],
         help="the pitch-task pilot's equalisation and neuromuscular tuning adapted to a motion "
         "configuration (minimises var(e) + r var(u))",
+        description="Adapt the pitch-task pilot to a motion configuration: the equalisation "
+        "(K_v, t_lead, t_lag, K_m) and neuromuscular tuning (omega_nm, zeta_nm) that minimise "
+        "var(e) + r var(u) through it, as a subject of `pilot experiment --pilot adaptive` "
+        "adapts to each condition.",
     )
     ada.add_argument("config", metavar="CONFIG", help=config_help())
     ada.add_argument(
@@ -131,6 +150,10 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
         "identify",
         parents=[common.overrides_parent(imu=False), common.json_parent(), common.quiet_parent()],
         help="FC, ARX and MLE on a twin-pilot/1 CSV",
+        description="Identify the pilot from twin-pilot/1 runs (§6.3.4): the Fourier-coefficient "
+        "(FC) and ARX estimates of the pilot's responses at the forcing functions' lines, and "
+        "the maximum-likelihood fit of the pilot model (Eq 6.5-6.7) in the closed loop through "
+        "the motion configuration the runs were flown with.",
     )
     ide.add_argument(
         "csv",
@@ -170,6 +193,10 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
             common.scheduler_parent(),
         ],
         help="Chapter 2 Monte-Carlo: FC versus ARX (§2.5)",
+        description="Chapter 2's Monte-Carlo study (§2.5): closed-loop runs identified with FC "
+        "and ARX, the spread of each at the forcing functions' lines, and ARX's analytic "
+        "standard deviation (Eq 2.16) against the spread; with --fit-runs, pilot-model fits "
+        "too.",
     )
     mc.add_argument("--runs", type=common.count(2, MAX_MC_RUNS), default=1000,
                     help="closed-loop runs (default 1000)")  # fmt: skip
@@ -180,6 +207,10 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
         "lead",
         parents=[common.overrides_parent(imu=False), common.json_parent()],
         help="vestibular lead through a configuration (§7.4)",
+        description="The vestibular lead through a configuration (§7.4): for the semicircular "
+        "canals and the otoliths, the lowest platform-filter break frequency (no delay) and the "
+        "largest delay (no filter) at which the lead channel lags an integrator by at most "
+        "--margin-deg over 0.06-2.8 Hz, and whether this configuration meets the criterion.",
     )
     lead.add_argument("config", metavar="CONFIG", help=config_help())
     lead.add_argument(
@@ -255,20 +286,24 @@ def _cmd_run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _adaptation_options(parser: argparse.ArgumentParser) -> None:
+def _adaptation_options(parser: argparse.ArgumentParser, when: str = "") -> None:
+    """Add the options of what a pilot adapts (``pilot adapt``, ``pilot experiment``).
+
+    ``when`` ends their help where they need another option (``pilot experiment``'s
+    ``--pilot adaptive``).
+    """
     parser.add_argument(
         "--fixed-neuromuscular",
         action="store_true",
         help="adapt only the equalisation (K_v, t_lead, t_lag, K_m) and keep the pilot's "
-        "neuromuscular system (omega_nm, zeta_nm), as a pilot model with fixed limitations "
-        "(pilot experiment: with --pilot adaptive)",
+        "neuromuscular system (omega_nm, zeta_nm), as a pilot model with fixed limitations" + when,
     )
     parser.add_argument(
         "--adapt-visual-delay",
         action="store_true",
         help="also adapt the visual delay tau_v, traded against the visual remnant (a "
         "speed-accuracy trade-off, twin.pilot.adapt.visual_noise_ratio; an assumption, not "
-        "the thesis') (pilot experiment: with --pilot adaptive)",
+        "the thesis')" + when,
     )
 
 
@@ -283,9 +318,10 @@ def _cmd_adapt(args: argparse.Namespace) -> int:
     from twin.chain.config import motion_system
     from twin.pilot.adapt import CONTROL_WEIGHT, adapt
 
-    a = adapt(motion_system(args.config),
-              weight=CONTROL_WEIGHT if args.weight is None else args.weight,
-              adapted=_adapted(args))  # fmt: skip
+    with common.options_named({"control weight r": "--weight (the control weight r)"}):
+        a = adapt(motion_system(args.config),
+                  weight=CONTROL_WEIGHT if args.weight is None else args.weight,
+                  adapted=_adapted(args))  # fmt: skip
     print(json.dumps(a.to_dict(), indent=2) if args.json else a.format())
     return 0
 
@@ -410,7 +446,7 @@ def _cmd_identify(args: argparse.Namespace) -> int:
     from twin.pilot.fc import fc_estimate
     from twin.pilot.felt_motion import felt_mismatch, match_motion
     from twin.pilot.forcing import pitch_task
-    from twin.pilot.mle import LOWER, PARAMETERS, UPPER, fit_pitch_pilot
+    from twin.pilot.mle import LOWER, PARAMETERS, UPPER, fit_pitch_pilot, fit_text
 
     overridden = common.overrides_given(args)
     if overridden and args.config is None:
@@ -510,6 +546,7 @@ def _cmd_identify(args: argparse.Namespace) -> int:
             f"response, u {loop}{reps}), VAF {mle.vaf_percent:.1f} %"
         )
         print("  " + motion.format())
+        print("  " + fit_text(mle.evidence["fit"]))
         own_sd = mle.crlb_at_estimate or mle.crlb
         for name, sd in mle.crlb.items():
             value = getattr(p, name)
@@ -619,7 +656,8 @@ def _cmd_lead(args: argparse.Namespace) -> int:
     from twin.pilot.lead import SENSORS, analyse_lead
 
     cfg = common.configured(args.config, args)
-    res = [analyse_lead(cfg, s, args.margin_deg) for s in SENSORS]
+    with common.options_named({"margin_deg": "--margin-deg"}):
+        res = [analyse_lead(cfg, s, args.margin_deg) for s in SENSORS]
     if args.json:
         from twin.jsonable import plain
 

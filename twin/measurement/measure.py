@@ -214,9 +214,8 @@ class Bench:
 
     def measure(self, sim: Simulation, meta: dict | None = None) -> Measurement:
         """Turn a simulation of this bench into a :class:`Measurement`."""
-        return from_imu(
-            sim.commands, sim.imu, f"{self.name} run seed {sim.seed}", self.config, dict(meta or {})
-        )
+        source = f"{self.config.name} ({self.model}) run seed {sim.seed}"
+        return from_imu(sim.commands, sim.imu, source, self.config, dict(meta or {}))
 
 
 def configure(

@@ -39,6 +39,8 @@ from twin.plotting import finish, pyplot
 from twin.progress import ProgressFn
 
 FloatArray = NDArray[np.float64]
+#: p of the fit's chi-square below which the model is said not to describe the data.
+MISFIT_P = 1e-3
 PARAMETERS = ("k_v", "t_lead", "t_lag", "tau_v", "k_m", "tau_m", "omega_nm", "zeta_nm")
 LOWER = np.array([0.01, 0.0, 0.0, 0.0, 0.0, 0.0, 3.0, 0.02])
 UPPER = np.array([20.0, 5.0, 5.0, 0.8, 10.0, 0.8, 40.0, 2.0])
@@ -140,7 +142,8 @@ class PilotFit:
         Vuong's statistic for the best against it); ``ruled_out_minima``, the same of the
         minima the data ruled out, which widen the bounds for the selection
         (:mod:`twin.pilot.selection`); ``range_end``, parameter -> the chi-square rise with
-        it on its end. JSON ``evidence``.
+        it on its end; ``fit``, the best fit's goodness of fit (:func:`goodness_of_fit`:
+        the VAF does not tell a model that does not hold, this does). JSON ``evidence``.
 
     """
 
@@ -634,6 +637,20 @@ def goodness_of_fit(chi2: float, dof: int) -> dict[str, float]:
     dof = max(int(dof), 1)
     return {"chi2": chi2, "dof": float(dof), "ratio": chi2 / dof,
             "p": float(chi2_dist.sf(chi2, dof))}  # fmt: skip
+
+
+def fit_text(fit: dict[str, float]) -> str:
+    """Return a line saying what :func:`goodness_of_fit`'s ``fit`` means for the estimates."""
+    head = (f"goodness of fit: chi-square {fit['chi2']:.1f} for {fit['dof']:.0f} degrees of "
+            f"freedom, x{fit['ratio']:.2f} what the remnant leaves at the lines (p ")  # fmt: skip
+    p = f"{fit['p']:.2g}" if fit["p"] >= 1e-300 else "< 1e-300"
+    if fit["p"] >= MISFIT_P:
+        return head + f"{p}): Eq 6.5-6.7 and the remnant account for the data"
+    return head + (f"{p}): Eq 6.5-6.7 does not describe these data. The estimates are the "
+                   "nearest such pilot's and may be biased; the sds are too narrow, by about "
+                   f"x{np.sqrt(fit['ratio']):.1f} (the square root of the ratio) or more. "
+                   "Look for what the model leaves out (a target feedforward, a passive "
+                   "path from the motion to the stick, a nonlinearity)")  # fmt: skip
 
 
 def _ruled_out(

@@ -397,7 +397,7 @@ class PopulationResult:
             ("phase_margin_disturbance_deg", "disturbance phase margin (Fig 6.7)", "deg"),
             ("crossover_target_rad_s", "target crossover (Fig 6.7)", "rad/s"),
             ("phase_margin_target_deg", "target phase margin (Fig 6.7)", "deg"),
-            ("k_v", "K_v (Fig 6.8)", "-"), ("k_m", "K_m (Fig 6.9)", "-"),
+            ("k_v", "K_v (Fig 6.8)", "-"), ("k_m", "K_m (Fig 6.9)", "s"),
             ("t_lead", "T_lead (Fig 6.8)", "s"), ("t_lag", "T_lag (Fig 6.8)", "s"),
             ("omega_nm", "omega_nm (Fig 6.9)", "rad/s"), ("zeta_nm", "zeta_nm (Fig 6.9)", "-"),
         )  # fmt: skip
