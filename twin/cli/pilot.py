@@ -120,6 +120,23 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
         help="simulated subjects with --pilot adaptive (default 9, the thesis' participants)",
     )
     exp.add_argument(
+        "--identify",
+        action="store_true",
+        help="with --pilot adaptive: measure the pilot model as the thesis did, each subject's "
+        "five repetitions flown in the time domain and Eq 6.5-6.7 fitted by the MLE to their "
+        "average (twin.pilot.identified; tau_m and tau_v in the ANOVA, each fit's goodness of "
+        "fit in --json's rows; about 15 s per subject on two cores)",
+    )
+    exp.add_argument(
+        "--feedthrough",
+        type=float,
+        default=0.0,
+        metavar="R",
+        help="with --identify: each subject also has a passive path from the motion to the "
+        "stick, R (0 to 2) of its condition-1 motion response at 3 rad/s "
+        "(twin.pilot.pitch.Feedthrough; an assumption; default 0: none; about 3x slower)",
+    )
+    exp.add_argument(
         "--populations",
         type=common.count(1, MAX_POPULATIONS),
         help="with --pilot adaptive: seeded populations (seeds SEED, SEED + 1, ...); from 2 on, "
@@ -345,6 +362,12 @@ def _cmd_experiment(args: argparse.Namespace) -> int:
         raise UsageError("--runs sets the fixed pilot's runs per condition; adaptive subjects "
                          "fly five repetitions per condition, as the thesis' participants "
                          "did")  # fmt: skip
+    if args.feedthrough and not args.identify:
+        raise UsageError("--feedthrough gives the subjects a path the MLE is to meet: give it "
+                         "with --identify")  # fmt: skip
+    if args.identify and (args.pilot != "adaptive" or (args.populations or 1) > 1):
+        raise UsageError("--identify measures one population of adaptive subjects: give it "
+                         "with --pilot adaptive and without --populations")  # fmt: skip
     if args.populations is not None:
         if args.pilot != "adaptive":
             raise UsageError("--populations counts populations of adaptive subjects: give it "
@@ -352,11 +375,17 @@ def _cmd_experiment(args: argparse.Namespace) -> int:
         if args.populations > 1:
             return _replication(args)
     if args.pilot == "adaptive":
+        from twin.pilot.identified import identified_population
         from twin.pilot.population import run_population
 
-        with common.engine(args) as engine:
-            p = run_population(args.subjects, args.seed, common.progress(args), engine,
-                               _adapted(args))  # fmt: skip
+        with common.engine(args) as engine, common.options_named({"feedthrough": "--feedthrough"}):
+            if args.identify:
+                p = identified_population(args.subjects, args.seed, common.progress(args),
+                                          engine, _adapted(args),
+                                          feedthrough=args.feedthrough)  # fmt: skip
+            else:
+                p = run_population(args.subjects, args.seed, common.progress(args), engine,
+                                   _adapted(args))  # fmt: skip
         if args.plot:
             plt = pyplot()
             plt.close(p.plot(args.plot))

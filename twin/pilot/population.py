@@ -16,7 +16,9 @@ thesis' procedure: var(e) and var(u) are the repetitions' own (frequency domain,
 :func:`twin.pilot.adapt.predict`), averaged; the pilot model identified on the averaged data is
 approximated by the repetitions' average pilot (geometric mean of each parameter), and
 its crossover frequencies and phase margins (:func:`twin.pilot.pitch.open_loops`), K_v, K_m,
-t_lead, t_lag, omega_nm and zeta_nm are the measures. (Each repetition flown as its own
+t_lead, t_lag, omega_nm and zeta_nm are the measures. (:mod:`twin.pilot.identified` measures
+them as the thesis did instead: the repetitions flown in the time domain and the model
+identified from them, tau_m included.) (Each repetition flown as its own
 measure, a single near-unstable draw dominated a subject's cell and the 1 Hz filter's effect
 on var(e) was lost in some populations.) Both the redraw and its fallback (after
 ``MAX_REDRAWS`` failed draws the adapted pilot itself) narrow the spread within a subject,
@@ -48,6 +50,7 @@ no population showed it; with the tuning adapted it is lower for 43 of 45.
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import Any
 
@@ -169,16 +172,8 @@ def fly_subject(
     ``adapted`` names the parameters the subject adapts (:func:`twin.pilot.adapt.adapt`);
     ``run_to_run_sd`` is their run-to-run variation (log-normal sd, :data:`ADAPTATION_SD`).
     """
-    rng = np.random.default_rng(np.random.SeedSequence([seed, 15, subject.number]))
-    rows, previous = [], None
-    for n in TABLE_6_3:
-        task = Task.pitch(f"condition-{n}")
-        starts = [dataclasses.replace(subject.limitations,
-                                      **dict(zip(EQUALISATION, x, strict=True)))
-                  for x in STARTS] + ([previous] if previous is not None else [])  # fmt: skip
-        a = adapt(task, subject.limitations, subject.weight, subject.noise_ratio, starts, adapted)
-        previous = a.pilot
-        flown = [_repetition(a, subject, task, rng, run_to_run_sd) for _ in range(REPETITIONS)]
+    rows = []
+    for n, task, a, flown in flown_conditions(subject, seed, adapted, run_to_run_sd):
         perf = [x for _, x in flown]
         # the thesis identified its model on the repetitions' average: the average pilot (its
         # log-parameters' mean); var(e) and var(u) are the runs' own, averaged
@@ -200,6 +195,30 @@ def fly_subject(
             "omega_nm": pilot.omega_nm, "zeta_nm": pilot.zeta_nm, "tau_v": pilot.tau_v,
         })  # fmt: skip
     return rows
+
+
+def flown_conditions(
+    subject: Subject,
+    seed: int = 0,
+    adapted: tuple[str, ...] = ADAPTED,
+    run_to_run_sd: float = ADAPTATION_SD,
+) -> Iterator[tuple[int, Task, Adapted, list[tuple[PitchPilot, Performance]]]]:
+    """Yield, per Table 6.3 condition in order, the subject's adaptation and its repetitions.
+
+    Each item is (condition, task, the adapted pilot, the ``REPETITIONS`` repetitions: each
+    one's pilot and performance); the arguments are :func:`fly_subject`'s.
+    """
+    rng = np.random.default_rng(np.random.SeedSequence([seed, 15, subject.number]))
+    previous = None
+    for n in TABLE_6_3:
+        task = Task.pitch(f"condition-{n}")
+        starts = [dataclasses.replace(subject.limitations,
+                                      **dict(zip(EQUALISATION, x, strict=True)))
+                  for x in STARTS] + ([previous] if previous is not None else [])  # fmt: skip
+        a = adapt(task, subject.limitations, subject.weight, subject.noise_ratio, starts, adapted)
+        previous = a.pilot
+        yield n, task, a, [_repetition(a, subject, task, rng, run_to_run_sd)
+                           for _ in range(REPETITIONS)]  # fmt: skip
 
 
 def _repetition(
@@ -301,6 +320,10 @@ class PopulationResult:
         The parameters the subjects adapted.
     run_to_run_sd : float
         Their run-to-run variation (log-normal sd).
+    identified : float or None
+        None: the pilot-model measures are the flown pilots' own (:func:`fly_subject`); a
+        number: identified from the runs, as the thesis did, with a passive feedthrough of
+        that relative size (0: none; :mod:`twin.pilot.identified`).
 
     """
 
@@ -309,6 +332,7 @@ class PopulationResult:
     seed: int
     adapted: tuple[str, ...] = ADAPTED
     run_to_run_sd: float = ADAPTATION_SD
+    identified: float | None = None
 
     def agreement(self) -> dict[str, dict[str, bool]]:
         """Per measure and factor, whether the prediction agrees with the thesis.
@@ -334,15 +358,20 @@ class PopulationResult:
         return {"anova": self.anova, "thesis": thesis, "agreement": self.agreement(),
                 "subjects": len({r["subject"] for r in self.rows}), "seed": self.seed,
                 "adapted": list(self.adapted), "run_to_run_sd": self.run_to_run_sd,
-                "rows": self.rows}  # fmt: skip
+                "identified": self.identified, "rows": self.rows}  # fmt: skip
 
     def format_table(self) -> str:
         """Plain-text table: predicted F, p, direction beside the thesis' F and direction."""
         agree = self.agreement()
+        how = ""
+        if self.identified is not None:
+            how = "; the pilot model identified from the runs (MLE)"
+            if self.identified:
+                how += f", each with a passive feedthrough {self.identified:g}"
         lines = [
             f"Chapter 6 predicted by {len({r['subject'] for r in self.rows})} adaptive "
             f"subjects (seed {self.seed}; adapting {', '.join(self.adapted)}; run-to-run "
-            f"variation {self.run_to_run_sd:.0%}); repeated-measures ANOVA, main effects",
+            f"variation {self.run_to_run_sd:.0%}{how}); repeated-measures ANOVA, main effects",
             f"{'measure':30s} {'factor':6s} {'F':>8s} {'p':>7s} dir | thesis F  dir  agrees",
         ]
         for m in self.anova:

@@ -381,7 +381,7 @@ def alike(results: Sequence[PopulationResult]) -> int:
     ------
     SignalError
         No populations, repeated seeds, or populations that differ in subjects, adapted
-        parameters, run-to-run variation or measures.
+        parameters, run-to-run variation, measures or how they were measured.
 
     """
     if not results:
@@ -393,13 +393,14 @@ def alike(results: Sequence[PopulationResult]) -> int:
         )
     first = results[0]
     subjects = len({r["subject"] for r in first.rows})
-    want = (subjects, first.adapted, first.run_to_run_sd, tuple(first.anova))
+    want = (subjects, first.adapted, first.run_to_run_sd, tuple(first.anova), first.identified)
     for r in results[1:]:
         got = (len({row["subject"] for row in r.rows}), r.adapted, r.run_to_run_sd,
-               tuple(r.anova))  # fmt: skip
+               tuple(r.anova), r.identified)  # fmt: skip
         if got != want:
             raise SignalError(f"populations differ in subjects, adapted parameters, run-to-run "
-                              f"variation or measures: {got} vs {want}")  # fmt: skip
+                              f"variation, measures or identification: {got} vs "
+                              f"{want}")  # fmt: skip
     return subjects
 
 
