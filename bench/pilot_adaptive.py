@@ -69,6 +69,7 @@ from twin.chain.config import motion_system
 from twin.pilot.adapt import ADAPTED, EQUALISATION, SPEED_ACCURACY, adapt
 from twin.pilot.design import ACCEPTANCE, MAX_SUBJECTS, Design, design
 from twin.pilot.experiment import pitch_remnant_scale
+from twin.pilot.identified import MAX_FEEDTHROUGH
 from twin.pilot.mle import PARAMETERS, bound_at, fit_pitch_pilot
 from twin.pilot.pitch import Feedthrough, PitchPilot, simulate_pitch
 from twin.pilot.population import (
@@ -267,8 +268,6 @@ def motion_delay_measured(n_subjects: int = 18, feedthrough: float = 0.0) -> Non
         a = np.array([[d[1][k], d[5][k]] for d in done])
         diff = a[:, 1] - a[:, 0]
         thesis = TABLES_6_4_TO_6_7.get(k, {}).get("filter")
-        if k == "tau_m":
-            thesis = (140.10, "-")  # Table 6.7 (not among the compared measures)
         th = "" if thesis is None else (f"; thesis d_z {'-' if thesis[1] == '-' else '+'}"
                                         f"{np.sqrt(thesis[0] / 9):.2f}")  # fmt: skip
         print(f"  {k:7s} condition 1 {_spread(a[:, 0])}, condition 5 {_spread(a[:, 1])}; d_z "
@@ -474,8 +473,9 @@ if __name__ == "__main__":
         parser.error(f"--coverage-runs must be at least 1; got {args.coverage_runs}")
     if args.design_subjects is not None and not 2 <= args.design_subjects <= MAX_SUBJECTS:
         parser.error(f"--design-subjects must be 2 to {MAX_SUBJECTS}; got {args.design_subjects}")
-    if not all(np.isfinite(r) and 0 <= r <= 2 for r in args.feedthrough):
-        parser.error(f"--feedthrough ratios must be 0 to 2; got {args.feedthrough}")
+    if not all(0 <= r <= MAX_FEEDTHROUGH for r in args.feedthrough):  # also refuses NaN
+        parser.error(f"--feedthrough ratios must be 0 to {MAX_FEEDTHROUGH:g}; "
+                     f"got {args.feedthrough}")  # fmt: skip
     if args.coverage_seed < 0:
         parser.error(f"--coverage-seed must be a seed >= 0; got {args.coverage_seed}")
     if args.motion_delay_only:

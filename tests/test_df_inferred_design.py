@@ -95,20 +95,25 @@ def test_a_signal_that_is_no_multisine_is_refused(tmp_path):
         w = np.clip(np.minimum(t, 60.0 - t) / 2, 0, 1)
         return np.radians(2.0) * w * np.sin(2 * np.pi * (0.1 * t + 0.02 * t**2))
 
-    with pytest.raises(SignalError, match=r"explain only 1 % .*\(signal\.frequencies_hz"):
+    with pytest.raises(SignalError, match=r"explain only \d+ % .*\(signal\.frequencies_hz"):
         analyse_df(from_run(write_run(tmp_path / "run", command=chirp)))
 
 
 def test_commands_cut_short_are_refused(tmp_path):
     """Commands that end mid-motion while the IMU goes on (the same test, a file cut)."""
     folder = write_run(tmp_path / "run", cmd_span=(0.0, 30.0))
-    with pytest.raises(RunFormatError, match=r"commands\.csv ends at 29\.98 s with pitch moving"):
+    with pytest.raises(
+        RunFormatError,
+        match=r"commands\.csv ends early: the commands cover 0-29\.98 s .* IMU moves as much",
+    ):
         from_run(folder)
 
 
 def test_an_imu_record_cut_short_is_refused(tmp_path):
     folder = write_run(tmp_path / "run", imu_span=(0.0, 30.0))
-    with pytest.raises(RunFormatError, match=r"imu\.csv ends at 29\.9975 s with pitch moving"):
+    with pytest.raises(
+        RunFormatError, match=r"imu\.csv ends early: .* the commands move outside the IMU record"
+    ):
         from_run(folder)
 
 

@@ -39,8 +39,7 @@ def test_run_writes_a_csv_that_identify_reads(capsys, tmp_path):
     assert len(out["mle"]["evidence"]["competing_minima"]) == len(out["mle"]["competing_minima"])
     assert set(out["mle"]["evidence"]["range_end"]) == set(out["mle"]["range_end"])
     fit = out["mle"]["evidence"]["fit"]  # the twin's own pilot: the model holds
-    assert fit["dof"] == 2 * 20 - 8 + sum(1 for _ in out["mle"]["on_range_bound"])
-    assert fit["p"] > 1e-3
+    assert 0.3 < fit["ratio"] < 3.0 and fit["p"] > 1e-3
     # no --config: the motion system is the one the run's theta_felt follows (condition-1's
     # pitch response, which condition-2 and srs share)
     assert out["motion"]["source"] == "theta_felt" and out["motion"]["mismatch"] < 0.01

@@ -49,7 +49,7 @@ def test_identify_is_refused_where_it_means_nothing(capsys):
                          "without --populations")):  # fmt: skip
         assert main(["pilot", "experiment", *argv]) == 2
         assert needs in capsys.readouterr().err
-    with pytest.raises(SignalError, match=r"feedthrough must be .* \[0, 2\]; got nan"):
+    with pytest.raises(SignalError, match=r"feedthrough must be .* \[0, 1\]; got nan"):
         identified_population(2, 0, feedthrough=float("nan"))
 
 
@@ -66,3 +66,21 @@ def test_nine_subjects_identified_find_the_large_filter_effects(capsys):
     for m in ("crossover_disturbance_rad_s", "phase_margin_disturbance_deg", "var_e", "k_v",
               "k_m", "t_lead", "t_lag", "omega_nm"):  # fmt: skip
         assert out["agreement"][m]["filter"], (m, out["anova"][m]["filter"])
+
+
+def test_populations_measured_differently_are_not_pooled():
+    """A population whose pilot model was identified (with or without a feedthrough) is not
+    comparable with one whose measures are the pilots' own (replication.alike)."""
+    from planted import planted_rows
+
+    from twin.pilot.population import PopulationResult, anova
+    from twin.pilot.replication import alike
+
+    def population(seed, identified):
+        rows = planted_rows(seed)
+        return PopulationResult(rows, anova(rows, ("k_v",)), seed, identified=identified)
+
+    assert alike([population(0, None), population(1, None)]) == 9
+    for identified in (0.0, 0.5):
+        with pytest.raises(SignalError, match="identification"):
+            alike([population(0, None), population(1, identified)])

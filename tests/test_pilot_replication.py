@@ -119,7 +119,7 @@ def test_a_replication_refuses_one_population_and_mixed_settings():
     with pytest.raises(SignalError, match=r"distinct populations; seeds \[0, 0\] repeat"):
         replicate([one, one])
     fewer = PopulationResult(rows, anova(rows, ("k_v",)), 1)
-    with pytest.raises(SignalError, match="or measures"):
+    with pytest.raises(SignalError, match="measures or identification"):
         replicate([one, fewer])
     flat = copy.deepcopy(one.anova)
     flat["k_v"]["delay"]["F"] = float("inf")

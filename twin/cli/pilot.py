@@ -133,7 +133,7 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
         default=0.0,
         metavar="R",
         help="with --identify: each subject also has a passive path from the motion to the "
-        "stick, R (0 to 2) of its condition-1 motion response at 3 rad/s "
+        "stick, R (0 to 1) of its condition-1 motion response at 3 rad/s "
         "(twin.pilot.pitch.Feedthrough; an assumption; default 0: none; about 3x slower)",
     )
     exp.add_argument(

@@ -40,8 +40,10 @@ G = 9.81
 ANALYSIS_RATE_HZ = 100.0
 #: Least time [s] the IMU record and the commands must cover together to be measured.
 MIN_OVERLAP_S = 1.0
-#: A command's first or last speed or acceleration above this share of the run's largest is
-#: "moving".
+#: Where one file goes on beyond the other, the share of its activity in the time both cover
+#: above which the test went on there (a file cut short).
+GOES_ON = 0.3
+#: A command's first or last speed or acceleration above this share of its largest: moving.
 MOVING_REL = 0.01
 
 
@@ -132,45 +134,58 @@ def from_run(run: RecordedRun | str | Path) -> Measurement:
 
 
 def _check_not_cut(rec: RecordedRun) -> None:
-    """Refuse a commands file or an IMU record that stops while the platform moves.
+    """Refuse a commands file or an IMU record that stops while the test goes on.
 
     An IMU logged beyond the commands is common (the platform at rest before and after the
-    test), and only the time both cover is measured; but where one file goes on beyond the
-    other and the commands are moving at the edge of the time both cover (speed or
-    acceleration above :data:`MOVING_REL` of the run's largest), the test was cut midway: a
-    file cut short, whose measurement would pair the IMU with the wrong commands. (A hold,
-    the platform kept at a pose, has neither speed nor acceleration.)
+    test), and only the time both cover is measured. But where one file goes on more than
+    :data:`MIN_OVERLAP_S` beyond the other, what it holds there tells whether the test went
+    on: commands still moving there (their speed's rms at least :data:`GOES_ON` of that in the
+    time both cover, in a DOF that moves), or commands that stop moving (speed or
+    acceleration at their first or last sample above :data:`MOVING_REL` of their largest, in
+    a DOF that moves) while the IMU moves there about as much as during the test (no logged
+    channel's rms, mean removed, down to :data:`GOES_ON` of its own in the time both cover)
+    mean a file cut short, whose measurement would pair the IMU with the wrong commands.
     """
     c = rec.commands
-    if c.n < 3:
-        return
     first, last = c.t0, c.t0 + c.duration
-    speed, acc = np.diff(c.values, axis=0), np.diff(c.values, 2, axis=0)
-    tops = [np.abs(d).max(axis=0) for d in (speed, acc)]
+    both = (max(first, rec.imu_t[0]), min(last, rec.imu_t[-1]))
+    speed = np.diff(c.values, axis=0) * c.rate_hz
+    ts = c.t[:-1]
 
-    def moving(t: float) -> tuple[float, str]:
-        """Return the commands' largest relative speed or acceleration at ``t``, its DOF."""
-        row = int(np.clip(round((t - c.t0) * c.rate_hz), 0, c.n - 3))
-        rel = np.maximum(*(np.abs(d[row]) / np.where(top > 0, top, np.inf)
-                           for d, top in zip((speed, acc), tops, strict=True)))  # fmt: skip
-        return float(rel.max()), c.names[int(np.argmax(rel))]
+    def rms(x: FloatArray, lo: float, hi: float, t: FloatArray) -> FloatArray:
+        y = x[(t >= lo) & (t <= hi)]
+        return np.sqrt(np.mean((y - y.mean(axis=0)) ** 2, axis=0)) if len(y) > 1 else 0 * x[0]
 
-    imu = f"{rec.path}/imu.csv"
-    cmd = f"{rec.path}/commands.csv"
-    edges = (
-        (first - rec.imu_t[0], first, f"{cmd} starts at {first:g} s"),
-        (rec.imu_t[-1] - last, last, f"{cmd} ends at {last:g} s"),
-        (rec.imu_t[0] - first, rec.imu_t[0], f"{imu} starts at {rec.imu_t[0]:g} s"),
-        (last - rec.imu_t[-1], rec.imu_t[-1], f"{imu} ends at {rec.imu_t[-1]:g} s"),
-    )
-    for gap, when, what in edges:
-        rel, dof = moving(when)
-        if gap > MIN_OVERLAP_S and rel > MOVING_REL:
-            raise RunFormatError(
-                f"{what} with {dof} moving, while the commands cover {first:g}-{last:g} s and "
-                f"the IMU {rec.imu_t[0]:g}-{rec.imu_t[-1]:g} s: a file looks cut short; give "
-                "the whole file, or cut the other to the time both cover"
-            )
+    during_cmd = rms(speed, *both, ts)
+    moves = during_cmd > 0.01 * during_cmd.max()  # DOFs the test drives (not numerical dust)
+    during_imu = rms(rec.imu, *both, rec.imu_t)
+    live = during_imu > 0  # a channel logged as a constant tells nothing
+    # the commands' speed and acceleration at their first and last sample, over their largest
+    acc = np.diff(c.values, 2, axis=0) if c.n > 2 else np.zeros((1, c.values.shape[1]))
+    rel = [np.abs(d[[0, -1]]) / np.where(np.abs(d).max(axis=0) > 0, np.abs(d).max(axis=0), 1)
+           for d in (speed, acc)]  # fmt: skip
+    at_edge = np.where(moves, np.maximum(*rel), 0.0).max(axis=1)  # (first, last)
+    span = (f"the commands cover {first:g}-{last:g} s and the IMU {rec.imu_t[0]:g}-"
+            f"{rec.imu_t[-1]:g} s")  # fmt: skip
+    for lo, hi, row, what in ((rec.imu_t[0], first, 0, "commands.csv starts late"),
+                              (last, rec.imu_t[-1], 1, "commands.csv ends early")):  # fmt: skip
+        if hi - lo > MIN_OVERLAP_S and at_edge[row] > MOVING_REL and live.any():
+            beyond = rms(rec.imu, lo, hi, rec.imu_t)
+            if np.all(beyond[live] > GOES_ON * during_imu[live]):
+                raise RunFormatError(
+                    f"{rec.path}/{what}: {span}, and the IMU moves as much outside the "
+                    "commands as within them; give the whole commands, or cut imu.csv to "
+                    "the time they cover"
+                )
+    for lo, hi, what in ((first, rec.imu_t[0], "imu.csv starts late"),
+                         (rec.imu_t[-1], last, "imu.csv ends early")):  # fmt: skip
+        if hi - lo > MIN_OVERLAP_S and moves.any():
+            beyond = rms(speed, lo, hi, ts)
+            if np.any(beyond[moves] >= GOES_ON * during_cmd[moves]):
+                raise RunFormatError(
+                    f"{rec.path}/{what}: {span}, and the commands move outside the IMU "
+                    "record; give the whole record, or cut commands.csv to the time it covers"
+                )
 
 
 @dataclass(frozen=True)

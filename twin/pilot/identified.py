@@ -37,7 +37,7 @@ from twin.pilot.mle import PARAMETERS, fit_pitch_pilot
 from twin.pilot.pitch import Feedthrough, open_loops, simulate_pitch
 from twin.pilot.population import (
     ADAPTATION_SD,
-    MEASURES,
+    COMPARED,
     PopulationResult,
     Subject,
     anova,
@@ -51,9 +51,14 @@ from twin.tasks.engine import Engine, using
 
 #: Remnant power relative to u's on the SRS baseline (the thesis' level, §6.3.4).
 REMNANT_RATIO = 0.15
+#: A run whose var(e) exceeds this many times the adapted pilot's has lost control for good.
+DIVERGED = 100.0
 #: Measures compared with the thesis when the model is identified: the contract's, the
 #: lead-lag pair, the neuromuscular tuning and both delays (Tables 6.4-6.7).
-IDENTIFIED = (*MEASURES, "t_lead", "t_lag", "omega_nm", "zeta_nm", "tau_v", "tau_m")
+IDENTIFIED = (*COMPARED, "tau_m")
+#: Largest feedthrough (share of the motion response at 3 rad/s) flown: the passive path is
+#: positive feedback, and at 2 the default subject's loop diverges behind the filter.
+MAX_FEEDTHROUGH = 1.0
 
 
 def identified_subject(
@@ -78,6 +83,16 @@ def identified_subject(
         runs = [simulate_pitch(pilot, task.config, 1, run_seed(seed, subject, n, k), scale,
                                feedthrough=path)
                 for k, (pilot, _) in enumerate(flown)]  # fmt: skip
+        lost = [
+            k for k, r in enumerate(runs) if not np.var(r.e[0]) < DIVERGED * a.performance.var_e
+        ]
+        if lost:
+            raise SignalError(
+                f"subject {subject.number}, condition {n}: repetition {lost[0] + 1}'s loop "
+                f"diverged (var(e) above {DIVERGED:g} times the adapted pilot's)"
+                + (f"; the feedthrough {feedthrough:g} destabilises it: give a smaller one"
+                   if feedthrough else "")
+            )  # fmt: skip
         u = np.vstack([r.u[0] for r in runs])
         fit = fit_pitch_pilot(runs[0].ft, runs[0].fd, u, task.config)
         loops = open_loops(fit.pilot, task.config)
@@ -122,13 +137,14 @@ def identified_population(
     Raises
     ------
     SignalError
-        A run-to-run variation out of range, or a feedthrough outside [0, 2].
+        A run-to-run variation out of range, a feedthrough outside [0, ``MAX_FEEDTHROUGH``],
+        or a loop that diverged.
 
     """
     adapted = checked_settings(adapted, run_to_run_sd)
-    if not 0 <= feedthrough <= 2:  # also refuses NaN
-        raise SignalError(f"feedthrough must be a share of the motion response in [0, 2]; "
-                          f"got {feedthrough}")  # fmt: skip
+    if not 0 <= feedthrough <= MAX_FEEDTHROUGH:  # also refuses NaN
+        raise SignalError(f"feedthrough must be a share of the motion response in "
+                          f"[0, {MAX_FEEDTHROUGH:g}]; got {feedthrough}")  # fmt: skip
     subs = subjects(n_subjects, seed)
     args = [(s, seed, adapted, run_to_run_sd, feedthrough) for s in subs]
     names = [{"subject": s.number, "seed": seed} for s in subs]

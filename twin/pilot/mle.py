@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import dataclasses
 import itertools
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -581,7 +581,7 @@ def fit_pitch_pilot(
             for r, _ in ruled
         ],
         "range_end": {name: rise for name, (_, rise) in ends.items()},
-        "fit": goodness_of_fit(chi2, best_r.size - (len(PARAMETERS) - len(on_bound))),
+        "fit": goodness_of_fit(chi2, best_r.size - _free(best.x, on_bound)),
     }
     points = [*(r.x for r in rivals), *inward.values(), *(x for x, _ in ends.values())]
     # a point's own parameters on an end are held there, and spread nothing about it
@@ -625,12 +625,22 @@ def fit_pitch_pilot(
                     {name: make(x) for name, (x, _) in ends.items()}, evidence)  # fmt: skip
 
 
+def _free(x: FloatArray, on_bound: Sequence[int]) -> int:
+    """Return how many parameters moved freely: not on a bound, nor tau_m behind K_m = 0."""
+    held = set(on_bound)
+    if PARAMETERS.index("k_m") in held and x[PARAMETERS.index("k_m")] == 0:
+        held.add(PARAMETERS.index("tau_m"))  # a delay on nothing
+    return len(PARAMETERS) - len(held)
+
+
 def goodness_of_fit(chi2: float, dof: int) -> dict[str, float]:
     """Return the best fit's chi-square against the remnant: ``{"chi2", "dof", "ratio", "p"}``.
 
     ``ratio`` is chi-square per degree of freedom (line residuals, two per line, less the free
     parameters); ``p`` the chance of one at least this large were the model the pilot and
-    the remnant all that is left at the lines (chi-square with ``dof`` degrees of freedom).
+    the remnant all that is left at the lines (chi-square with ``dof`` degrees of freedom;
+    approximate, as the remnant's variance at each line is estimated from its neighbours:
+    on the twin's own pilot the ratio's spread matches the chi-square's, see the README).
     """
     from scipy.stats import chi2 as chi2_dist
 

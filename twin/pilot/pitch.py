@@ -284,7 +284,9 @@ def simulate_pitch(
         Called with the flown time about every 2 % of the run (:mod:`twin.progress`).
     feedthrough : Feedthrough, optional
         A passive path from the felt motion to the stick beside the pilot's (none by
-        default; with one the loop is stepped one sample at a time, about 3x slower).
+        default; with one the loop and its motion chain are stepped one sample at a time:
+        about 3x slower on the reduced platform, far slower on the full one; a motion
+        delay below half a sample then acts one sample late).
 
     """
     cfg = motion_system(config) if isinstance(config, str) else config

@@ -37,7 +37,8 @@ class WithPassive:
     """A pilot's motion channel ``d_active`` samples late beside a passive path one sample late.
 
     Stepped by the loop as a motion channel with a delay of one sample (so the loop steps
-    one sample at a time): the active channel's extra ``d_active - 1`` samples are kept here.
+    one sample at a time): the active channel's extra ``d_active - 1`` samples are kept here
+    (an active channel of no delay, ``d_active`` 0, acts one sample late).
     ``active`` None: the passive path alone (a pilot who does not use the motion).
     """
 
