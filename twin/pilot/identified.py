@@ -34,7 +34,7 @@ from twin.errors import SignalError
 from twin.pilot.adapt import ADAPTED
 from twin.pilot.experiment import pitch_remnant_scale
 from twin.pilot.mle import PARAMETERS, fit_pitch_pilot
-from twin.pilot.pitch import Feedthrough, open_loops, simulate_pitch
+from twin.pilot.pitch import Feedthrough, simulate_pitch
 from twin.pilot.population import (
     ADAPTATION_SD,
     COMPARED,
@@ -42,8 +42,8 @@ from twin.pilot.population import (
     Subject,
     anova,
     checked_settings,
+    condition_row,
     flown_conditions,
-    levels,
     subjects,
 )
 from twin.progress import ProgressFn
@@ -95,20 +95,11 @@ def identified_subject(
             )  # fmt: skip
         u = np.vstack([r.u[0] for r in runs])
         fit = fit_pitch_pilot(runs[0].ft, runs[0].fd, u, task.config)
-        loops = open_loops(fit.pilot, task.config)
-        deg2 = (180 / np.pi) ** 2
-        rows.append({
-            "subject": subject.number, "condition": n, **levels(n),
-            "crossover_disturbance_rad_s": loops.crossover_d,
-            "crossover_target_rad_s": loops.crossover_t,
-            "phase_margin_disturbance_deg": loops.phase_margin_d,
-            "phase_margin_target_deg": loops.phase_margin_t,
-            "var_u": float(np.mean([np.var(r.u[0]) for r in runs])) * deg2,
-            "var_e": float(np.mean([np.var(r.e[0]) for r in runs])) * deg2,
-            **{k: getattr(fit.pilot, k) for k in PARAMETERS},
-            "chi2_per_dof": fit.evidence["fit"]["ratio"],
-            "tau_m_identifiable": float("tau_m" not in fit.unidentifiable),
-        })  # fmt: skip
+        row = condition_row(subject, n, fit.pilot, task,
+                            float(np.mean([np.var(r.e[0]) for r in runs])),
+                            float(np.mean([np.var(r.u[0]) for r in runs])), PARAMETERS)  # fmt: skip
+        rows.append({**row, "chi2_per_dof": fit.evidence["fit"]["ratio"],
+                     "tau_m_identifiable": float("tau_m" not in fit.unidentifiable)})  # fmt: skip
     return rows
 
 

@@ -180,21 +180,42 @@ def fly_subject(
         pilot = dataclasses.replace(a.pilot, **{
             k: float(np.exp(np.mean([np.log(getattr(r, k)) for r, _ in flown])))
             if getattr(a.pilot, k) > 0 else 0.0 for k in a.adapted})  # fmt: skip
-        loops = open_loops(pilot, task.config)
-        deg2 = (180 / np.pi) ** 2
-        rows.append({
-            "subject": subject.number, "condition": n, **levels(n),
-            "crossover_disturbance_rad_s": loops.crossover_d,
-            "crossover_target_rad_s": loops.crossover_t,
-            "phase_margin_disturbance_deg": loops.phase_margin_d,
-            "phase_margin_target_deg": loops.phase_margin_t,
-            "var_u": float(np.mean([x.var_u for x in perf])) * deg2,
-            "var_e": float(np.mean([x.var_e for x in perf])) * deg2,
-            "k_m": pilot.k_m, "k_v": pilot.k_v,
-            "t_lead": pilot.t_lead, "t_lag": pilot.t_lag,
-            "omega_nm": pilot.omega_nm, "zeta_nm": pilot.zeta_nm, "tau_v": pilot.tau_v,
-        })  # fmt: skip
+        rows.append(condition_row(subject, n, pilot, task,
+                                  float(np.mean([x.var_e for x in perf])),
+                                  float(np.mean([x.var_u for x in perf]))))  # fmt: skip
     return rows
+
+
+#: The pilot parameters in a row of :func:`fly_subject` (in this order).
+ROW_PARAMETERS = ("k_m", "k_v", "t_lead", "t_lag", "omega_nm", "zeta_nm", "tau_v")
+
+
+def condition_row(
+    subject: Subject,
+    condition: int,
+    pilot: PitchPilot,
+    task: Task,
+    var_e: float,
+    var_u: float,
+    parameters: tuple[str, ...] = ROW_PARAMETERS,
+) -> dict[str, float]:
+    """Return one subject's measures in one condition, as the ANOVA takes them.
+
+    ``pilot`` is the subject's model there (its open loops give the crossovers and phase
+    margins), ``var_e`` and ``var_u`` are in rad^2 (the row holds deg^2), ``parameters``
+    are the pilot's parameters the row holds.
+    """
+    loops = open_loops(pilot, task.config)
+    deg2 = (180 / np.pi) ** 2
+    return {
+        "subject": subject.number, "condition": condition, **levels(condition),
+        "crossover_disturbance_rad_s": loops.crossover_d,
+        "crossover_target_rad_s": loops.crossover_t,
+        "phase_margin_disturbance_deg": loops.phase_margin_d,
+        "phase_margin_target_deg": loops.phase_margin_t,
+        "var_u": var_u * deg2, "var_e": var_e * deg2,
+        **{k: getattr(pilot, k) for k in parameters},
+    }  # fmt: skip
 
 
 def flown_conditions(
