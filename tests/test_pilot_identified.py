@@ -45,8 +45,8 @@ def test_tau_m_is_identified_where_motion_is_used_and_not_behind_the_filter(subj
 def test_identify_is_refused_where_it_means_nothing(capsys):
     for argv, needs in ((["--feedthrough", "0.5"], "--identify"),
                         (["--identify"], "--pilot adaptive"),
-                        (["--pilot", "adaptive", "--identify", "--populations", "3"],
-                         "without --populations")):  # fmt: skip
+                        (["--pilot", "adaptive", "--identify", "--populations", "3",
+                          "--feedthrough", "1.5"], "--feedthrough must be")):  # fmt: skip
         assert main(["pilot", "experiment", *argv]) == 2
         assert needs in capsys.readouterr().err
     with pytest.raises(SignalError, match=r"feedthrough must be .* \[0, 1\]; got nan"):
@@ -84,3 +84,16 @@ def test_populations_measured_differently_are_not_pooled():
     for identified in (0.0, 0.5):
         with pytest.raises(SignalError, match="identification"):
             alike([population(0, None), population(1, identified)])
+
+
+@pytest.mark.slow
+def test_identified_populations_replicate_as_one_flown_alone():
+    """Populations measured as the thesis did, flown together for a replication, are each the
+    population flown alone (same bits), and tau_m is among the replicated effects."""
+    from twin.pilot.replication import run_populations
+
+    rep, results = run_populations(2, 2, seed=5, identified=0.0)
+    assert [r.identified for r in results] == [0.0, 0.0]
+    alone = identified_population(2, 6)
+    assert results[1].rows == alone.rows
+    assert len(rep.effect("tau_m", "filter").signed_f) == 2

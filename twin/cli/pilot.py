@@ -125,7 +125,8 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
         help="with --pilot adaptive: measure the pilot model as the thesis did, each subject's "
         "five repetitions flown in the time domain and Eq 6.5-6.7 fitted by the MLE to their "
         "average (twin.pilot.identified; tau_m and tau_v in the ANOVA, each fit's goodness of "
-        "fit in --json's rows; about 15 s per subject on two cores)",
+        "fit in --json's rows; about 15 s per subject on two cores; with --populations, "
+        "over populations)",
     )
     exp.add_argument(
         "--feedthrough",
@@ -365,9 +366,9 @@ def _cmd_experiment(args: argparse.Namespace) -> int:
     if args.feedthrough and not args.identify:
         raise UsageError("--feedthrough gives the subjects a path the MLE is to meet: give it "
                          "with --identify")  # fmt: skip
-    if args.identify and (args.pilot != "adaptive" or (args.populations or 1) > 1):
-        raise UsageError("--identify measures one population of adaptive subjects: give it "
-                         "with --pilot adaptive and without --populations")  # fmt: skip
+    if args.identify and args.pilot != "adaptive":
+        raise UsageError("--identify measures the pilot model of adaptive subjects: give it "
+                         "with --pilot adaptive")  # fmt: skip
     if args.populations is not None:
         if args.pilot != "adaptive":
             raise UsageError("--populations counts populations of adaptive subjects: give it "
@@ -411,9 +412,11 @@ def _replication(args: argparse.Namespace) -> int:
     from twin.pilot.design import MIN_POOL, design
     from twin.pilot.replication import run_populations
 
-    with common.engine(args) as engine:
+    identified = args.feedthrough if args.identify else None
+    with common.engine(args) as engine, common.options_named({"feedthrough": "--feedthrough"}):
         rep, results = run_populations(args.populations, args.subjects, args.seed,
-                                       common.progress(args), engine, _adapted(args))  # fmt: skip
+                                       common.progress(args), engine, _adapted(args),
+                                       identified=identified)  # fmt: skip
     pooled = args.populations * args.subjects
     plan = design(results) if pooled >= MIN_POOL else None
     if args.plot:

@@ -133,14 +133,37 @@ def identified_population(
 
     """
     adapted = checked_settings(adapted, run_to_run_sd)
-    if not 0 <= feedthrough <= MAX_FEEDTHROUGH:  # also refuses NaN
-        raise SignalError(f"feedthrough must be a share of the motion response in "
-                          f"[0, {MAX_FEEDTHROUGH:g}]; got {feedthrough}")  # fmt: skip
-    subs = subjects(n_subjects, seed)
-    args = [(s, seed, adapted, run_to_run_sd, feedthrough) for s in subs]
-    names = [{"subject": s.number, "seed": seed} for s in subs]
+    check_feedthrough(feedthrough)
+    args, names = identified_tasks(n_subjects, seed, adapted, run_to_run_sd, feedthrough)
     with using(scheduler) as engine:
         flown = engine.map(identified_subject, args, names, "subjects", progress).values()
+    return identified_result(flown, seed, adapted, run_to_run_sd, feedthrough)
+
+
+def check_feedthrough(feedthrough: float) -> None:
+    """Refuse a feedthrough outside [0, ``MAX_FEEDTHROUGH``] (or NaN)."""
+    if not 0 <= feedthrough <= MAX_FEEDTHROUGH:
+        raise SignalError(f"feedthrough must be a share of the motion response in "
+                          f"[0, {MAX_FEEDTHROUGH:g}]; got {feedthrough}")  # fmt: skip
+
+
+def identified_tasks(
+    n_subjects: int, seed: int, adapted: tuple[str, ...], run_to_run_sd: float, feedthrough: float
+) -> tuple[list[tuple], list[dict[str, int]]]:
+    """Arguments of :func:`identified_subject` per subject of population ``seed``, and names."""
+    subs = subjects(n_subjects, seed)
+    return ([(s, seed, adapted, run_to_run_sd, feedthrough) for s in subs],
+            [{"subject": s.number, "seed": seed} for s in subs])  # fmt: skip
+
+
+def identified_result(
+    flown: list[list[dict[str, float]]],
+    seed: int,
+    adapted: tuple[str, ...],
+    run_to_run_sd: float,
+    feedthrough: float,
+) -> PopulationResult:
+    """Assemble the subjects' identified rows (in subject order) and their ANOVA."""
     rows = [row for r in flown for row in r]
     return PopulationResult(rows, anova(rows, IDENTIFIED), seed, adapted, run_to_run_sd,
                             feedthrough)  # fmt: skip

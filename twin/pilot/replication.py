@@ -58,6 +58,12 @@ from scipy import stats
 
 from twin.errors import SignalError
 from twin.pilot.adapt import ADAPTED
+from twin.pilot.identified import (
+    check_feedthrough,
+    identified_result,
+    identified_subject,
+    identified_tasks,
+)
 from twin.pilot.population import (
     ADAPTATION_SD,
     FACTORS,
@@ -456,6 +462,7 @@ def run_populations(
     scheduler: Engine | str | None = None,
     adapted: tuple[str, ...] = ADAPTED,
     run_to_run_sd: float = ADAPTATION_SD,
+    identified: float | None = None,
 ) -> tuple[Replication, list[PopulationResult]]:
     """Fly ``n_populations`` populations (seeds ``seed``, ``seed + 1``, ...) and replicate.
 
@@ -479,6 +486,10 @@ def run_populations(
         What the subjects adapt (:data:`twin.pilot.adapt.ADAPTED`).
     run_to_run_sd : float
         Their run-to-run variation (log-normal sd, 0 to 1).
+    identified : float, optional
+        Measure the pilot model as the thesis did, identified from the runs, with a passive
+        feedthrough of this relative size (0: none; :mod:`twin.pilot.identified`); None (the
+        default): the pilots' own measures.
 
     Returns
     -------
@@ -497,11 +508,23 @@ def run_populations(
         raise SignalError(f"a replication needs at least 2 populations; got {n_populations}")
     adapted = checked_settings(adapted, run_to_run_sd)
     seeds = list(range(seed, seed + n_populations))
-    tasks = [population_tasks(n_subjects, s, adapted, run_to_run_sd) for s in seeds]
+    if identified is None:
+        fly, tasks = fly_subject, [population_tasks(n_subjects, s, adapted, run_to_run_sd)
+                                   for s in seeds]  # fmt: skip
+    else:
+        check_feedthrough(identified)
+        fly = identified_subject
+        tasks = [identified_tasks(n_subjects, s, adapted, run_to_run_sd, identified)
+                 for s in seeds]  # fmt: skip
     args = [a for t in tasks for a in t[0]]
     inputs = [i for t in tasks for i in t[1]]
     with using(scheduler) as engine:
-        flown = engine.map(fly_subject, args, inputs, "subjects", progress).values()
-    results = [population_result(flown[k * n_subjects:(k + 1) * n_subjects], s, adapted,
-                                 run_to_run_sd) for k, s in enumerate(seeds)]  # fmt: skip
+        flown = engine.map(fly, args, inputs, "subjects", progress).values()
+    parts = [flown[k * n_subjects : (k + 1) * n_subjects] for k in range(len(seeds))]
+    if identified is None:
+        results = [population_result(part, s, adapted, run_to_run_sd)
+                   for part, s in zip(parts, seeds, strict=True)]  # fmt: skip
+    else:
+        results = [identified_result(part, s, adapted, run_to_run_sd, identified)
+                   for part, s in zip(parts, seeds, strict=True)]  # fmt: skip
     return replicate(results), results
