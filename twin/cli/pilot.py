@@ -369,6 +369,11 @@ def _cmd_experiment(args: argparse.Namespace) -> int:
     if args.identify and args.pilot != "adaptive":
         raise UsageError("--identify measures the pilot model of adaptive subjects: give it "
                          "with --pilot adaptive")  # fmt: skip
+    if args.identify:  # before any worker starts
+        from twin.pilot.identified import check_feedthrough
+
+        with common.options_named({"feedthrough": "--feedthrough"}):
+            check_feedthrough(args.feedthrough)
     if args.populations is not None:
         if args.pilot != "adaptive":
             raise UsageError("--populations counts populations of adaptive subjects: give it "
