@@ -97,3 +97,16 @@ def test_identified_populations_replicate_as_one_flown_alone():
     alone = identified_population(2, 6)
     assert results[1].rows == alone.rows
     assert len(rep.effect("tau_m", "filter").signed_f) == 2
+
+
+def test_the_condition_figure_of_an_identified_population_shows_the_fits(subject_rows, tmp_path):
+    """Fig 6.5-6.9 of identified measures: tau_v, tau_m and each fit's chi-square per dof too."""
+    from twin.pilot.population import PopulationResult
+    from twin.plotting import pyplot
+
+    _, identified = subject_rows
+    fig = PopulationResult(identified, {}, 0, identified=0.0).plot_conditions(tmp_path / "c.png")
+    titles = [ax.get_title() for ax in fig.axes]
+    pyplot().close(fig)
+    assert {"tau_v (Fig 6.9a)", "tau_m (Fig 6.9b)", "fit chi-square per dof"} <= set(titles)
+    assert (tmp_path / "c.png").stat().st_size > 0

@@ -451,16 +451,20 @@ class PopulationResult:
             ("t_lead", "T_lead (Fig 6.8)", "s"), ("t_lag", "T_lag (Fig 6.8)", "s"),
             ("omega_nm", "omega_nm (Fig 6.9)", "rad/s"), ("zeta_nm", "zeta_nm (Fig 6.9)", "-"),
         )  # fmt: skip
-        if "tau_v" in self.adapted:
+        if "tau_v" in self.adapted or self.identified is not None:
             measures = (*measures, ("tau_v", "tau_v (Fig 6.9a)", "s"))
+        if self.identified is not None:  # the fit's own: tau_m and how well the model fits
+            measures = (*measures, ("tau_m", "tau_m (Fig 6.9b)", "s"),
+                        ("chi2_per_dof", "fit chi-square per dof", "-"))  # fmt: skip
         panels = [Panel(title, f"{title.split(' (')[0]} [{unit}]",
                         samples_by_condition(self.rows, key))
                   for key, title, unit in measures]  # fmt: skip
         n = len({r["subject"] for r in self.rows})
+        how = "" if self.identified is None else ", the pilot model identified from the runs"
         return plot_conditions(
             panels,
-            f"Table 6.3 conditions flown by {n} adaptive simulated subjects (seed {self.seed}): "
-            "mean and 95 % CI over subjects, as Fig 6.5-6.9",
+            f"Table 6.3 conditions flown by {n} adaptive simulated subjects (seed {self.seed}"
+            f"{how}): mean and 95 % CI over subjects, as Fig 6.5-6.9",
             path,
         )
 
