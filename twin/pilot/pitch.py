@@ -118,10 +118,13 @@ class Feedthrough:
 
         u_b = -gain (h s^2 - g) H_nm(s) theta_felt,
 
-    in phase with the attitude at every frequency (|h s^2 - g| = h w^2 + g), where Eq 6.7's
-    K_m s e^{-s tau_m} lags it by 90 deg plus the delay: the MLE of Eq 6.5-6.7 can only
-    absorb it in biased parameters (``evidence["fit"]`` of :func:`twin.pilot.mle.fit_pitch_pilot`
-    shows the misfit). An assumption for exploring what the thesis' estimates may hold
+    whose force is in phase with the attitude at every frequency (h s^2 - g is -(h w^2 + g)
+    at s = jw), while Eq 6.7's -K_m s e^{-s tau_m} (its sign in u) is 90 deg from it less the
+    delay's lag, for any K_m >= 0 and tau_m >= 0: both share H_nm, and the MLE of Eq 6.5-6.7
+    can only absorb the path in biased parameters (``evidence["fit"]`` of
+    :func:`twin.pilot.mle.fit_pitch_pilot` shows the misfit). The path is positive feedback
+    (the hand pushed aft as the nose rises); a large one destabilises the loop. An
+    assumption for exploring what the thesis' estimates may hold
     (Venrooij et al. measured such paths; no value for the SRS side-stick is given), not a
     measured property of the SRS.
 
