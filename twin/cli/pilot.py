@@ -125,7 +125,7 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
         help="with --pilot adaptive: measure the pilot model as the thesis did, each subject's "
         "five repetitions flown in the time domain and Eq 6.5-6.7 fitted by the MLE to their "
         "average (twin.pilot.identified; tau_m and tau_v in the ANOVA, each fit's goodness of "
-        "fit in --json's rows; about 15 s per subject on two cores; with --populations, "
+        "fit in --json's rows; about 12 s a subject on two cores; with --populations, "
         "over populations)",
     )
     exp.add_argument(
@@ -135,7 +135,8 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
         metavar="R",
         help="with --identify: each subject also has a passive path from the motion to the "
         "stick, R (0 to 1) of its condition-1 motion response at 3 rad/s "
-        "(twin.pilot.pitch.Feedthrough; an assumption; default 0: none; about 3x slower)",
+        "(twin.pilot.pitch.Feedthrough; an assumption: only the simulated subjects have it, no "
+        "fit models it; default 0: none; about 5x slower)",
     )
     exp.add_argument(
         "--populations",
@@ -432,6 +433,10 @@ def _replication(args: argparse.Namespace) -> int:
             plt.close(plan.plot(str(plot.with_name(f"{plot.stem}-subjects.png"))))
     if args.json:  # the summary, and each population's ANOVA as a single one prints it
         per = [{"seed": r.seed, "anova": r.anova, "agreement": r.agreement()} for r in results]
+        for entry, r in zip(per, results, strict=True):
+            if r.identified is not None:  # each fit's goodness of fit: 5, 50, 95 %
+                chi = [row["chi2_per_dof"] for row in r.rows]
+                entry["chi2_per_dof_5_50_95"] = [float(q) for q in np.percentile(chi, [5, 50, 95])]
         out = {**rep.to_dict(), "per_population": per,
                "design": None if plan is None else plan.to_dict()}  # fmt: skip
         print(json.dumps(out, indent=2))

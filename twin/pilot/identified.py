@@ -22,8 +22,8 @@ So tau_m, which a subject who does not use the motion behind the filter does not
 value as it did in the thesis, and Table 6.7's tau_m row can be compared. With a
 ``feedthrough`` each subject also has a passive path from the motion to the stick, that share
 of its condition-1 motion response at 3 rad/s (:class:`twin.pilot.pitch.Feedthrough`; an
-assumption), which Eq 6.5-6.7 does not hold. About 1.4 s of fitting per subject and condition
-on one core (3-4x that with a feedthrough, whose loop is stepped a sample at a time).
+assumption), which Eq 6.5-6.7 does not hold. About 12 s a subject on two cores (110 s for
+nine), about 5x that with a feedthrough, whose loop is stepped a sample at a time.
 """
 
 from __future__ import annotations
