@@ -87,16 +87,19 @@ def test_populations_measured_differently_are_not_pooled():
 
 
 @pytest.mark.slow
-def test_identified_populations_replicate_as_one_flown_alone():
-    """Populations measured as the thesis did, flown together for a replication, are each the
-    population flown alone (same bits), and tau_m is among the replicated effects."""
-    from twin.pilot.replication import run_populations
-
-    rep, results = run_populations(2, 2, seed=5, identified=0.0)
-    assert [r.identified for r in results] == [0.0, 0.0]
+def test_identified_populations_replicate_as_one_flown_alone(capsys):
+    """Populations measured as the thesis did, flown together for a replication (the CLI's
+    JSON), are each the population flown alone (same ANOVA), tau_m is among the replicated
+    effects, and each population carries its fits' chi-square per dof."""
+    assert main(["pilot", "experiment", "--pilot", "adaptive", "--identify", "--populations",
+                 "2", "--subjects", "2", "--seed", "5", "--json", "--quiet"]) == 0  # fmt: skip
+    out = json.loads(capsys.readouterr().out)
     alone = identified_population(2, 6)
-    assert results[1].rows == alone.rows
-    assert len(rep.effect("tau_m", "filter").signed_f) == 2
+    assert out["per_population"][1]["anova"] == json.loads(json.dumps(alone.anova))
+    assert "filter" in out["replication"]["tau_m"]
+    for entry in out["per_population"]:
+        lo, mid, hi = entry["chi2_per_dof_5_50_95"]
+        assert 0.2 < lo <= mid <= hi < 5.0
 
 
 def test_the_condition_figure_of_an_identified_population_shows_the_fits(subject_rows, tmp_path):
