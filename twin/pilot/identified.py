@@ -83,9 +83,8 @@ def identified_subject(
         runs = [simulate_pitch(pilot, task.config, 1, run_seed(seed, subject, n, k), scale,
                                feedthrough=path)
                 for k, (pilot, _) in enumerate(flown)]  # fmt: skip
-        lost = [
-            k for k, r in enumerate(runs) if not np.var(r.e[0]) < DIVERGED * a.performance.var_e
-        ]
+        var_e = [float(np.var(r.e[0])) for r in runs]
+        lost = [k for k, v in enumerate(var_e) if not v < DIVERGED * a.performance.var_e]
         if lost:
             raise SignalError(
                 f"subject {subject.number}, condition {n}: repetition {lost[0] + 1}'s loop "
@@ -95,8 +94,7 @@ def identified_subject(
             )  # fmt: skip
         u = np.vstack([r.u[0] for r in runs])
         fit = fit_pitch_pilot(runs[0].ft, runs[0].fd, u, task.config)
-        row = condition_row(subject, n, fit.pilot, task,
-                            float(np.mean([np.var(r.e[0]) for r in runs])),
+        row = condition_row(subject, n, fit.pilot, task, float(np.mean(var_e)),
                             float(np.mean([np.var(r.u[0]) for r in runs])), PARAMETERS)  # fmt: skip
         rows.append({**row, "chi2_per_dof": fit.evidence["fit"]["ratio"],
                      "tau_m_identifiable": float("tau_m" not in fit.unidentifiable)})  # fmt: skip

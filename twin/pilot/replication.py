@@ -509,22 +509,16 @@ def run_populations(
     adapted = checked_settings(adapted, run_to_run_sd)
     seeds = list(range(seed, seed + n_populations))
     if identified is None:
-        fly, tasks = fly_subject, [population_tasks(n_subjects, s, adapted, run_to_run_sd)
-                                   for s in seeds]  # fmt: skip
+        fly, tasks_of, result_of, extra = fly_subject, population_tasks, population_result, ()
     else:
         check_feedthrough(identified)
-        fly = identified_subject
-        tasks = [identified_tasks(n_subjects, s, adapted, run_to_run_sd, identified)
-                 for s in seeds]  # fmt: skip
+        fly, tasks_of, result_of = identified_subject, identified_tasks, identified_result
+        extra = (identified,)
+    tasks = [tasks_of(n_subjects, s, adapted, run_to_run_sd, *extra) for s in seeds]
     args = [a for t in tasks for a in t[0]]
     inputs = [i for t in tasks for i in t[1]]
     with using(scheduler) as engine:
         flown = engine.map(fly, args, inputs, "subjects", progress).values()
-    parts = [flown[k * n_subjects : (k + 1) * n_subjects] for k in range(len(seeds))]
-    if identified is None:
-        results = [population_result(part, s, adapted, run_to_run_sd)
-                   for part, s in zip(parts, seeds, strict=True)]  # fmt: skip
-    else:
-        results = [identified_result(part, s, adapted, run_to_run_sd, identified)
-                   for part, s in zip(parts, seeds, strict=True)]  # fmt: skip
+    results = [result_of(flown[k * n_subjects : (k + 1) * n_subjects], s, adapted,
+                         run_to_run_sd, *extra) for k, s in enumerate(seeds)]  # fmt: skip
     return replicate(results), results
