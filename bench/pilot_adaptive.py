@@ -54,6 +54,16 @@
    subjects (default: the fewest with which it does, or nine) are flown, and their
    agreements counted beside the prediction: is the design right about experiments it did
    not pool?
+7. The subjects' unknown spreads against the thesis (``--spread-profile``, about 7 min a
+   cell): ``SPREAD_POPULATIONS`` populations of nine for each motion perception spread
+   (:data:`twin.pilot.population.MOTION_NOISE_SD` is chosen here) and run-to-run variation
+   of ``SPREAD_GRID``; per cell the log predictive density of the thesis' 36 effects
+   (:attr:`twin.pilot.replication.Replication.log_density`: higher, the thesis' results are
+   likelier draws of the twin), how many are plausible draws, the filter effects' d_z beside
+   the thesis', and how often nine subjects meet the acceptance at once (the design's).
+
+``--motion-spread SD`` sets the subjects' spread in motion perception for every section but
+7 (0: the subjects before it, with which the README's older Chapter 6 figures were measured).
 """
 
 import argparse
@@ -74,6 +84,8 @@ from twin.pilot.mle import PARAMETERS, bound_at, fit_pitch_pilot
 from twin.pilot.pitch import Feedthrough, PitchPilot, simulate_pitch
 from twin.pilot.population import (
     ADAPTATION_SD,
+    MAX_MOTION_SPREAD,
+    MOTION_NOISE_SD,
     PopulationResult,
     Subject,
     filter_effect,
@@ -103,6 +115,12 @@ VISUAL_DELAY = (
 )
 #: Populations of section 5.
 VISUAL_DELAY_POPULATIONS = 10
+#: The subjects' spread in motion perception for every section but 7 (``--motion-spread``).
+SPREAD = {"motion": MOTION_NOISE_SD}
+#: Section 7's grid: motion perception spreads and run-to-run variations, and populations
+#: per cell.
+SPREAD_GRID = ((0.0, 0.5, 1.0, 1.5), (0.05, 0.1))
+SPREAD_POPULATIONS = 10
 #: Fresh populations flown to check section 6's design, and their first seed.
 DESIGN_CHECK_POPULATIONS, DESIGN_CHECK_SEED = 20, 100
 
@@ -140,6 +158,7 @@ def populations(sd: float, n: int, adapted: tuple[str, ...] = ADAPTED) -> list[P
     """Section 1: agreement with Tables 6.4-6.7 over seeded populations, beside the agreement
     the thesis' own F predicts (:mod:`twin.pilot.replication`); returns the populations."""
     rep, results = run_populations(n, SUBJECTS, 0, scheduler="local:2", run_to_run_sd=sd,
+                                   motion_spread=SPREAD["motion"],
                                    adapted=adapted)  # fmt: skip
     full = sum(e.agreed == e.populations for e in rep.effects)
     print(f"{n} populations of {SUBJECTS} subjects (the thesis' nine), run-to-run variation "
@@ -153,6 +172,27 @@ def populations(sd: float, n: int, adapted: tuple[str, ...] = ADAPTED) -> list[P
     return results
 
 
+def spread_profile() -> None:
+    """Section 7: the subjects' motion perception spread and run-to-run variation, profiled
+    against Tables 6.4-6.7."""
+    spreads, variations = SPREAD_GRID
+    filters = [(m, "filter") for m in TABLES_6_4_TO_6_7 if m not in ("tau_v", "tau_m")]
+    head = " ".join(f"{m[:9]:>9s}" for m, _ in filters)
+    print(f"\n{'spread':>6s} {'rr':>5s} {'log dens':>8s} {'plaus':>5s} {'accept9':>7s} | {head}")
+    for sd in variations:
+        for spread in spreads:
+            rep, results = run_populations(SPREAD_POPULATIONS, SUBJECTS, 0, scheduler="local:2",
+                                           run_to_run_sd=sd, motion_spread=spread)  # fmt: skip
+            plausible = len(rep.effects) - len(rep.implausible())
+            accept = design(results, resamples=2).acceptance_at(SUBJECTS)
+            if sd == variations[0] and spread == spreads[0]:
+                thesis = " ".join(f"{rep.effect(m, f).thesis_d_z[0]:+9.2f}" for m, f in filters)
+                print(f"{'thesis':>6s} {'':5s} {'':8s} {'':5s} {'':7s} | {thesis}")
+            d = " ".join(f"{rep.effect(m, f).quantiles()[1]:+9.2f}" for m, f in filters)
+            print(f"{spread:6.2f} {sd:5.2f} {rep.log_density:8.1f} {plausible:3d}/"
+                  f"{len(rep.effects)} {accept:7.2f} | {d}", flush=True)  # fmt: skip
+
+
 def design_check(pool: list[PopulationResult], subjects_n: int | None = None) -> None:
     """Section 6: the design from the pooled populations, checked on fresh populations."""
     plan = design(pool)
@@ -164,6 +204,7 @@ def design_check(pool: list[PopulationResult], subjects_n: int | None = None) ->
     plan.at(n)  # refuses a size beyond the design before anything flies
     t0 = time.perf_counter()
     _, fresh = run_populations(DESIGN_CHECK_POPULATIONS, n, DESIGN_CHECK_SEED,
+                               motion_spread=SPREAD["motion"],
                                scheduler="local:2")  # fmt: skip
     print(f"\n{DESIGN_CHECK_POPULATIONS} fresh populations of {n} subjects (seeds "
           f"{DESIGN_CHECK_SEED}-{DESIGN_CHECK_SEED + DESIGN_CHECK_POPULATIONS - 1}, "
@@ -254,7 +295,7 @@ def motion_delay_measured(n_subjects: int = 18, feedthrough: float = 0.0) -> Non
     """Section 5: Table 6.7's tau_m as the thesis measured it - the twin's subjects' runs
     identified by the MLE - beside the thesis' F (140.1, lower behind the filter); with
     ``feedthrough``, subjects who also have a passive path of that relative size."""
-    subs = subjects(n_subjects, 0)
+    subs = subjects(n_subjects, 0, SPREAD["motion"])
     with Engine("local:2") as engine:
         done = engine.map(measured_as_the_thesis, [(s, feedthrough) for s in subs],
                           [{"subject": s.number} for s in subs], "subjects").values()  # fmt: skip
@@ -288,7 +329,9 @@ def _spread(x: np.ndarray) -> str:
 
 def subject_effects(models: tuple[tuple[str, tuple[str, ...]], ...] = MODELS) -> None:
     """Section 2: the filter's effect per adapted subject, for each of ``models``."""
-    subs = [s for seed in range(EFFECT_POPULATIONS) for s in subjects(SUBJECTS, seed)]
+    subs = [
+        s for seed in range(EFFECT_POPULATIONS) for s in subjects(SUBJECTS, seed, SPREAD["motion"])
+    ]
     for name, adapted in models:
         with Engine("local:2") as engine:
             effects = list(engine.map(filter_effect, [(s, adapted) for s in subs],
@@ -465,6 +508,14 @@ if __name__ == "__main__":
                         help="subjects per population of section 6's check (default: from "
                              "how many the design says the acceptance holds in 80 %%, or "
                              "9)")  # fmt: skip
+    parser.add_argument("--spread-profile", action="store_true",
+                        help="section 7 only: the subjects' motion perception spread and "
+                             "run-to-run variation profiled against Tables 6.4-6.7 (about 7 "
+                             "min a cell, 8 cells)")  # fmt: skip
+    parser.add_argument("--motion-spread", type=float, default=MOTION_NOISE_SD, metavar="SD",
+                        help="the subjects' spread in motion perception for every section but "
+                             "7 (default: twin.pilot.population.MOTION_NOISE_SD; 0: the "
+                             "subjects before it)")  # fmt: skip
     parser.add_argument("--no-intervals", action="store_true",
                         help="fit without the likelihood-ratio intervals (and their rule): "
                              "about 6x faster")  # fmt: skip
@@ -476,12 +527,19 @@ if __name__ == "__main__":
     if not all(0 <= r <= MAX_FEEDTHROUGH for r in args.feedthrough):  # also refuses NaN
         parser.error(f"--feedthrough ratios must be 0 to {MAX_FEEDTHROUGH:g}; "
                      f"got {args.feedthrough}")  # fmt: skip
+    if not 0 <= args.motion_spread <= MAX_MOTION_SPREAD:  # also refuses NaN
+        parser.error(f"--motion-spread must be 0 to {MAX_MOTION_SPREAD:g}; "
+                     f"got {args.motion_spread}")  # fmt: skip
+    SPREAD["motion"] = args.motion_spread
     if args.coverage_seed < 0:
         parser.error(f"--coverage-seed must be a seed >= 0; got {args.coverage_seed}")
     if args.motion_delay_only:
         motion_delay()
         for ratio in args.feedthrough:
             motion_delay_measured(feedthrough=ratio)
+        raise SystemExit(0)
+    if args.spread_profile:
+        spread_profile()
         raise SystemExit(0)
     if args.design_only:
         design_check(populations(ADAPTATION_SD, POPULATIONS), args.design_subjects)

@@ -179,6 +179,39 @@ def test_the_visual_remnant_carries_the_cost_of_speed():
     assert noisier.var_e > plain.var_e and noisier.var_u > plain.var_u
 
 
+def test_a_pilot_who_perceives_motion_less_well_uses_it_less():
+    """The motion channel's own observation noise: a felt-rate ratio equal to the common one
+    predicts what the common one does; more noise on the felt rate (none on the display)
+    raises var(e), and the pilot adapted to it uses motion less (lower K_m) and makes up
+    with visual lead, monotonically over a factor of 4 each way."""
+    own, task = PitchPilot(), Task.pitch("condition-1")
+    same, plain = predict(own, task, 0.03, 0.01, None, 0.01), predict(own, task, 0.03, 0.01)
+    assert (same.var_e, same.var_u) == pytest.approx((plain.var_e, plain.var_u), rel=1e-12)
+    assert predict(own, task, 0.03, 0.01, None, 0.04).var_e > plain.var_e
+    pilots = [adapt("condition-1", motion_noise=m).pilot for m in (0.25, 1.0, 4.0)]
+    assert pilots[0].k_m > pilots[1].k_m > pilots[2].k_m > 0
+    assert pilots[0].t_lead < pilots[1].t_lead < pilots[2].t_lead
+    for bad in (0.0, -1.0, float("nan"), float("inf")):
+        with pytest.raises(SignalError, match="motion channel"):
+            adapt("condition-1", motion_noise=bad)
+
+
+def test_subjects_differ_in_how_well_they_perceive_motion():
+    """Each subject's motion noise (relative to its visual) is log-normal with the stated
+    spread, drawn from its own stream: the other draws are those of a population drawn
+    without it (its delays, neuromuscular system and priorities from the first stream)."""
+    from twin.pilot.population import MOTION_NOISE_SD, SUBJECT_SPREAD, subjects
+
+    many = subjects(400, seed=3)
+    logs = np.log([s.motion_noise for s in many])
+    assert abs(np.mean(logs)) < 3 * MOTION_NOISE_SD / np.sqrt(400)
+    assert np.std(logs, ddof=1) == pytest.approx(MOTION_NOISE_SD, rel=0.15)
+    rng = np.random.default_rng(np.random.SeedSequence([3, 14]))
+    first = rng.normal(*SUBJECT_SPREAD["tau_v"])
+    assert many[0].limitations.tau_v == max(first, 0.3 * SUBJECT_SPREAD["tau_v"][0])
+    assert [s.motion_noise for s in subjects(5, seed=3)] == [s.motion_noise for s in many[:5]]
+
+
 def test_population_measures_follow_what_was_adapted():
     """tau_v is among the ANOVA's measures (beside Table 6.7's F 35.8) only where the subjects
     adapt it; a subject's rows carry it either way."""

@@ -94,6 +94,39 @@ def test_the_predictive_p_is_uniform_when_the_new_draw_comes_from_the_same_distr
         predictive_p([1.0, 1.0, 1.0], 1.0)
 
 
+def test_the_predictive_log_density_is_a_density_peaked_at_the_draws_mean():
+    """It integrates to 1 over the new draw (whatever the scale), is highest at the draws'
+    mean and falls as p falls; summed over a replication's effects it is the replication's
+    score, and the thesis' sign counts where it gave one (the likelier sign where not)."""
+    from twin.pilot.replication import (
+        EffectReplication,
+        Replication,
+        predictive_log_density,
+        predictive_p,
+    )
+
+    draws = np.random.default_rng(6).normal(2.0, 0.5, 10)
+    grid = np.linspace(-30, 34, 64001)
+    for scale in (0.5, 1.0, 2.0):
+        density = np.exp([predictive_log_density(draws, v, scale) for v in grid])
+        assert np.trapezoid(density, grid) == pytest.approx(1.0, abs=2e-3)
+        assert grid[np.argmax(density)] == pytest.approx(draws.mean(), abs=2e-3)
+    near, far = draws.mean() + 0.3, draws.mean() + 1.5
+    assert predictive_log_density(draws, near) > predictive_log_density(draws, far)
+    assert predictive_p(draws, near) > predictive_p(draws, far)
+    with pytest.raises(SignalError, match="no spread"):
+        predictive_log_density([1.0, 1.0], 1.0)
+
+    def effect(direction):
+        return EffectReplication("m", "filter", 9.0, direction, (-9.0, -16.0), 9, 0, 0.5)
+
+    assert effect("-").log_density > effect("+").log_density
+    assert effect(None).log_density == effect("-").log_density
+    both = Replication((effect("-"), effect("+")), (0, 1), 9, ADAPTED, 0.1)
+    assert both.log_density == pytest.approx(effect("-").log_density + effect("+").log_density)
+    assert "log predictive density" in both.format_table()
+
+
 def test_the_thesis_standardised_effect_has_its_direction_or_both_signs():
     from twin.pilot.replication import EffectReplication
 
@@ -119,7 +152,7 @@ def test_a_replication_refuses_one_population_and_mixed_settings():
     with pytest.raises(SignalError, match=r"distinct populations; seeds \[0, 0\] repeat"):
         replicate([one, one])
     fewer = PopulationResult(rows, anova(rows, ("k_v",)), 1)
-    with pytest.raises(SignalError, match="measures or identification"):
+    with pytest.raises(SignalError, match="measures, identification or motion"):
         replicate([one, fewer])
     flat = copy.deepcopy(one.anova)
     flat["k_v"]["delay"]["F"] = float("inf")
@@ -129,6 +162,12 @@ def test_a_replication_refuses_one_population_and_mixed_settings():
         run_populations(1)
     with pytest.raises(SignalError, match="run-to-run variation must be"):
         run_populations(2, run_to_run_sd=float("nan"))
+    spread = PopulationResult(rows, anova(rows), 1, motion_spread=0.0)
+    with pytest.raises(SignalError, match="motion perception spread"):
+        replicate([one, spread])
+    for bad in (float("nan"), -0.1, 3.5):
+        with pytest.raises(SignalError, match=r"motion perception's spread .* \[0, 3\]"):
+            run_populations(2, motion_spread=bad)
 
 
 def fake_fly(subject, seed, adapted, sd):
@@ -157,6 +196,11 @@ def test_cli_populations_only_with_adaptive_subjects(capsys):
     assert "--populations: must be an integer in [1, 1,000]" in capsys.readouterr().err
     assert main(["pilot", "experiment", "--pilot", "adaptive", "--runs", "3"]) == 2
     assert "adaptive subjects fly five repetitions" in capsys.readouterr().err
+    assert main(["pilot", "experiment", "--motion-spread", "1"]) == 2
+    assert "--motion-spread sets how adaptive subjects differ" in capsys.readouterr().err
+    assert main(["pilot", "experiment", "--pilot", "adaptive", "--motion-spread", "nan"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("twin: error: --motion-spread") and "[0, 3]" in err and "\n" not in err
 
 
 def test_cli_populations_json_and_figure(monkeypatch, tmp_path, capsys):

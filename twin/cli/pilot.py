@@ -20,6 +20,11 @@ MAX_RUNS = 1000
 MAX_SUBJECTS = 1000
 #: Subjects of ``pilot experiment --pilot adaptive`` by default: the thesis' participants.
 DEFAULT_SUBJECTS = 9
+#: The library's names in ``pilot experiment``'s errors -> the options typed.
+OPTIONS = {
+    "feedthrough": "--feedthrough",
+    "the motion perception's spread": "--motion-spread (the motion perception's spread)",
+}
 #: Most populations of ``pilot experiment --pilot adaptive --populations``.
 MAX_POPULATIONS = 1000
 #: Runs per task of ``pilot montecarlo`` (:func:`twin.pilot.montecarlo.monte_carlo`'s batch).
@@ -137,6 +142,15 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
         "stick, R (0 to 1) of its condition-1 motion response at 3 rad/s "
         "(twin.pilot.pitch.Feedthrough; an assumption: only the simulated subjects have it, no "
         "fit models it; default 0: none; about 5x slower)",
+    )
+    exp.add_argument(
+        "--motion-spread",
+        type=float,
+        metavar="SD",
+        help="with --pilot adaptive: how much the subjects differ in perceiving motion, the "
+        "log-normal sd of the felt rate's observation noise relative to the displayed error's "
+        "(0 to 3; default 0.5, from a profile against Tables 6.4-6.7, README; 0: every subject "
+        "perceives motion as well as vision, the subjects of earlier versions)",
     )
     exp.add_argument(
         "--populations",
@@ -370,11 +384,20 @@ def _cmd_experiment(args: argparse.Namespace) -> int:
     if args.identify and args.pilot != "adaptive":
         raise UsageError("--identify measures the pilot model of adaptive subjects: give it "
                          "with --pilot adaptive")  # fmt: skip
-    if args.identify:  # before any worker starts
-        from twin.pilot.identified import check_feedthrough
+    if args.motion_spread is not None and args.pilot != "adaptive":
+        raise UsageError("--motion-spread sets how adaptive subjects differ: give it with "
+                         "--pilot adaptive")  # fmt: skip
+    if args.motion_spread is None:
+        from twin.pilot.population import MOTION_NOISE_SD
 
-        with common.options_named({"feedthrough": "--feedthrough"}):
+        args.motion_spread = MOTION_NOISE_SD
+    if args.pilot == "adaptive":  # before any worker starts
+        from twin.pilot.identified import check_feedthrough
+        from twin.pilot.population import checked_settings
+
+        with common.options_named(OPTIONS):
             check_feedthrough(args.feedthrough)
+            checked_settings(_adapted(args), 0.0, args.motion_spread)
     if args.populations is not None:
         if args.pilot != "adaptive":
             raise UsageError("--populations counts populations of adaptive subjects: give it "
@@ -385,14 +408,14 @@ def _cmd_experiment(args: argparse.Namespace) -> int:
         from twin.pilot.identified import identified_population
         from twin.pilot.population import run_population
 
-        with common.engine(args) as engine, common.options_named({"feedthrough": "--feedthrough"}):
+        with common.engine(args) as engine, common.options_named(OPTIONS):
             if args.identify:
                 p = identified_population(args.subjects, args.seed, common.progress(args),
-                                          engine, _adapted(args),
-                                          feedthrough=args.feedthrough)  # fmt: skip
+                                          engine, _adapted(args), feedthrough=args.feedthrough,
+                                          motion_spread=args.motion_spread)  # fmt: skip
             else:
                 p = run_population(args.subjects, args.seed, common.progress(args), engine,
-                                   _adapted(args))  # fmt: skip
+                                   _adapted(args), motion_spread=args.motion_spread)  # fmt: skip
         if args.plot:
             plt = pyplot()
             plt.close(p.plot(args.plot))
@@ -419,10 +442,11 @@ def _replication(args: argparse.Namespace) -> int:
     from twin.pilot.replication import run_populations
 
     identified = args.feedthrough if args.identify else None
-    with common.engine(args) as engine, common.options_named({"feedthrough": "--feedthrough"}):
+    with common.engine(args) as engine, common.options_named(OPTIONS):
         rep, results = run_populations(args.populations, args.subjects, args.seed,
                                        common.progress(args), engine, _adapted(args),
-                                       identified=identified)  # fmt: skip
+                                       identified=identified,
+                                       motion_spread=args.motion_spread)  # fmt: skip
     pooled = args.populations * args.subjects
     plan = design(results) if pooled >= MIN_POOL else None
     if args.plot:

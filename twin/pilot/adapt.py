@@ -218,6 +218,7 @@ def predict(
     weight: float = CONTROL_WEIGHT,
     noise_ratio: float = NOISE_RATIO,
     visual_ratio: float | None = None,
+    motion_ratio: float | None = None,
 ) -> Performance:
     """Predict var(e), var(u) and the cost of ``pilot`` flying ``task`` (frequency domain).
 
@@ -225,9 +226,10 @@ def predict(
     displayed error and on the felt pitch rate, each with a one-sided density of
     ``noise_ratio`` times its signal's variance per rad/s (the optimal-control model's
     V = pi rho E[y^2]); ``visual_ratio``, if given, replaces it on the displayed error
-    (:func:`visual_noise_ratio`). Visual lead differentiates the visual noise; the motion
-    channel senses the rate directly. Both variances depend on the noise they scale: a 2 x 2
-    linear system.
+    (:func:`visual_noise_ratio`), ``motion_ratio`` on the felt rate (a subject who perceives
+    motion less well than vision: :func:`adapt`'s ``motion_noise``). Visual lead
+    differentiates the visual noise; the motion channel senses the rate directly. Both
+    variances depend on the noise they scale: a 2 x 2 linear system.
     """
     cfg = task.config
 
@@ -258,19 +260,16 @@ def predict(
     # gains of the two observation noises (unit density) on e, u and rate
     gains = np.array([[float(np.trapezoid(np.abs(x[k]) ** 2, w)) for k in ("v", "r")]
                       for x in out])  # fmt: skip
-    # [ve, vr] = forced[e, rate] + noise_ratio * G [ve, vr], G from the e and rate rows
-    if visual_ratio is None:
-        g = noise_ratio * gains[[0, 2]]
-    else:  # the visual noise's column scaled by its own ratio
-        g = gains[[0, 2]] * np.array([visual_ratio, noise_ratio])
+    # [ve, vr] = forced[e, rate] + G diag(ratios) [ve, vr], G from the e and rate rows: each
+    # noise's column scaled by its channel's ratio
+    ratios = np.array([noise_ratio if visual_ratio is None else visual_ratio,
+                       noise_ratio if motion_ratio is None else motion_ratio])  # fmt: skip
+    g = gains[[0, 2]] * ratios
     radius = float(np.max(np.abs(np.linalg.eigvals(g))))
     if radius >= 1:
         return Performance(float("inf"), float("inf"), float("inf"), float("inf"), radius)
     ve, vr = np.linalg.solve(np.eye(2) - g, forced[[0, 2]])
-    if visual_ratio is None:
-        vu = forced[1] + noise_ratio * (gains[1, 0] * ve + gains[1, 1] * vr)
-    else:
-        vu = forced[1] + visual_ratio * gains[1, 0] * ve + noise_ratio * gains[1, 1] * vr
+    vu = forced[1] + ratios[0] * gains[1, 0] * ve + ratios[1] * gains[1, 1] * vr
     return Performance(float(ve), float(vu), float(vr), float(ve + weight * vu), radius)
 
 
@@ -380,6 +379,7 @@ def adapt(
     noise_ratio: float = NOISE_RATIO,
     starts: Sequence[PitchPilot] | None = None,
     adapted: Sequence[str] = ADAPTED,
+    motion_noise: float = 1.0,
 ) -> Adapted:
     """Choose the parameters ``adapted`` (:data:`ADAPTED`) that minimise the cost on ``task``.
 
@@ -403,6 +403,10 @@ def adapt(
         The parameters the pilot adapts, among :data:`ADAPTED` and :data:`SPEED_ACCURACY`
         (``EQUALISATION`` keeps the neuromuscular system fixed, as a pilot model with fixed
         limitations; ``(*ADAPTED, "tau_v")`` adapts the visual delay too).
+    motion_noise : float
+        The felt rate's observation-noise ratio relative to the displayed error's (> 0; 1:
+        the pilot perceives both alike; above 1 it perceives motion less well, and uses it
+        less).
 
     Raises
     ------
@@ -415,6 +419,10 @@ def adapt(
         raise SignalError(f"control weight r must be > 0; got {weight}")
     if not np.isfinite(noise_ratio) or noise_ratio <= 0:
         raise SignalError(f"observation-noise ratio must be > 0; got {noise_ratio}")
+    if not np.isfinite(motion_noise) or motion_noise <= 0:
+        raise SignalError(f"the motion channel's noise relative to the visual must be > 0; "
+                          f"got {motion_noise}")  # fmt: skip
+    motion_ratio = noise_ratio * motion_noise
     names = adapted_names(adapted)
     t = task if isinstance(task, Task) else Task.pitch(task)
     base = limitations or PitchPilot()
@@ -428,14 +436,18 @@ def adapt(
     def pilot_of(x: FloatArray) -> PitchPilot:
         return dataclasses.replace(base, **dict(zip(names, np.clip(x, lo, hi), strict=True)))
 
+    def performance_of(p: PitchPilot) -> Performance:
+        visual = visual_noise_ratio(p, base, noise_ratio, names)
+        return predict(p, t, weight, noise_ratio, visual, motion_ratio)
+
     def cost(x: FloatArray) -> float:
         p = pilot_of(x)
-        perf = predict(p, t, weight, noise_ratio, visual_noise_ratio(p, base, noise_ratio, names))
+        perf = performance_of(p)
         if not np.isfinite(perf.cost) or perf.remnant_gain >= 0.95 or not stable(p, t):
             return UNSTABLE_COST
         return perf.cost / scale
 
-    scale = predict(base, t, weight, noise_ratio).cost
+    scale = predict(base, t, weight, noise_ratio, motion_ratio=motion_ratio).cost
     scale = scale if np.isfinite(scale) and scale > 0 else 1.0
     firsts = list(starts) if starts else [
         dataclasses.replace(base, **dict(zip(EQUALISATION, x, strict=True))) for x in STARTS
@@ -452,5 +464,5 @@ def adapt(
     if best is None:
         raise SignalError(f"no stable equalisation found for {t.config.name}")
     p = pilot_of(best.x)
-    perf = predict(p, t, weight, noise_ratio, visual_noise_ratio(p, base, noise_ratio, names))
+    perf = performance_of(p)
     return Adapted(p, perf, open_loops(p, t.config), t.config.name, names)

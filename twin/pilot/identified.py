@@ -38,6 +38,7 @@ from twin.pilot.pitch import Feedthrough, simulate_pitch
 from twin.pilot.population import (
     ADAPTATION_SD,
     COMPARED,
+    MOTION_NOISE_SD,
     PopulationResult,
     Subject,
     anova,
@@ -115,6 +116,7 @@ def identified_population(
     adapted: tuple[str, ...] = ADAPTED,
     run_to_run_sd: float = ADAPTATION_SD,
     feedthrough: float = 0.0,
+    motion_spread: float = MOTION_NOISE_SD,
 ) -> PopulationResult:
     """Fly the eight conditions with ``n_subjects`` subjects, identify, and run the ANOVA.
 
@@ -126,16 +128,18 @@ def identified_population(
     Raises
     ------
     SignalError
-        A run-to-run variation out of range, a feedthrough outside [0, ``MAX_FEEDTHROUGH``],
-        or a loop that diverged.
+        A run-to-run variation or motion spread out of range, a feedthrough outside [0,
+        ``MAX_FEEDTHROUGH``], or a loop that diverged.
 
     """
-    adapted = checked_settings(adapted, run_to_run_sd)
+    adapted = checked_settings(adapted, run_to_run_sd, motion_spread)
     check_feedthrough(feedthrough)
-    args, names = identified_tasks(n_subjects, seed, adapted, run_to_run_sd, feedthrough)
+    args, names = identified_tasks(n_subjects, seed, adapted, run_to_run_sd, feedthrough,
+                                   motion_spread=motion_spread)  # fmt: skip
     with using(scheduler) as engine:
         flown = engine.map(identified_subject, args, names, "subjects", progress).values()
-    return identified_result(flown, seed, adapted, run_to_run_sd, feedthrough)
+    return identified_result(flown, seed, adapted, run_to_run_sd, feedthrough,
+                             motion_spread=motion_spread)  # fmt: skip
 
 
 def check_feedthrough(feedthrough: float) -> None:
@@ -146,10 +150,15 @@ def check_feedthrough(feedthrough: float) -> None:
 
 
 def identified_tasks(
-    n_subjects: int, seed: int, adapted: tuple[str, ...], run_to_run_sd: float, feedthrough: float
+    n_subjects: int,
+    seed: int,
+    adapted: tuple[str, ...],
+    run_to_run_sd: float,
+    feedthrough: float,
+    motion_spread: float = MOTION_NOISE_SD,
 ) -> tuple[list[tuple], list[dict[str, int]]]:
     """Arguments of :func:`identified_subject` per subject of population ``seed``, and names."""
-    subs = subjects(n_subjects, seed)
+    subs = subjects(n_subjects, seed, motion_spread)
     return ([(s, seed, adapted, run_to_run_sd, feedthrough) for s in subs],
             [{"subject": s.number, "seed": seed} for s in subs])  # fmt: skip
 
@@ -160,8 +169,9 @@ def identified_result(
     adapted: tuple[str, ...],
     run_to_run_sd: float,
     feedthrough: float,
+    motion_spread: float = MOTION_NOISE_SD,
 ) -> PopulationResult:
     """Assemble the subjects' identified rows (in subject order) and their ANOVA."""
     rows = [row for r in flown for row in r]
     return PopulationResult(rows, anova(rows, IDENTIFIED), seed, adapted, run_to_run_sd,
-                            feedthrough)  # fmt: skip
+                            feedthrough, motion_spread)  # fmt: skip

@@ -1,8 +1,10 @@
 """Chapter 6's experiment flown by a population of adaptive simulated subjects, with its ANOVA.
 
-Each subject (seeded) has its own limitations - visual and motion delays, and a resting
-neuromuscular frequency and damping - and its own priorities (control weight r,
-observation-noise ratio), drawn around the values of :mod:`twin.pilot.adapt`. In every Table 6.3
+Each subject (seeded) has its own limitations - visual and motion delays, a resting
+neuromuscular frequency and damping, and how well it perceives motion (the felt rate's
+observation noise relative to the displayed error's; people's vestibular thresholds differ
+by factors of several) - and its own priorities (control weight r, observation-noise ratio),
+drawn around the values of :mod:`twin.pilot.adapt`. In every Table 6.3
 condition the subject adapts its equalisation (K_v, t_lead, t_lag, K_m) and its neuromuscular
 tuning (omega_nm, zeta_nm; the resting one is where the search starts, and what is flown when
 only the equalisation adapts) to the motion system (:func:`twin.pilot.adapt.adapt`, from the
@@ -30,21 +32,23 @@ direction of each main effect (mean at the second level - 1 Hz filter, 35 ms, no
 minus the first), beside the thesis' F and directions.
 
 Assumptions (stated, not from the thesis): the spreads of :data:`SUBJECT_SPREAD` and the
-adaptation noise; the cost J = var(e) + r var(u) and the observation-noise remnant of
-:mod:`twin.pilot.adapt`; where the subjects adapt their visual delay too (``adapted`` with
-``"tau_v"``), the speed-accuracy trade-off of :func:`twin.pilot.adapt.visual_noise_ratio`.
-What to keep in mind when reading the F values: the motion noise of
-Eq 5.10 changes the predicted var(e) by parts per million, so the noise factor is nearly inert
-in this model (its "no effect" agrees with the thesis by construction); behind the filter the
-adapted loop's gain falls slowly through 0 dB (about -0.5 in log-log between 1 and 3 rad/s),
-so the target crossover moves much with small parameter changes (with K_m = 0 the target and
-disturbance loops coincide), and a few subjects cross over higher behind the filter; a
-population finds the effect about as often as the thesis' own F predicts (a replication over
-populations: :mod:`twin.pilot.replication`). With
-only the equalisation adapted (``adapted=EQUALISATION``, the model before the neuromuscular
-tuning adapted) the filter's effect on var(u) went either way (24 of 45 subjects lower), so
-no population showed it; with the tuning adapted it is lower for 43 of 45.
-``bench/pilot_adaptive.py`` prints both models side by side.
+adaptation noise (the motion perception's spread, :data:`MOTION_NOISE_SD`, chosen from a
+profile against Tables 6.4-6.7, README); the cost J = var(e) + r var(u) and the
+observation-noise remnant of :mod:`twin.pilot.adapt`; where the subjects adapt their visual
+delay too (``adapted`` with ``"tau_v"``), the speed-accuracy trade-off of
+:func:`twin.pilot.adapt.visual_noise_ratio`. What to keep in mind when reading the F values:
+the motion noise of Eq 5.10 changes the predicted var(e) by parts per million, so the noise
+factor is nearly inert in this model (its "no effect" agrees with the thesis by construction);
+behind the filter the adapted loop's gain falls slowly through 0 dB (about -0.5 in log-log
+between 1 and 3 rad/s), so the target crossover moves much with small parameter changes (with
+K_m = 0 the target and disturbance loops coincide), and a few subjects cross over higher
+behind the filter; a population finds the effect about as often as the thesis' own F predicts
+(a replication over populations: :mod:`twin.pilot.replication`). With only the equalisation
+adapted (``adapted=EQUALISATION``, the model before the neuromuscular tuning adapted) the
+filter's effect on var(u) went either way (24 of 45 subjects lower), so no population showed
+it; with the tuning adapted it is lower for 43 of 45 (subjects who all perceived motion as
+well as vision, ``motion_spread=0``). ``bench/pilot_adaptive.py`` prints both
+models side by side.
 """
 
 from __future__ import annotations
@@ -98,7 +102,14 @@ MEASURES = (
 #: Measures compared with the thesis: the contract's, the lead-lag pair (Table 6.6), the
 #: neuromuscular tuning and the visual delay (Table 6.7; each compared where it is adapted).
 COMPARED = (*MEASURES, "t_lead", "t_lag", "omega_nm", "zeta_nm", "tau_v")
-#: Subject spread: parameter -> (mean, sd) for limitations; log-normal sd for the priorities.
+#: Spread between subjects of how well they perceive motion: the log-normal sd of the felt
+#: rate's observation-noise ratio relative to the displayed error's (README, "How subjects
+#: differ in using motion").
+MOTION_NOISE_SD = 0.5
+#: Largest spread accepted (a factor e^3 = 20 between subjects one sd apart).
+MAX_MOTION_SPREAD = 3.0
+#: Subject spread: parameter -> (mean, sd) for limitations; log-normal sd for the priorities
+#: and the motion perception.
 SUBJECT_SPREAD = {
     "tau_v": (0.30, 0.03),
     "tau_m": (0.20, 0.03),
@@ -106,6 +117,7 @@ SUBJECT_SPREAD = {
     "zeta_nm": (0.25, 0.05),
     "weight": (CONTROL_WEIGHT, 0.3),
     "noise_ratio": (NOISE_RATIO, 0.3),
+    "motion_noise": (1.0, MOTION_NOISE_SD),
 }
 #: Run-to-run variation of the adapted parameters (log-normal sd).
 ADAPTATION_SD = 0.1
@@ -131,6 +143,9 @@ class Subject:
         tuning where it adapts, are only where the search starts).
     weight, noise_ratio : float
         r of the cost and observation-noise ratio of the remnant.
+    motion_noise : float
+        The felt rate's observation-noise ratio relative to the displayed error's
+        (:func:`twin.pilot.adapt.adapt`; 1: motion perceived as well as vision).
 
     """
 
@@ -138,20 +153,30 @@ class Subject:
     limitations: PitchPilot
     weight: float
     noise_ratio: float
+    motion_noise: float = 1.0
 
 
-def subjects(n: int, seed: int = 0) -> list[Subject]:
-    """Draw ``n`` subjects from ``seed`` (:data:`SUBJECT_SPREAD`)."""
+def subjects(n: int, seed: int = 0, motion_spread: float = MOTION_NOISE_SD) -> list[Subject]:
+    """Draw ``n`` subjects from ``seed`` (:data:`SUBJECT_SPREAD`).
+
+    ``motion_spread`` is the log-normal sd of their motion perception between subjects
+    (:data:`MOTION_NOISE_SD`; 0: every subject perceives motion as well as vision, the other
+    draws unchanged).
+    """
     if n < 2:
         raise SignalError(f"an ANOVA needs at least 2 subjects; got {n}")
     rng = np.random.default_rng(np.random.SeedSequence([seed, 14]))
+    # the motion perception from its own stream: the other draws are those of subjects
+    # drawn before it was part of a subject
+    motion = np.random.default_rng(np.random.SeedSequence([seed, 16]))
     out = []
     for i in range(n):
         lim = {k: float(max(rng.normal(*SUBJECT_SPREAD[k]), 0.3 * SUBJECT_SPREAD[k][0]))
                for k in ("tau_v", "tau_m", "omega_nm", "zeta_nm")}  # fmt: skip
         w, nr = (float(SUBJECT_SPREAD[k][0] * np.exp(rng.normal(0, SUBJECT_SPREAD[k][1])))
                  for k in ("weight", "noise_ratio"))  # fmt: skip
-        out.append(Subject(i + 1, dataclasses.replace(PitchPilot(), **lim), w, nr))
+        mn = float(SUBJECT_SPREAD["motion_noise"][0] * np.exp(motion.normal(0, motion_spread)))
+        out.append(Subject(i + 1, dataclasses.replace(PitchPilot(), **lim), w, nr, mn))
     return out
 
 
@@ -236,7 +261,8 @@ def flown_conditions(
         starts = [dataclasses.replace(subject.limitations,
                                       **dict(zip(EQUALISATION, x, strict=True)))
                   for x in STARTS] + ([previous] if previous is not None else [])  # fmt: skip
-        a = adapt(task, subject.limitations, subject.weight, subject.noise_ratio, starts, adapted)
+        a = adapt(task, subject.limitations, subject.weight, subject.noise_ratio, starts, adapted,
+                  subject.motion_noise)  # fmt: skip
         previous = a.pilot
         yield n, task, a, [_repetition(a, subject, task, rng, run_to_run_sd)
                            for _ in range(REPETITIONS)]  # fmt: skip
@@ -258,7 +284,8 @@ def _repetition(
         if stable(pilot, task):
             visual = visual_noise_ratio(pilot, subject.limitations, subject.noise_ratio,
                                         adapted.adapted)  # fmt: skip
-            perf = predict(pilot, task, subject.weight, subject.noise_ratio, visual)
+            perf = predict(pilot, task, subject.weight, subject.noise_ratio, visual,
+                           subject.noise_ratio * subject.motion_noise)  # fmt: skip
             if perf.cost <= MAX_COST_RATIO * best:
                 return pilot, perf
     return adapted.pilot, adapted.performance
@@ -280,7 +307,8 @@ def filter_effect(
     deg2 = (180 / np.pi) ** 2
     for n in (1, 5):
         a = adapt(Task.pitch(f"condition-{n}"), subject.limitations, subject.weight,
-                  subject.noise_ratio, adapted=adapted)  # fmt: skip
+                  subject.noise_ratio, adapted=adapted,
+                  motion_noise=subject.motion_noise)  # fmt: skip
         d = a.to_dict()
         values = {"var_e": a.performance.var_e * deg2, "var_u": a.performance.var_u * deg2,
                   **{m: d[m] for m in MEASURES if m in d},
@@ -345,6 +373,8 @@ class PopulationResult:
         None: the pilot-model measures are the flown pilots' own (:func:`fly_subject`); a
         number: identified from the runs, as the thesis did, with a passive feedthrough of
         that relative size (0: none; :mod:`twin.pilot.identified`).
+    motion_spread : float
+        The subjects' spread in motion perception (:func:`subjects`).
 
     """
 
@@ -354,6 +384,7 @@ class PopulationResult:
     adapted: tuple[str, ...] = ADAPTED
     run_to_run_sd: float = ADAPTATION_SD
     identified: float | None = None
+    motion_spread: float = MOTION_NOISE_SD
 
     def agreement(self) -> dict[str, dict[str, bool]]:
         """Per measure and factor, whether the prediction agrees with the thesis.
@@ -379,7 +410,8 @@ class PopulationResult:
         return {"anova": self.anova, "thesis": thesis, "agreement": self.agreement(),
                 "subjects": len({r["subject"] for r in self.rows}), "seed": self.seed,
                 "adapted": list(self.adapted), "run_to_run_sd": self.run_to_run_sd,
-                "identified": self.identified, "rows": self.rows}  # fmt: skip
+                "identified": self.identified, "motion_spread": self.motion_spread,
+                "rows": self.rows}  # fmt: skip
 
     def format_table(self) -> str:
         """Plain-text table: predicted F, p, direction beside the thesis' F and direction."""
@@ -392,7 +424,8 @@ class PopulationResult:
         lines = [
             f"Chapter 6 predicted by {len({r['subject'] for r in self.rows})} adaptive "
             f"subjects (seed {self.seed}; adapting {', '.join(self.adapted)}; run-to-run "
-            f"variation {self.run_to_run_sd:.0%}{how}); repeated-measures ANOVA, main effects",
+            f"variation {self.run_to_run_sd:.0%}; motion perception spread "
+            f"{self.motion_spread:g}{how}); repeated-measures ANOVA, main effects",
             f"{'measure':30s} {'factor':6s} {'F':>8s} {'p':>7s} dir | thesis F  dir  agrees",
         ]
         for m in self.anova:
@@ -518,6 +551,7 @@ def run_population(
     scheduler: Engine | str | None = None,
     adapted: tuple[str, ...] = ADAPTED,
     run_to_run_sd: float = ADAPTATION_SD,
+    motion_spread: float = MOTION_NOISE_SD,
 ) -> PopulationResult:
     """Fly the eight conditions with ``n_subjects`` adaptive subjects and run the ANOVA.
 
@@ -525,53 +559,69 @@ def run_population(
     result is the same whatever runs the subjects (``scheduler``; default this process).
     ``adapted`` names the parameters the subjects adapt (:data:`twin.pilot.adapt.ADAPTED`;
     ``EQUALISATION`` keeps each subject's neuromuscular system, and its measures out of the
-    ANOVA); ``run_to_run_sd`` is their run-to-run variation (log-normal sd, 0 to 1).
+    ANOVA); ``run_to_run_sd`` is their run-to-run variation (log-normal sd, 0 to 1);
+    ``motion_spread`` their spread in motion perception (:func:`subjects`).
 
     Raises
     ------
     SignalError
-        A run-to-run variation out of range.
+        A run-to-run variation or motion spread out of range.
     TaskError
         When a subject failed (named with its number and seed).
 
     """
-    adapted = checked_settings(adapted, run_to_run_sd)
+    adapted = checked_settings(adapted, run_to_run_sd, motion_spread)
+    tasks = population_tasks(n_subjects, seed, adapted, run_to_run_sd, motion_spread=motion_spread)
     with using(scheduler) as engine:
-        flown = engine.map(fly_subject, *population_tasks(n_subjects, seed, adapted, run_to_run_sd),
-                           "subjects", progress).values()  # fmt: skip
-    return population_result(flown, seed, adapted, run_to_run_sd)
+        flown = engine.map(fly_subject, *tasks, "subjects", progress).values()
+    return population_result(flown, seed, adapted, run_to_run_sd, motion_spread=motion_spread)
 
 
-def checked_settings(adapted: tuple[str, ...], run_to_run_sd: float) -> tuple[str, ...]:
+def checked_settings(
+    adapted: tuple[str, ...], run_to_run_sd: float, motion_spread: float = MOTION_NOISE_SD
+) -> tuple[str, ...]:
     """Check a population's settings before any subject flies; return the adapted names.
 
     Raises
     ------
     SignalError
-        A run-to-run variation out of [0, 1] (or NaN), or a bad choice of adapted names.
+        A run-to-run variation out of [0, 1] or a motion spread out of [0,
+        ``MAX_MOTION_SPREAD``] (or NaN), or a bad choice of adapted names.
 
     """
     if not 0 <= run_to_run_sd <= 1:  # also refuses NaN
         raise SignalError(f"run-to-run variation must be a log-normal sd in [0, 1]; "
                           f"got {run_to_run_sd}")  # fmt: skip
+    if not 0 <= motion_spread <= MAX_MOTION_SPREAD:
+        raise SignalError(f"the motion perception's spread must be a log-normal sd in "
+                          f"[0, {MAX_MOTION_SPREAD:g}]; got {motion_spread}")  # fmt: skip
     return adapted_names(adapted)
 
 
 def population_tasks(
-    n_subjects: int, seed: int, adapted: tuple[str, ...], run_to_run_sd: float
+    n_subjects: int,
+    seed: int,
+    adapted: tuple[str, ...],
+    run_to_run_sd: float,
+    motion_spread: float = MOTION_NOISE_SD,
 ) -> tuple[list[tuple], list[dict[str, int]]]:
     """Arguments of :func:`fly_subject` per subject of population ``seed``, and their names."""
-    subs = subjects(n_subjects, seed)
+    subs = subjects(n_subjects, seed, motion_spread)
     return ([(s, seed, adapted, run_to_run_sd) for s in subs],
             [{"subject": s.number, "seed": seed} for s in subs])  # fmt: skip
 
 
 def population_result(
-    flown: list[list[dict[str, float]]], seed: int, adapted: tuple[str, ...], run_to_run_sd: float
+    flown: list[list[dict[str, float]]],
+    seed: int,
+    adapted: tuple[str, ...],
+    run_to_run_sd: float,
+    motion_spread: float = MOTION_NOISE_SD,
 ) -> PopulationResult:
     """Assemble the subjects' rows (:func:`fly_subject`'s, in subject order) and their ANOVA."""
     rows = [row for r in flown for row in r]
-    return PopulationResult(rows, anova(rows, compared(adapted)), seed, adapted, run_to_run_sd)
+    return PopulationResult(rows, anova(rows, compared(adapted)), seed, adapted, run_to_run_sd,
+                            motion_spread=motion_spread)  # fmt: skip
 
 
 def compared(adapted: tuple[str, ...]) -> tuple[str, ...]:

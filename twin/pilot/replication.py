@@ -67,6 +67,7 @@ from twin.pilot.identified import (
 from twin.pilot.population import (
     ADAPTATION_SD,
     FACTORS,
+    MOTION_NOISE_SD,
     PopulationResult,
     checked_settings,
     effect_axes,
@@ -150,6 +151,32 @@ def predictive_p(draws: ArrayLike, value: float, scale: float = 1.0) -> float:
     1.0
 
     """
+    t, _, df = _predictive_t(draws, value, scale)
+    return float(2 * stats.t.sf(abs(t), df))
+
+
+def predictive_log_density(draws: ArrayLike, value: float, scale: float = 1.0) -> float:
+    """Log density of one more draw at ``value``: the Student-t of :func:`predictive_p`.
+
+    Summed over effects, it scores how well the draws predict the values (higher is better),
+    which a p value does not: it rewards a prediction that is both near and sharp.
+
+    Parameters
+    ----------
+    draws, value, scale
+        As :func:`predictive_p`.
+
+    Returns
+    -------
+    float
+
+    """
+    t, spread, df = _predictive_t(draws, value, scale)
+    return float(stats.t.logpdf(t, df) - np.log(spread))
+
+
+def _predictive_t(draws: ArrayLike, value: float, scale: float) -> tuple[float, float, int]:
+    """(t, the prediction's spread, degrees of freedom) of :func:`predictive_p`."""
     x = np.asarray(draws, dtype=float)
     if x.size < 2 or not np.all(np.isfinite(x)):
         raise SignalError(f"a predictive test needs at least 2 finite draws; got {x.tolist()}")
@@ -158,9 +185,8 @@ def predictive_p(draws: ArrayLike, value: float, scale: float = 1.0) -> float:
     sd = float(np.std(x, ddof=1))
     if sd == 0:
         raise SignalError(f"the draws are all {x[0]}: no spread to predict a draw from")
-    spread = sd * np.sqrt(1.0 / x.size + scale**2)
-    t = abs(value - float(x.mean())) / spread
-    return float(2 * stats.t.sf(t, x.size - 1))
+    spread = float(sd * np.sqrt(1.0 / x.size + scale**2))
+    return (value - float(x.mean())) / spread, spread, x.size - 1
 
 
 @dataclass(frozen=True)
@@ -230,6 +256,15 @@ class EffectReplication:
         return max(predictive_p(self.d_z, d, scale) for d in self.thesis_d_z)
 
     @property
+    def log_density(self) -> float:
+        """Log predictive density of the thesis' d_z (:func:`predictive_log_density`).
+
+        Where the thesis gave no direction, the likelier sign's.
+        """
+        scale = float(np.sqrt(self.subjects / THESIS_SUBJECTS))
+        return max(predictive_log_density(self.d_z, d, scale) for d in self.thesis_d_z)
+
+    @property
     def plausible(self) -> bool:
         """Whether the thesis' result is a plausible draw of the twin (:data:`PLAUSIBLE`)."""
         return self.p_draw >= PLAUSIBLE
@@ -245,7 +280,8 @@ class EffectReplication:
         return {"thesis_F": self.thesis_f, "thesis_direction": self.thesis_direction,
                 "thesis_d_z": list(self.thesis_d_z), "signed_F": list(self.signed_f),
                 "d_z_median": med, "d_z_5_95": [lo, hi], "p_draw": self.p_draw,
-                "plausible": self.plausible, "agreed": self.agreed,
+                "plausible": self.plausible, "log_density": self.log_density,
+                "agreed": self.agreed,
                 "populations": self.populations, "agreement_probability": self.probability,
                 "expected_agreements": self.expected}  # fmt: skip
 
@@ -266,6 +302,8 @@ class Replication:
         What the subjects adapted.
     run_to_run_sd : float
         Their run-to-run variation.
+    motion_spread : float
+        Their spread in motion perception.
 
     """
 
@@ -274,6 +312,7 @@ class Replication:
     subjects: int
     adapted: tuple[str, ...]
     run_to_run_sd: float
+    motion_spread: float = MOTION_NOISE_SD
 
     def effect(self, measure: str, factor: str) -> EffectReplication:
         """Return one effect by name."""
@@ -283,6 +322,15 @@ class Replication:
         names = sorted({e.measure for e in self.effects})
         raise SignalError(f"no effect {measure!r} x {factor!r}; measures: {', '.join(names)}; "
                           f"factors: {', '.join(FACTORS)}")  # fmt: skip
+
+    @property
+    def log_density(self) -> float:
+        """Sum of the effects' log predictive densities of the thesis' results.
+
+        A score of the twin's settings against the thesis (higher: the thesis' 36 effects
+        are likelier draws of the twin); compare settings on the same seeds.
+        """
+        return float(sum(e.log_density for e in self.effects))
 
     def implausible(self) -> list[EffectReplication]:
         """Return the effects where the thesis is not a plausible draw of the twin."""
@@ -295,14 +343,17 @@ class Replication:
             rep.setdefault(e.measure, {})[e.factor] = e.to_dict()
         return {"replication": rep, "seeds": list(self.seeds), "subjects": self.subjects,
                 "adapted": list(self.adapted), "run_to_run_sd": self.run_to_run_sd,
-                "implausible": [f"{e.measure}/{e.factor}" for e in self.implausible()]}  # fmt: skip
+                "motion_spread": self.motion_spread,
+                "implausible": [f"{e.measure}/{e.factor}" for e in self.implausible()],
+                "log_density": self.log_density}  # fmt: skip
 
     def format_table(self) -> str:
         """Plain-text table: the twin's standardised effects over populations beside the thesis'."""
         n = len(self.seeds)
         lines = [
             f"Chapter 6 replicated by {n} populations of {self.subjects} adaptive subjects "
-            f"(seeds {_seed_list(self.seeds)}; run-to-run variation {self.run_to_run_sd:.0%})",
+            f"(seeds {_seed_list(self.seeds)}; run-to-run variation {self.run_to_run_sd:.0%}; "
+            f"motion perception spread {self.motion_spread:g})",
             f"{'measure':30s} {'factor':6s} {'twin d_z: median':>16s} {'5-95 %':>13s} | "
             f"{'thesis d_z':>10s} {'p draw':>7s} | agree expected",
         ]
@@ -324,7 +375,8 @@ class Replication:
             "agree: populations with p < 0.05 in the thesis' direction where it found the effect, "
             "p >= 0.05 where not; expected: if the true effect were exactly the thesis' estimate",
             f"the thesis is a plausible draw of the twin for {len(self.effects) - len(bad)} of "
-            f"{len(self.effects)} main effects",
+            f"{len(self.effects)} main effects; log predictive density of the thesis' effects "
+            f"{self.log_density:.1f} (higher: likelier)",
         ]
         if self.subjects != THESIS_SUBJECTS:
             lines.append(f"(the test is calibrated for populations of {THESIS_SUBJECTS}, the "
@@ -387,7 +439,8 @@ def alike(results: Sequence[PopulationResult]) -> int:
     ------
     SignalError
         No populations, repeated seeds, or populations that differ in subjects, adapted
-        parameters, run-to-run variation, measures or how they were measured.
+        parameters, run-to-run variation, measures, how they were measured or the subjects'
+        spread in motion perception.
 
     """
     if not results:
@@ -399,14 +452,15 @@ def alike(results: Sequence[PopulationResult]) -> int:
         )
     first = results[0]
     subjects = len({r["subject"] for r in first.rows})
-    want = (subjects, first.adapted, first.run_to_run_sd, tuple(first.anova), first.identified)
+    want = (subjects, first.adapted, first.run_to_run_sd, tuple(first.anova), first.identified,
+            first.motion_spread)  # fmt: skip
     for r in results[1:]:
         got = (len({row["subject"] for row in r.rows}), r.adapted, r.run_to_run_sd,
-               tuple(r.anova), r.identified)  # fmt: skip
+               tuple(r.anova), r.identified, r.motion_spread)  # fmt: skip
         if got != want:
             raise SignalError(f"populations differ in subjects, adapted parameters, run-to-run "
-                              f"variation, measures or identification: {got} vs "
-                              f"{want}")  # fmt: skip
+                              f"variation, measures, identification or motion perception "
+                              f"spread: {got} vs {want}")  # fmt: skip
     return subjects
 
 
@@ -451,7 +505,7 @@ def replicate(results: Sequence[PopulationResult]) -> Replication:
             effects.append(EffectReplication(measure, factor, thesis_f, direction, signed,
                                              subjects, agreed, prob))  # fmt: skip
     return Replication(tuple(effects), tuple(seeds), subjects, first.adapted,
-                       first.run_to_run_sd)  # fmt: skip
+                       first.run_to_run_sd, first.motion_spread)  # fmt: skip
 
 
 def run_populations(
@@ -463,6 +517,7 @@ def run_populations(
     adapted: tuple[str, ...] = ADAPTED,
     run_to_run_sd: float = ADAPTATION_SD,
     identified: float | None = None,
+    motion_spread: float = MOTION_NOISE_SD,
 ) -> tuple[Replication, list[PopulationResult]]:
     """Fly ``n_populations`` populations (seeds ``seed``, ``seed + 1``, ...) and replicate.
 
@@ -490,6 +545,9 @@ def run_populations(
         Measure the pilot model as the thesis did, identified from the runs, with a passive
         feedthrough of this relative size (0: none; :mod:`twin.pilot.identified`); None (the
         default): the pilots' own measures.
+    motion_spread : float
+        The subjects' spread in motion perception (log-normal sd, 0 to 3;
+        :func:`twin.pilot.population.subjects`).
 
     Returns
     -------
@@ -506,7 +564,7 @@ def run_populations(
     """
     if n_populations < 2:
         raise SignalError(f"a replication needs at least 2 populations; got {n_populations}")
-    adapted = checked_settings(adapted, run_to_run_sd)
+    adapted = checked_settings(adapted, run_to_run_sd, motion_spread)
     seeds = list(range(seed, seed + n_populations))
     if identified is None:
         fly, tasks_of, result_of, extra = fly_subject, population_tasks, population_result, ()
@@ -514,11 +572,13 @@ def run_populations(
         check_feedthrough(identified)
         fly, tasks_of, result_of = identified_subject, identified_tasks, identified_result
         extra = (identified,)
-    tasks = [tasks_of(n_subjects, s, adapted, run_to_run_sd, *extra) for s in seeds]
+    tasks = [tasks_of(n_subjects, s, adapted, run_to_run_sd, *extra, motion_spread=motion_spread)
+             for s in seeds]  # fmt: skip
     args = [a for t in tasks for a in t[0]]
     inputs = [i for t in tasks for i in t[1]]
     with using(scheduler) as engine:
         flown = engine.map(fly, args, inputs, "subjects", progress).values()
     results = [result_of(flown[k * n_subjects : (k + 1) * n_subjects], s, adapted,
-                         run_to_run_sd, *extra) for k, s in enumerate(seeds)]  # fmt: skip
+                         run_to_run_sd, *extra, motion_spread=motion_spread)
+               for k, s in enumerate(seeds)]  # fmt: skip
     return replicate(results), results
