@@ -76,6 +76,7 @@ import numpy as np
 from statsmodels.stats.proportion import proportion_confint
 
 from twin.chain.config import motion_system
+from twin.errors import SignalError
 from twin.pilot.adapt import ADAPTED, EQUALISATION, SPEED_ACCURACY, adapt
 from twin.pilot.design import ACCEPTANCE, MAX_SUBJECTS, Design, design
 from twin.pilot.experiment import pitch_remnant_scale
@@ -84,10 +85,10 @@ from twin.pilot.mle import PARAMETERS, bound_at, fit_pitch_pilot
 from twin.pilot.pitch import Feedthrough, PitchPilot, simulate_pitch
 from twin.pilot.population import (
     ADAPTATION_SD,
-    MAX_MOTION_SPREAD,
     MOTION_NOISE_SD,
     PopulationResult,
     Subject,
+    checked_spread,
     filter_effect,
     run_population,
     subjects,
@@ -143,7 +144,7 @@ def main(
         coverage(runs, intervals, coverage_seed)
         return
     t0 = time.perf_counter()
-    run_population(6, 0, scheduler="local:2")
+    run_population(6, 0, scheduler="local:2", motion_spread=SPREAD["motion"])
     wall = time.perf_counter() - t0
     print(f"adaptive experiment, 6 subjects, 2 workers: {wall:.1f} s (goal <= 60 s)")
     design_check(populations(ADAPTATION_SD, POPULATIONS))
@@ -527,10 +528,10 @@ if __name__ == "__main__":
     if not all(0 <= r <= MAX_FEEDTHROUGH for r in args.feedthrough):  # also refuses NaN
         parser.error(f"--feedthrough ratios must be 0 to {MAX_FEEDTHROUGH:g}; "
                      f"got {args.feedthrough}")  # fmt: skip
-    if not 0 <= args.motion_spread <= MAX_MOTION_SPREAD:  # also refuses NaN
-        parser.error(f"--motion-spread must be 0 to {MAX_MOTION_SPREAD:g}; "
-                     f"got {args.motion_spread}")  # fmt: skip
-    SPREAD["motion"] = args.motion_spread
+    try:
+        SPREAD["motion"] = checked_spread(args.motion_spread)
+    except SignalError as e:
+        parser.error(f"--motion-spread: {e}")
     if args.coverage_seed < 0:
         parser.error(f"--coverage-seed must be a seed >= 0; got {args.coverage_seed}")
     if args.motion_delay_only:

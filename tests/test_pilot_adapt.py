@@ -210,6 +210,35 @@ def test_subjects_differ_in_how_well_they_perceive_motion():
     first = rng.normal(*SUBJECT_SPREAD["tau_v"])
     assert many[0].limitations.tau_v == max(first, 0.3 * SUBJECT_SPREAD["tau_v"][0])
     assert [s.motion_noise for s in subjects(5, seed=3)] == [s.motion_noise for s in many[:5]]
+    # every subject's other draws are the same whatever the spread; at 0 (or -0) all are 1
+    flat, wide = subjects(9, 3, 0.0), subjects(9, 3, 2.0)
+    assert [s.motion_noise for s in flat] == [1.0] * 9 == [s.motion_noise for s in
+                                                           subjects(9, 3, -0.0)]  # fmt: skip
+    for a, b, c in zip(flat, wide, many[:9], strict=True):
+        assert (a.limitations, a.weight, a.noise_ratio) == (b.limitations, b.weight,
+                                                            b.noise_ratio)  # fmt: skip
+        assert (a.limitations, a.weight, a.noise_ratio) == (c.limitations, c.weight,
+                                                            c.noise_ratio)  # fmt: skip
+    with pytest.raises(SignalError, match=r"motion perception's spread .* \[0, 3\]"):
+        subjects(3, 0, float("nan"))
+
+
+def test_a_repetition_flies_with_the_subjects_motion_perception():
+    """Without run-to-run variation a repetition is the adapted pilot, and its predicted
+    performance is the adaptation's: the subject's motion noise is carried into both (a
+    repetition predicted without it would differ)."""
+    from twin.pilot.population import Subject, _repetition
+
+    subject = Subject(1, PitchPilot(), 0.03, 0.01, motion_noise=2.4)
+    task = Task.pitch("condition-1")
+    a = adapt(task, subject.limitations, subject.weight, subject.noise_ratio,
+              motion_noise=subject.motion_noise)  # fmt: skip
+    pilot, perf = _repetition(a, subject, task, np.random.default_rng(0), 0.0)
+    assert pilot == a.pilot
+    assert (perf.var_e, perf.var_u, perf.cost) == pytest.approx(
+        (a.performance.var_e, a.performance.var_u, a.performance.cost), rel=1e-12)  # fmt: skip
+    alike = predict(a.pilot, task, 0.03, 0.01)
+    assert abs(alike.cost / perf.cost - 1) > 1e-3
 
 
 def test_population_measures_follow_what_was_adapted():

@@ -214,6 +214,7 @@ def test_cli_populations_json_and_figure(monkeypatch, tmp_path, capsys):
     assert code == 0
     doc = json.loads(capsys.readouterr().out)
     assert doc["seeds"] == [4, 5] and doc["subjects"] == 3
+    assert doc["motion_spread"] == population.MOTION_NOISE_SD
     assert [p["seed"] for p in doc["per_population"]] == [4, 5]
     default = set(compared(ADAPTED))  # tau_v only where the subjects adapt it
     assert set(doc["per_population"][0]["anova"]) == set(doc["replication"]) == default
@@ -221,8 +222,10 @@ def test_cli_populations_json_and_figure(monkeypatch, tmp_path, capsys):
     assert doc["design"] is None  # six subjects pooled: too few to design on
     assert png.stat().st_size > 10_000 and not (tmp_path / "rep-subjects.png").exists()
     assert main(["pilot", "experiment", "--pilot", "adaptive", "--populations", "2",
-                 "--subjects", "3", "--scheduler", "inline"]) == 0  # fmt: skip
+                 "--subjects", "3", "--scheduler", "inline",
+                 "--motion-spread", "1.5"]) == 0  # fmt: skip
     out = capsys.readouterr().out
+    assert "motion perception spread 1.5)" in out
     assert "calibrated for populations of 9, the thesis' size; with 3" in out
     assert (
         "(no design of experiments: it pools at least 40 subjects; these populations have 6)" in out

@@ -393,11 +393,12 @@ def _cmd_experiment(args: argparse.Namespace) -> int:
         args.motion_spread = MOTION_NOISE_SD
     if args.pilot == "adaptive":  # before any worker starts
         from twin.pilot.identified import check_feedthrough
-        from twin.pilot.population import checked_settings
+        from twin.pilot.population import checked_settings, checked_spread
 
         with common.options_named(OPTIONS):
             check_feedthrough(args.feedthrough)
             checked_settings(_adapted(args), 0.0, args.motion_spread)
+            args.motion_spread = checked_spread(args.motion_spread)
     if args.populations is not None:
         if args.pilot != "adaptive":
             raise UsageError("--populations counts populations of adaptive subjects: give it "

@@ -32,7 +32,8 @@ Everything is computed in the frequency domain, so one evaluation takes about a 
 * the forcing functions' lines (Table 6.2) give their parts of var(e) and var(u) exactly;
 * the remnant is observation noise (Kleinman, Baron and Levison 1970): white noise on the
   displayed error and on the felt pitch rate, each with a density of ``noise_ratio`` times its
-  signal's variance, so visual lead (which differentiates the visual noise) costs, and motion
+  signal's variance (on the felt rate times the pilot's ``motion_noise`` too: people perceive
+  motion differently), so visual lead (which differentiates the visual noise) costs, and motion
   senses the rate directly; both variances depend on the noise they scale (a 2 x 2 linear
   system, required to be contracting);
 * the motion noise m (Eq 5.10 heave at the pilot station, read as attitude -z / l, §6.3.5)
@@ -187,14 +188,14 @@ def visual_noise_ratio(pilot: PitchPilot, own: PitchPilot, noise_ratio: float,
     own : PitchPilot
         The pilot as it is: its tau_v is the one at which the visual noise is ``noise_ratio``.
     noise_ratio : float
-        The observation-noise ratio of both channels at the pilot's own delays.
+        The pilot's observation-noise ratio at its own delays.
     adapted : sequence of str
         What the pilot adapts.
 
     Returns
     -------
     float or None
-        None (the ratio is ``noise_ratio``, as the motion channel's) unless ``tau_v`` is
+        None (the ratio is ``noise_ratio``) unless ``tau_v`` is
         ``adapted``; then ``noise_ratio (own.tau_v / pilot.tau_v)^k`` (k
         :data:`SPEED_ACCURACY_EXPONENT`).
 
@@ -210,6 +211,41 @@ def visual_noise_ratio(pilot: PitchPilot, own: PitchPilot, noise_ratio: float,
     if "tau_v" not in adapted:
         return None
     return noise_ratio * (own.tau_v / pilot.tau_v) ** SPEED_ACCURACY_EXPONENT
+
+
+def performance(
+    pilot: PitchPilot,
+    task: Task,
+    own: PitchPilot,
+    weight: float,
+    noise_ratio: float,
+    adapted: Sequence[str],
+    motion_noise: float = 1.0,
+) -> Performance:
+    """Predict how a subject flies ``task`` as ``pilot`` (:func:`predict`, its remnant its own).
+
+    Parameters
+    ----------
+    pilot : PitchPilot
+        The pilot as it flies.
+    task : Task
+        The task.
+    own : PitchPilot
+        The subject as it is (its own visual delay: :func:`visual_noise_ratio`).
+    weight, noise_ratio : float
+        The subject's r and observation-noise ratio at its own delays.
+    adapted : sequence of str
+        What the subject adapts.
+    motion_noise : float
+        Its felt rate's noise ratio relative to ``noise_ratio`` (:func:`adapt`).
+
+    Returns
+    -------
+    Performance
+
+    """
+    visual = visual_noise_ratio(pilot, own, noise_ratio, adapted)
+    return predict(pilot, task, weight, noise_ratio, visual, noise_ratio * motion_noise)
 
 
 def predict(
@@ -269,7 +305,10 @@ def predict(
     if radius >= 1:
         return Performance(float("inf"), float("inf"), float("inf"), float("inf"), radius)
     ve, vr = np.linalg.solve(np.eye(2) - g, forced[[0, 2]])
-    vu = forced[1] + ratios[0] * gains[1, 0] * ve + ratios[1] * gains[1, 1] * vr
+    if ratios[0] == ratios[1]:  # one ratio for both channels: summed as it always was
+        vu = forced[1] + ratios[0] * (gains[1, 0] * ve + gains[1, 1] * vr)
+    else:
+        vu = forced[1] + ratios[0] * gains[1, 0] * ve + ratios[1] * gains[1, 1] * vr
     return Performance(float(ve), float(vu), float(vr), float(ve + weight * vu), radius)
 
 
@@ -404,9 +443,8 @@ def adapt(
         (``EQUALISATION`` keeps the neuromuscular system fixed, as a pilot model with fixed
         limitations; ``(*ADAPTED, "tau_v")`` adapts the visual delay too).
     motion_noise : float
-        The felt rate's observation-noise ratio relative to the displayed error's (> 0; 1:
-        the pilot perceives both alike; above 1 it perceives motion less well, and uses it
-        less).
+        The felt rate's observation-noise ratio relative to ``noise_ratio`` (> 0; 1: the
+        pilot perceives both alike; above 1 it perceives motion less well, and uses it less).
 
     Raises
     ------
@@ -419,10 +457,10 @@ def adapt(
         raise SignalError(f"control weight r must be > 0; got {weight}")
     if not np.isfinite(noise_ratio) or noise_ratio <= 0:
         raise SignalError(f"observation-noise ratio must be > 0; got {noise_ratio}")
-    if not np.isfinite(motion_noise) or motion_noise <= 0:
-        raise SignalError(f"the motion channel's noise relative to the visual must be > 0; "
-                          f"got {motion_noise}")  # fmt: skip
-    motion_ratio = noise_ratio * motion_noise
+    if not (np.isfinite(motion_noise) and motion_noise > 0
+            and np.isfinite(noise_ratio * motion_noise)):  # fmt: skip
+        raise SignalError(f"the motion channel's noise relative to the visual must be a finite "
+                          f"number > 0; got {motion_noise}")  # fmt: skip
     names = adapted_names(adapted)
     t = task if isinstance(task, Task) else Task.pitch(task)
     base = limitations or PitchPilot()
@@ -437,8 +475,7 @@ def adapt(
         return dataclasses.replace(base, **dict(zip(names, np.clip(x, lo, hi), strict=True)))
 
     def performance_of(p: PitchPilot) -> Performance:
-        visual = visual_noise_ratio(p, base, noise_ratio, names)
-        return predict(p, t, weight, noise_ratio, visual, motion_ratio)
+        return performance(p, t, base, weight, noise_ratio, names, motion_noise)
 
     def cost(x: FloatArray) -> float:
         p = pilot_of(x)
@@ -447,7 +484,7 @@ def adapt(
             return UNSTABLE_COST
         return perf.cost / scale
 
-    scale = predict(base, t, weight, noise_ratio, motion_ratio=motion_ratio).cost
+    scale = predict(base, t, weight, noise_ratio, motion_ratio=noise_ratio * motion_noise).cost
     scale = scale if np.isfinite(scale) and scale > 0 else 1.0
     firsts = list(starts) if starts else [
         dataclasses.replace(base, **dict(zip(EQUALISATION, x, strict=True))) for x in STARTS

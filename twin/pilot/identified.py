@@ -43,6 +43,7 @@ from twin.pilot.population import (
     Subject,
     anova,
     checked_settings,
+    checked_spread,
     condition_row,
     flown_conditions,
     subjects,
@@ -133,6 +134,7 @@ def identified_population(
 
     """
     adapted = checked_settings(adapted, run_to_run_sd, motion_spread)
+    motion_spread = checked_spread(motion_spread)
     check_feedthrough(feedthrough)
     args, names = identified_tasks(n_subjects, seed, adapted, run_to_run_sd, feedthrough,
                                    motion_spread=motion_spread)  # fmt: skip

@@ -75,9 +75,8 @@ from twin.pilot.adapt import (
     Task,
     adapt,
     adapted_names,
-    predict,
+    performance,
     stable,
-    visual_noise_ratio,
 )
 from twin.pilot.pitch import PitchPilot, open_loops
 from twin.progress import ProgressFn
@@ -102,14 +101,14 @@ MEASURES = (
 #: Measures compared with the thesis: the contract's, the lead-lag pair (Table 6.6), the
 #: neuromuscular tuning and the visual delay (Table 6.7; each compared where it is adapted).
 COMPARED = (*MEASURES, "t_lead", "t_lag", "omega_nm", "zeta_nm", "tau_v")
-#: Spread between subjects of how well they perceive motion: the log-normal sd of the felt
-#: rate's observation-noise ratio relative to the displayed error's (README, "How subjects
-#: differ in using motion").
+#: Spread between subjects of how well they perceive motion: the log-normal sd (median 1) of
+#: the felt rate's observation-noise ratio relative to the subject's own ratio (README,
+#: "Subjects who differ in perceiving motion").
 MOTION_NOISE_SD = 0.5
 #: Largest spread accepted (a factor e^3 = 20 between subjects one sd apart).
 MAX_MOTION_SPREAD = 3.0
 #: Subject spread: parameter -> (mean, sd) for limitations; log-normal sd for the priorities
-#: and the motion perception.
+#: (the motion perception's: :data:`MOTION_NOISE_SD`).
 SUBJECT_SPREAD = {
     "tau_v": (0.30, 0.03),
     "tau_m": (0.20, 0.03),
@@ -117,7 +116,6 @@ SUBJECT_SPREAD = {
     "zeta_nm": (0.25, 0.05),
     "weight": (CONTROL_WEIGHT, 0.3),
     "noise_ratio": (NOISE_RATIO, 0.3),
-    "motion_noise": (1.0, MOTION_NOISE_SD),
 }
 #: Run-to-run variation of the adapted parameters (log-normal sd).
 ADAPTATION_SD = 0.1
@@ -144,7 +142,7 @@ class Subject:
     weight, noise_ratio : float
         r of the cost and observation-noise ratio of the remnant.
     motion_noise : float
-        The felt rate's observation-noise ratio relative to the displayed error's
+        The felt rate's observation-noise ratio relative to ``noise_ratio``
         (:func:`twin.pilot.adapt.adapt`; 1: motion perceived as well as vision).
 
     """
@@ -165,9 +163,11 @@ def subjects(n: int, seed: int = 0, motion_spread: float = MOTION_NOISE_SD) -> l
     """
     if n < 2:
         raise SignalError(f"an ANOVA needs at least 2 subjects; got {n}")
+    spread = checked_spread(motion_spread)
     rng = np.random.default_rng(np.random.SeedSequence([seed, 14]))
     # the motion perception from its own stream: the other draws are those of subjects
-    # drawn before it was part of a subject
+    # drawn before it was part of a subject (tag 16 with two entries; the identified runs'
+    # [seed, 16, subject, condition, repetition] are other streams)
     motion = np.random.default_rng(np.random.SeedSequence([seed, 16]))
     out = []
     for i in range(n):
@@ -175,7 +175,7 @@ def subjects(n: int, seed: int = 0, motion_spread: float = MOTION_NOISE_SD) -> l
                for k in ("tau_v", "tau_m", "omega_nm", "zeta_nm")}  # fmt: skip
         w, nr = (float(SUBJECT_SPREAD[k][0] * np.exp(rng.normal(0, SUBJECT_SPREAD[k][1])))
                  for k in ("weight", "noise_ratio"))  # fmt: skip
-        mn = float(SUBJECT_SPREAD["motion_noise"][0] * np.exp(motion.normal(0, motion_spread)))
+        mn = float(np.exp(motion.normal(0, spread)))
         out.append(Subject(i + 1, dataclasses.replace(PitchPilot(), **lim), w, nr, mn))
     return out
 
@@ -282,10 +282,15 @@ def _repetition(
                  for k in adapted.adapted}  # fmt: skip
         pilot = dataclasses.replace(adapted.pilot, **noisy)
         if stable(pilot, task):
-            visual = visual_noise_ratio(pilot, subject.limitations, subject.noise_ratio,
-                                        adapted.adapted)  # fmt: skip
-            perf = predict(pilot, task, subject.weight, subject.noise_ratio, visual,
-                           subject.noise_ratio * subject.motion_noise)  # fmt: skip
+            perf = performance(
+                pilot,
+                task,
+                subject.limitations,
+                subject.weight,
+                subject.noise_ratio,
+                adapted.adapted,
+                subject.motion_noise,
+            )
             if perf.cost <= MAX_COST_RATIO * best:
                 return pilot, perf
     return adapted.pilot, adapted.performance
@@ -571,6 +576,7 @@ def run_population(
 
     """
     adapted = checked_settings(adapted, run_to_run_sd, motion_spread)
+    motion_spread = checked_spread(motion_spread)
     tasks = population_tasks(n_subjects, seed, adapted, run_to_run_sd, motion_spread=motion_spread)
     with using(scheduler) as engine:
         flown = engine.map(fly_subject, *tasks, "subjects", progress).values()
@@ -592,10 +598,23 @@ def checked_settings(
     if not 0 <= run_to_run_sd <= 1:  # also refuses NaN
         raise SignalError(f"run-to-run variation must be a log-normal sd in [0, 1]; "
                           f"got {run_to_run_sd}")  # fmt: skip
-    if not 0 <= motion_spread <= MAX_MOTION_SPREAD:
+    checked_spread(motion_spread)
+    return adapted_names(adapted)
+
+
+def checked_spread(motion_spread: float) -> float:
+    """Return the subjects' spread in motion perception as a float, checked (-0 is 0).
+
+    Raises
+    ------
+    SignalError
+        A spread out of [0, ``MAX_MOTION_SPREAD``] (or NaN).
+
+    """
+    if not 0 <= motion_spread <= MAX_MOTION_SPREAD:  # also refuses NaN
         raise SignalError(f"the motion perception's spread must be a log-normal sd in "
                           f"[0, {MAX_MOTION_SPREAD:g}]; got {motion_spread}")  # fmt: skip
-    return adapted_names(adapted)
+    return abs(float(motion_spread))
 
 
 def population_tasks(

@@ -70,6 +70,7 @@ from twin.pilot.population import (
     MOTION_NOISE_SD,
     PopulationResult,
     checked_settings,
+    checked_spread,
     effect_axes,
     fly_subject,
     population_result,
@@ -169,6 +170,7 @@ def predictive_log_density(draws: ArrayLike, value: float, scale: float = 1.0) -
     Returns
     -------
     float
+        The log of the predictive density at ``value`` (per unit of the draws).
 
     """
     t, spread, df = _predictive_t(draws, value, scale)
@@ -252,17 +254,22 @@ class EffectReplication:
         :func:`predictive_p` of the thesis' d_z (either sign where the thesis gave none),
         whose sampling spread is sqrt(n / 9) times a population's of n subjects.
         """
-        scale = float(np.sqrt(self.subjects / THESIS_SUBJECTS))
-        return max(predictive_p(self.d_z, d, scale) for d in self.thesis_d_z)
+        return max(predictive_p(self.d_z, d, self._thesis_scale) for d in self.thesis_d_z)
 
     @property
     def log_density(self) -> float:
         """Log predictive density of the thesis' d_z (:func:`predictive_log_density`).
 
-        Where the thesis gave no direction, the likelier sign's.
+        Where the thesis gave no direction, the likelier sign's (a score: over both signs it
+        is not a normalised density).
         """
-        scale = float(np.sqrt(self.subjects / THESIS_SUBJECTS))
-        return max(predictive_log_density(self.d_z, d, scale) for d in self.thesis_d_z)
+        return max(predictive_log_density(self.d_z, d, self._thesis_scale)
+                   for d in self.thesis_d_z)  # fmt: skip
+
+    @property
+    def _thesis_scale(self) -> float:
+        """The thesis' sampling spread of d_z relative to a population's: sqrt(n / 9)."""
+        return float(np.sqrt(self.subjects / THESIS_SUBJECTS))
 
     @property
     def plausible(self) -> bool:
@@ -327,8 +334,8 @@ class Replication:
     def log_density(self) -> float:
         """Sum of the effects' log predictive densities of the thesis' results.
 
-        A score of the twin's settings against the thesis (higher: the thesis' 36 effects
-        are likelier draws of the twin); compare settings on the same seeds.
+        A score of the twin's settings against the thesis (higher: the thesis' main effects
+        are likelier draws of the twin); compare settings on the same seeds and measures.
         """
         return float(sum(e.log_density for e in self.effects))
 
@@ -565,6 +572,7 @@ def run_populations(
     if n_populations < 2:
         raise SignalError(f"a replication needs at least 2 populations; got {n_populations}")
     adapted = checked_settings(adapted, run_to_run_sd, motion_spread)
+    motion_spread = checked_spread(motion_spread)
     seeds = list(range(seed, seed + n_populations))
     if identified is None:
         fly, tasks_of, result_of, extra = fly_subject, population_tasks, population_result, ()
