@@ -148,7 +148,7 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
         type=float,
         metavar="SD",
         help="with --pilot adaptive: how much the subjects differ in perceiving motion, the "
-        "log-normal sd of the felt rate's observation noise relative to the displayed error's "
+        "log-normal sd of the felt rate's observation noise relative to the visual one "
         "(0 to 3; default 0.5, from a profile against Tables 6.4-6.7, README; 0: every subject "
         "perceives motion as well as vision, the subjects of earlier versions)",
     )

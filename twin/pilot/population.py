@@ -2,7 +2,7 @@
 
 Each subject (seeded) has its own limitations - visual and motion delays, a resting
 neuromuscular frequency and damping, and how well it perceives motion (the felt rate's
-observation noise relative to the displayed error's; people's vestibular thresholds differ
+observation noise relative to its visual one; people's vestibular thresholds differ
 by factors of several) - and its own priorities (control weight r, observation-noise ratio),
 drawn around the values of :mod:`twin.pilot.adapt`. In every Table 6.3
 condition the subject adapts its equalisation (K_v, t_lead, t_lag, K_m) and its neuromuscular
