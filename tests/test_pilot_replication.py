@@ -106,11 +106,11 @@ def test_the_predictive_log_density_is_a_density_peaked_at_the_draws_mean():
     )
 
     draws = np.random.default_rng(6).normal(2.0, 0.5, 10)
-    grid = np.linspace(-30, 34, 64001)
+    grid = np.linspace(-30, 34, 6401)
     for scale in (0.5, 1.0, 2.0):
         density = np.exp([predictive_log_density(draws, v, scale) for v in grid])
         assert np.trapezoid(density, grid) == pytest.approx(1.0, abs=2e-3)
-        assert grid[np.argmax(density)] == pytest.approx(draws.mean(), abs=2e-3)
+        assert grid[np.argmax(density)] == pytest.approx(draws.mean(), abs=1e-2)
     near, far = draws.mean() + 0.3, draws.mean() + 1.5
     assert predictive_log_density(draws, near) > predictive_log_density(draws, far)
     assert predictive_p(draws, near) > predictive_p(draws, far)
