@@ -46,7 +46,7 @@ from twin.pilot.population import (
     checked_spread,
     condition_row,
     flown_conditions,
-    subjects,
+    population_tasks,
 )
 from twin.progress import ProgressFn
 from twin.tasks.engine import Engine, using
@@ -159,10 +159,12 @@ def identified_tasks(
     feedthrough: float,
     motion_spread: float = MOTION_NOISE_SD,
 ) -> tuple[list[tuple], list[dict[str, int]]]:
-    """Arguments of :func:`identified_subject` per subject of population ``seed``, and names."""
-    subs = subjects(n_subjects, seed, motion_spread)
-    return ([(s, seed, adapted, run_to_run_sd, feedthrough) for s in subs],
-            [{"subject": s.number, "seed": seed} for s in subs])  # fmt: skip
+    """Arguments of :func:`identified_subject` per subject of population ``seed``, and names.
+
+    :func:`twin.pilot.population.population_tasks`'s, each with the feedthrough.
+    """
+    args, names = population_tasks(n_subjects, seed, adapted, run_to_run_sd, motion_spread)
+    return [(*a, feedthrough) for a in args], names
 
 
 def identified_result(
