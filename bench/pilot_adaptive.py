@@ -85,15 +85,15 @@ from twin.pilot.mle import PARAMETERS, bound_at, fit_pitch_pilot
 from twin.pilot.pitch import Feedthrough, PitchPilot, simulate_pitch
 from twin.pilot.population import (
     ADAPTATION_SD,
-    MOTION_NOISE_SD,
     PopulationResult,
     Subject,
-    checked_spread,
+    checked_settings,
     filter_effect,
     run_population,
     subjects,
 )
 from twin.pilot.replication import run_populations
+from twin.pilot.spread import DEFAULT_SPREAD, MOTION_NOISE_SD, VISUAL_DELAY_SD, Spread
 from twin.tasks.engine import Engine
 from twin.thesis import TABLES_6_4_TO_6_7
 
@@ -116,11 +116,14 @@ VISUAL_DELAY = (
 )
 #: Populations of section 5.
 VISUAL_DELAY_POPULATIONS = 10
-#: The subjects' spread in motion perception for every section but 7 (``--motion-spread``).
-SPREAD = {"motion": MOTION_NOISE_SD}
-#: Section 7's grid: motion perception spreads and run-to-run variations, and populations
-#: per cell.
-SPREAD_GRID = ((0.0, 0.5, 1.0, 1.5), (0.05, 0.1))
+#: The subjects' spreads for every section but 7 (``--motion-spread``,
+#: ``--visual-delay-spread``).
+SETTINGS = {"spread": DEFAULT_SPREAD}
+#: Section 7's grid by default (``--profile-motion``, ``--profile-visual-delay``,
+#: ``--profile-run-to-run``): motion perception spreads, visual-delay sds (s) and run-to-run
+#: variations; and populations per cell (``--profile-populations``).
+SPREAD_GRID = {"motion": (0.5, 1.0), "visual_delay": (0.0, 0.01, 0.02, VISUAL_DELAY_SD),
+               "run_to_run": (ADAPTATION_SD,)}  # fmt: skip
 SPREAD_POPULATIONS = 10
 #: Fresh populations flown to check section 6's design, and their first seed.
 DESIGN_CHECK_POPULATIONS, DESIGN_CHECK_SEED = 20, 100
@@ -144,7 +147,7 @@ def main(
         coverage(runs, intervals, coverage_seed)
         return
     t0 = time.perf_counter()
-    run_population(6, 0, scheduler="local:2", motion_spread=SPREAD["motion"])
+    run_population(6, 0, scheduler="local:2", spread=SETTINGS["spread"])
     wall = time.perf_counter() - t0
     print(f"adaptive experiment, 6 subjects, 2 workers: {wall:.1f} s (goal <= 60 s)")
     design_check(populations(ADAPTATION_SD, POPULATIONS))
@@ -159,7 +162,7 @@ def populations(sd: float, n: int, adapted: tuple[str, ...] = ADAPTED) -> list[P
     """Section 1: agreement with Tables 6.4-6.7 over seeded populations, beside the agreement
     the thesis' own F predicts (:mod:`twin.pilot.replication`); returns the populations."""
     rep, results = run_populations(n, SUBJECTS, 0, scheduler="local:2", run_to_run_sd=sd,
-                                   motion_spread=SPREAD["motion"],
+                                   spread=SETTINGS["spread"],
                                    adapted=adapted)  # fmt: skip
     full = sum(e.agreed == e.populations for e in rep.effects)
     print(f"{n} populations of {SUBJECTS} subjects (the thesis' nine), run-to-run variation "
@@ -173,25 +176,27 @@ def populations(sd: float, n: int, adapted: tuple[str, ...] = ADAPTED) -> list[P
     return results
 
 
-def spread_profile() -> None:
-    """Section 7: the subjects' motion perception spread and run-to-run variation, profiled
-    against Tables 6.4-6.7."""
-    spreads, variations = SPREAD_GRID
+def spread_profile(grid: dict[str, tuple[float, ...]], n: int, seed: int = 0) -> None:
+    """Section 7: the subjects' spreads and run-to-run variation profiled against Tables
+    6.4-6.7, ``n`` populations of nine a cell from ``seed``."""
     filters = [(m, "filter") for m in TABLES_6_4_TO_6_7 if m not in ("tau_v", "tau_m")]
     head = " ".join(f"{m[:9]:>9s}" for m, _ in filters)
-    print(f"\n{'spread':>6s} {'rr':>5s} {'log dens':>8s} {'plaus':>5s} {'accept9':>7s} | {head}")
-    for sd in variations:
-        for spread in spreads:
-            rep, results = run_populations(SPREAD_POPULATIONS, SUBJECTS, 0, scheduler="local:2",
-                                           run_to_run_sd=sd, motion_spread=spread)  # fmt: skip
-            plausible = len(rep.effects) - len(rep.implausible())
-            accept = design(results, resamples=2).acceptance_at(SUBJECTS)
-            if sd == variations[0] and spread == spreads[0]:
-                thesis = " ".join(f"{rep.effect(m, f).thesis_d_z[0]:+9.2f}" for m, f in filters)
-                print(f"{'thesis':>6s} {'':5s} {'':8s} {'':5s} {'':7s} | {thesis}")
-            d = " ".join(f"{rep.effect(m, f).quantiles()[1]:+9.2f}" for m, f in filters)
-            print(f"{spread:6.2f} {sd:5.2f} {rep.log_density:8.1f} {plausible:3d}/"
-                  f"{len(rep.effects)} {accept:7.2f} | {d}", flush=True)  # fmt: skip
+    print(f"\n{n} populations of {SUBJECTS} a cell, seeds {seed}-{seed + n - 1}")
+    print(f"{'motion':>6s} {'tau_v sd':>8s} {'rr':>5s} {'log dens':>8s} {'plaus':>5s} "
+          f"{'accept9':>7s} | {head}")  # fmt: skip
+    cells = [(sd, Spread(m, v)) for sd in grid["run_to_run"] for m in grid["motion"]
+             for v in grid["visual_delay"]]  # fmt: skip
+    for k, (sd, spread) in enumerate(cells):
+        rep, results = run_populations(n, SUBJECTS, seed, scheduler="local:2",
+                                       run_to_run_sd=sd, spread=spread)  # fmt: skip
+        plausible = len(rep.effects) - len(rep.implausible())
+        accept = design(results, resamples=2).acceptance_at(SUBJECTS)
+        if k == 0:
+            thesis = " ".join(f"{rep.effect(m, f).thesis_d_z[0]:+9.2f}" for m, f in filters)
+            print(f"{'thesis':>6s} {'':8s} {'':5s} {'':8s} {'':5s} {'':7s} | {thesis}")
+        d = " ".join(f"{rep.effect(m, f).quantiles()[1]:+9.2f}" for m, f in filters)
+        print(f"{spread.motion:6.2f} {spread.visual_delay:8.3f} {sd:5.2f} {rep.log_density:8.1f} "
+              f"{plausible:3d}/{len(rep.effects)} {accept:7.2f} | {d}", flush=True)  # fmt: skip
 
 
 def design_check(pool: list[PopulationResult], subjects_n: int | None = None) -> None:
@@ -205,7 +210,7 @@ def design_check(pool: list[PopulationResult], subjects_n: int | None = None) ->
     plan.at(n)  # refuses a size beyond the design before anything flies
     t0 = time.perf_counter()
     _, fresh = run_populations(DESIGN_CHECK_POPULATIONS, n, DESIGN_CHECK_SEED,
-                               motion_spread=SPREAD["motion"],
+                               spread=SETTINGS["spread"],
                                scheduler="local:2")  # fmt: skip
     print(f"\n{DESIGN_CHECK_POPULATIONS} fresh populations of {n} subjects (seeds "
           f"{DESIGN_CHECK_SEED}-{DESIGN_CHECK_SEED + DESIGN_CHECK_POPULATIONS - 1}, "
@@ -296,7 +301,7 @@ def motion_delay_measured(n_subjects: int = 18, feedthrough: float = 0.0) -> Non
     """Section 5: Table 6.7's tau_m as the thesis measured it - the twin's subjects' runs
     identified by the MLE - beside the thesis' F (140.1, lower behind the filter); with
     ``feedthrough``, subjects who also have a passive path of that relative size."""
-    subs = subjects(n_subjects, 0, SPREAD["motion"])
+    subs = subjects(n_subjects, 0, SETTINGS["spread"])
     with Engine("local:2") as engine:
         done = engine.map(measured_as_the_thesis, [(s, feedthrough) for s in subs],
                           [{"subject": s.number} for s in subs], "subjects").values()  # fmt: skip
@@ -330,9 +335,8 @@ def _spread(x: np.ndarray) -> str:
 
 def subject_effects(models: tuple[tuple[str, tuple[str, ...]], ...] = MODELS) -> None:
     """Section 2: the filter's effect per adapted subject, for each of ``models``."""
-    subs = [
-        s for seed in range(EFFECT_POPULATIONS) for s in subjects(SUBJECTS, seed, SPREAD["motion"])
-    ]
+    spread = SETTINGS["spread"]
+    subs = [s for seed in range(EFFECT_POPULATIONS) for s in subjects(SUBJECTS, seed, spread)]
     for name, adapted in models:
         with Engine("local:2") as engine:
             effects = list(engine.map(filter_effect, [(s, adapted) for s in subs],
@@ -510,13 +514,38 @@ if __name__ == "__main__":
                              "how many the design says the acceptance holds in 80 %%, or "
                              "9)")  # fmt: skip
     parser.add_argument("--spread-profile", action="store_true",
-                        help="section 7 only: the subjects' motion perception spread and "
-                             "run-to-run variation profiled against Tables 6.4-6.7 (about 7 "
-                             "min a cell, 8 cells)")  # fmt: skip
+                        help="section 7 only: the subjects' spreads and run-to-run variation "
+                             "profiled against Tables 6.4-6.7 (about 7 min a cell of 10 "
+                             "populations)")  # fmt: skip
+    for name, what in (("motion", "motion perception spreads"),
+                       ("visual-delay", "visual-delay sds in s"),
+                       ("run-to-run", "run-to-run variations")):  # fmt: skip
+        key = name.replace("-", "_")
+        parser.add_argument(
+            f"--profile-{name}",
+            type=float,
+            nargs="+",
+            metavar="X",
+            default=list(SPREAD_GRID[key]),
+            help=f"section 7's {what} (default: {SPREAD_GRID[key]})",
+        )
+    parser.add_argument("--profile-populations", type=int, default=SPREAD_POPULATIONS,
+                        metavar="N", help="section 7's populations a cell (default: "
+                        f"{SPREAD_POPULATIONS})")  # fmt: skip
+    parser.add_argument(
+        "--profile-seed",
+        type=int,
+        default=0,
+        metavar="S",
+        help="section 7's first seed (default 0)",
+    )
     parser.add_argument("--motion-spread", type=float, default=MOTION_NOISE_SD, metavar="SD",
                         help="the subjects' spread in motion perception for every section but "
-                             "7 (default: twin.pilot.population.MOTION_NOISE_SD; 0: the "
+                             "7 (default: twin.pilot.spread.MOTION_NOISE_SD; 0: the "
                              "subjects before it)")  # fmt: skip
+    parser.add_argument("--visual-delay-spread", type=float, default=VISUAL_DELAY_SD,
+                        metavar="S", help="the subjects' visual-delay sd in s for every "
+                        "section but 7 (default: twin.pilot.spread.VISUAL_DELAY_SD)")  # fmt: skip
     parser.add_argument("--no-intervals", action="store_true",
                         help="fit without the likelihood-ratio intervals (and their rule): "
                              "about 6x faster")  # fmt: skip
@@ -529,9 +558,19 @@ if __name__ == "__main__":
         parser.error(f"--feedthrough ratios must be 0 to {MAX_FEEDTHROUGH:g}; "
                      f"got {args.feedthrough}")  # fmt: skip
     try:
-        SPREAD["motion"] = checked_spread(args.motion_spread)
+        SETTINGS["spread"] = Spread(args.motion_spread, args.visual_delay_spread)
+        grid = {"motion": args.profile_motion, "visual_delay": args.profile_visual_delay,
+                "run_to_run": args.profile_run_to_run}  # fmt: skip
+        for m in grid["motion"]:
+            for v in grid["visual_delay"]:
+                Spread(m, v)
+        for sd in grid["run_to_run"]:
+            checked_settings(ADAPTED, sd)
     except SignalError as e:
-        parser.error(f"--motion-spread: {e}")
+        parser.error(str(e))
+    if args.profile_populations < 2 or args.profile_seed < 0:
+        parser.error(f"--profile-populations must be >= 2 and --profile-seed >= 0; got "
+                     f"{args.profile_populations} and {args.profile_seed}")  # fmt: skip
     if args.coverage_seed < 0:
         parser.error(f"--coverage-seed must be a seed >= 0; got {args.coverage_seed}")
     if args.motion_delay_only:
@@ -540,7 +579,7 @@ if __name__ == "__main__":
             motion_delay_measured(feedthrough=ratio)
         raise SystemExit(0)
     if args.spread_profile:
-        spread_profile()
+        spread_profile(grid, args.profile_populations, args.profile_seed)
         raise SystemExit(0)
     if args.design_only:
         design_check(populations(ADAPTATION_SD, POPULATIONS), args.design_subjects)

@@ -200,7 +200,8 @@ def test_subjects_differ_in_how_well_they_perceive_motion():
     """Each subject's motion noise (relative to its visual) is log-normal with the stated
     spread, drawn from its own stream: the other draws are those of a population drawn
     without it (its delays, neuromuscular system and priorities from the first stream)."""
-    from twin.pilot.population import MOTION_NOISE_SD, SUBJECT_SPREAD, subjects
+    from twin.pilot.population import SUBJECT_SPREAD, subjects
+    from twin.pilot.spread import MOTION_NOISE_SD, Spread
 
     many = subjects(400, seed=3)
     logs = np.log([s.motion_noise for s in many])
@@ -211,16 +212,63 @@ def test_subjects_differ_in_how_well_they_perceive_motion():
     assert many[0].limitations.tau_v == max(first, 0.3 * SUBJECT_SPREAD["tau_v"][0])
     assert [s.motion_noise for s in subjects(5, seed=3)] == [s.motion_noise for s in many[:5]]
     # every subject's other draws are the same whatever the spread; at 0 (or -0) all are 1
-    flat, wide = subjects(9, 3, 0.0), subjects(9, 3, 2.0)
-    assert [s.motion_noise for s in flat] == [1.0] * 9 == [s.motion_noise for s in
-                                                           subjects(9, 3, -0.0)]  # fmt: skip
+    flat, wide = subjects(9, 3, Spread(motion=0.0)), subjects(9, 3, Spread(motion=2.0))
+    zero = subjects(9, 3, Spread(-0.0))
+    assert [s.motion_noise for s in flat] == [1.0] * 9 == [s.motion_noise for s in zero]
     for a, b, c in zip(flat, wide, many[:9], strict=True):
         assert (a.limitations, a.weight, a.noise_ratio) == (b.limitations, b.weight,
                                                             b.noise_ratio)  # fmt: skip
         assert (a.limitations, a.weight, a.noise_ratio) == (c.limitations, c.weight,
                                                             c.noise_ratio)  # fmt: skip
-    with pytest.raises(SignalError, match=r"motion perception's spread .* \[0, 3\]"):
-        subjects(3, 0, float("nan"))
+
+
+def test_subjects_differ_in_visual_delay_by_the_spread_set():
+    """The visual delay's sd is a setting: its draws are the same standard deviates scaled,
+    so one seed's subjects are the same people more or less alike in visual delay, and all
+    their other draws are unchanged."""
+    from twin.pilot.population import subjects
+    from twin.pilot.spread import VISUAL_DELAY_SD, Spread
+
+    many = subjects(400, seed=5, spread=Spread(visual_delay=0.02))
+    tau_v = np.array([s.limitations.tau_v for s in many])
+    assert abs(tau_v.mean() - 0.30) < 3 * 0.02 / np.sqrt(400)
+    assert np.std(tau_v, ddof=1) == pytest.approx(0.02, rel=0.15)
+    default = subjects(9, 5)
+    for spread in (Spread(visual_delay=0.0), Spread(visual_delay=0.01), Spread(motion=1.0)):
+        other = subjects(9, 5, spread)
+        for a, b in zip(default, other, strict=True):
+            assert dataclasses.replace(a.limitations, tau_v=0.3) == dataclasses.replace(
+                b.limitations, tau_v=0.3)  # fmt: skip
+            assert (a.weight, a.noise_ratio) == (b.weight, b.noise_ratio)
+            z = (a.limitations.tau_v - 0.30) / VISUAL_DELAY_SD
+            want = 0.30 + spread.visual_delay * z
+            assert b.limitations.tau_v == pytest.approx(want, abs=1e-15)
+    assert {s.limitations.tau_v for s in subjects(9, 5, Spread(visual_delay=0.0))} == {0.30}
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        (
+            {"motion": float("nan")},
+            r"motion perception's spread must be a log-normal sd in \[0, 3\]",
+        ),
+        ({"motion": 3.5}, r"motion perception's spread .* got 3.5"),
+        ({"visual_delay": -0.01}, r"visual delay's spread must be an sd in s in \[0, 0.1\]"),
+        ({"visual_delay": float("inf")}, r"visual delay's spread .* got inf"),
+        ({"visual_delay": "fast"}, r"visual delay's spread .* got 'fast'"),
+    ],
+)
+def test_a_spread_out_of_range_is_refused_naming_it(kwargs, message):
+    from twin.pilot.population import subjects
+    from twin.pilot.spread import Spread
+
+    with pytest.raises(SignalError, match=message):
+        Spread(**kwargs)
+    assert Spread(-0.0, -0.0).to_dict() == {"motion_spread": 0.0, "visual_delay_sd": 0.0}
+    assert str(Spread(-0.0, -0.0).motion) == "0.0"
+    with pytest.raises(TypeError, match=r"spread must be a twin\.pilot\.spread\.Spread"):
+        subjects(3, 0, 0.5)
 
 
 def test_a_repetition_flies_with_the_subjects_motion_perception():
@@ -245,13 +293,14 @@ def test_population_measures_follow_what_was_adapted():
     """tau_v is among the ANOVA's measures (beside Table 6.7's F 35.8) only where the subjects
     adapt it; a subject's rows carry it either way."""
     from twin.pilot.population import population_result
+    from twin.pilot.spread import Spread
 
     rng = np.random.default_rng(4)
     flown = [[{"subject": s, "condition": n, "filter": fb, "delay": dl, "noise": nz,
                **{m: s + fb + rng.normal(0, 0.1) for m in COMPARED}}
               for n, (fb, dl, nz) in LEVELS.items()] for s in (1, 2, 3)]  # fmt: skip
-    assert "tau_v" not in population_result(flown, 0, ADAPTED, 0.1).anova
-    with_delay = population_result(flown, 0, (*ADAPTED, *SPEED_ACCURACY), 0.1)
+    assert "tau_v" not in population_result(flown, 0, ADAPTED, 0.1, Spread()).anova
+    with_delay = population_result(flown, 0, (*ADAPTED, *SPEED_ACCURACY), 0.1, Spread())
     assert with_delay.anova["tau_v"]["filter"]["direction"] == "+"
     assert "tau_v" in with_delay.format_table()
 

@@ -16,6 +16,7 @@ from twin.pilot import population, replication
 from twin.pilot.adapt import ADAPTED
 from twin.pilot.population import PopulationResult, anova, compared
 from twin.pilot.replication import agreement_probability, replicate, run_populations
+from twin.pilot.spread import MOTION_NOISE_SD, VISUAL_DELAY_SD, Spread
 
 
 @pytest.mark.parametrize(("f", "significant"), [(5.98, True), (15.0, True), (4.67, False),
@@ -152,7 +153,7 @@ def test_a_replication_refuses_one_population_and_mixed_settings():
     with pytest.raises(SignalError, match=r"distinct populations; seeds \[0, 0\] repeat"):
         replicate([one, one])
     fewer = PopulationResult(rows, anova(rows, ("k_v",)), 1)
-    with pytest.raises(SignalError, match="measures, identification or motion"):
+    with pytest.raises(SignalError, match="measures, identification or the subjects' spreads"):
         replicate([one, fewer])
     flat = copy.deepcopy(one.anova)
     flat["k_v"]["delay"]["F"] = float("inf")
@@ -162,12 +163,11 @@ def test_a_replication_refuses_one_population_and_mixed_settings():
         run_populations(1)
     with pytest.raises(SignalError, match="run-to-run variation must be"):
         run_populations(2, run_to_run_sd=float("nan"))
-    spread = PopulationResult(rows, anova(rows), 1, motion_spread=0.0)
-    with pytest.raises(SignalError, match="motion perception spread"):
-        replicate([one, spread])
-    for bad in (float("nan"), -0.1, 3.5):
-        with pytest.raises(SignalError, match=r"motion perception's spread .* \[0, 3\]"):
-            run_populations(2, motion_spread=bad)
+    for other in (Spread(motion=0.0), Spread(visual_delay=0.01)):
+        with pytest.raises(SignalError, match="the subjects' spreads"):
+            replicate([one, PopulationResult(rows, anova(rows), 1, spread=other)])
+    with pytest.raises(TypeError, match=r"spread must be a twin.pilot.spread.Spread .* float"):
+        run_populations(2, spread=0.5)
 
 
 def fake_fly(subject, seed, adapted, sd):
@@ -201,6 +201,14 @@ def test_cli_populations_only_with_adaptive_subjects(capsys):
     assert main(["pilot", "experiment", "--pilot", "adaptive", "--motion-spread", "nan"]) == 2
     err = capsys.readouterr().err.strip()
     assert err.startswith("twin: error: --motion-spread") and "[0, 3]" in err and "\n" not in err
+    assert main(["pilot", "experiment", "--visual-delay-spread", "0.01"]) == 2
+    assert "--visual-delay-spread sets how adaptive subjects differ" in capsys.readouterr().err
+    for bad in ("nan", "-0.01", "0.2"):
+        assert main(["pilot", "experiment", "--pilot", "adaptive",
+                     "--visual-delay-spread", bad]) == 2  # fmt: skip
+        err = capsys.readouterr().err.strip()
+        assert err.startswith("twin: error: --visual-delay-spread") and "[0, 0.1]" in err
+        assert "\n" not in err
 
 
 def test_cli_populations_json_and_figure(monkeypatch, tmp_path, capsys):
@@ -214,7 +222,7 @@ def test_cli_populations_json_and_figure(monkeypatch, tmp_path, capsys):
     assert code == 0
     doc = json.loads(capsys.readouterr().out)
     assert doc["seeds"] == [4, 5] and doc["subjects"] == 3
-    assert doc["motion_spread"] == population.MOTION_NOISE_SD
+    assert doc["motion_spread"] == MOTION_NOISE_SD and doc["visual_delay_sd"] == VISUAL_DELAY_SD
     assert [p["seed"] for p in doc["per_population"]] == [4, 5]
     default = set(compared(ADAPTED))  # tau_v only where the subjects adapt it
     assert set(doc["per_population"][0]["anova"]) == set(doc["replication"]) == default
@@ -223,9 +231,9 @@ def test_cli_populations_json_and_figure(monkeypatch, tmp_path, capsys):
     assert png.stat().st_size > 10_000 and not (tmp_path / "rep-subjects.png").exists()
     assert main(["pilot", "experiment", "--pilot", "adaptive", "--populations", "2",
                  "--subjects", "3", "--scheduler", "inline",
-                 "--motion-spread", "1.5"]) == 0  # fmt: skip
+                 "--motion-spread", "1.5", "--visual-delay-spread", "0.01"]) == 0  # fmt: skip
     out = capsys.readouterr().out
-    assert "motion perception spread 1.5)" in out
+    assert "motion perception spread 1.5, visual delay sd 10 ms)" in out
     assert "calibrated for populations of 9, the thesis' size; with 3" in out
     assert (
         "(no design of experiments: it pools at least 40 subjects; these populations have 6)" in out

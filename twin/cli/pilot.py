@@ -24,6 +24,7 @@ DEFAULT_SUBJECTS = 9
 OPTIONS = {
     "feedthrough": "--feedthrough",
     "the motion perception's spread": "--motion-spread (the motion perception's spread)",
+    "the visual delay's spread": "--visual-delay-spread (the visual delay's spread)",
 }
 #: Most populations of ``pilot experiment --pilot adaptive --populations``.
 MAX_POPULATIONS = 1000
@@ -151,6 +152,13 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
         "log-normal sd of the felt rate's observation noise relative to the visual one "
         "(0 to 3; default 0.5, from a profile against Tables 6.4-6.7, README; 0: every subject "
         "perceives motion as well as vision, the subjects of earlier versions)",
+    )
+    exp.add_argument(
+        "--visual-delay-spread",
+        type=float,
+        metavar="S",
+        help="with --pilot adaptive: how much the subjects differ in visual delay, its sd in s "
+        "around 0.30 s (0 to 0.1; default 0.03; 0: every subject has the mean delay)",
     )
     exp.add_argument(
         "--populations",
@@ -384,21 +392,21 @@ def _cmd_experiment(args: argparse.Namespace) -> int:
     if args.identify and args.pilot != "adaptive":
         raise UsageError("--identify measures the pilot model of adaptive subjects: give it "
                          "with --pilot adaptive")  # fmt: skip
-    if args.motion_spread is not None and args.pilot != "adaptive":
-        raise UsageError("--motion-spread sets how adaptive subjects differ: give it with "
-                         "--pilot adaptive")  # fmt: skip
-    if args.motion_spread is None:
-        from twin.pilot.population import MOTION_NOISE_SD
-
-        args.motion_spread = MOTION_NOISE_SD
+    for flag, value in (("--motion-spread", args.motion_spread),
+                        ("--visual-delay-spread", args.visual_delay_spread)):  # fmt: skip
+        if value is not None and args.pilot != "adaptive":
+            raise UsageError(f"{flag} sets how adaptive subjects differ: give it with "
+                             "--pilot adaptive")  # fmt: skip
     if args.pilot == "adaptive":  # before any worker starts
         from twin.pilot.identified import check_feedthrough
-        from twin.pilot.population import checked_settings, checked_spread
+        from twin.pilot.population import checked_settings
+        from twin.pilot.spread import Spread
 
+        given = {"motion": args.motion_spread, "visual_delay": args.visual_delay_spread}
         with common.options_named(OPTIONS):
             check_feedthrough(args.feedthrough)
-            checked_settings(_adapted(args), 0.0, args.motion_spread)
-            args.motion_spread = checked_spread(args.motion_spread)
+            args.spread = Spread(**{k: v for k, v in given.items() if v is not None})
+            checked_settings(_adapted(args), 0.0, args.spread)
     if args.populations is not None:
         if args.pilot != "adaptive":
             raise UsageError("--populations counts populations of adaptive subjects: give it "
@@ -413,10 +421,10 @@ def _cmd_experiment(args: argparse.Namespace) -> int:
             if args.identify:
                 p = identified_population(args.subjects, args.seed, common.progress(args),
                                           engine, _adapted(args), feedthrough=args.feedthrough,
-                                          motion_spread=args.motion_spread)  # fmt: skip
+                                          spread=args.spread)  # fmt: skip
             else:
                 p = run_population(args.subjects, args.seed, common.progress(args), engine,
-                                   _adapted(args), motion_spread=args.motion_spread)  # fmt: skip
+                                   _adapted(args), spread=args.spread)  # fmt: skip
         if args.plot:
             plt = pyplot()
             plt.close(p.plot(args.plot))
@@ -446,8 +454,7 @@ def _replication(args: argparse.Namespace) -> int:
     with common.engine(args) as engine, common.options_named(OPTIONS):
         rep, results = run_populations(args.populations, args.subjects, args.seed,
                                        common.progress(args), engine, _adapted(args),
-                                       identified=identified,
-                                       motion_spread=args.motion_spread)  # fmt: skip
+                                       identified=identified, spread=args.spread)  # fmt: skip
     pooled = args.populations * args.subjects
     plan = design(results) if pooled >= MIN_POOL else None
     if args.plot:

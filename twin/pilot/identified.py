@@ -38,16 +38,15 @@ from twin.pilot.pitch import Feedthrough, simulate_pitch
 from twin.pilot.population import (
     ADAPTATION_SD,
     COMPARED,
-    MOTION_NOISE_SD,
     PopulationResult,
     Subject,
     anova,
     checked_settings,
-    checked_spread,
     condition_row,
     flown_conditions,
     population_tasks,
 )
+from twin.pilot.spread import DEFAULT_SPREAD, Spread
 from twin.progress import ProgressFn
 from twin.tasks.engine import Engine, using
 
@@ -117,7 +116,7 @@ def identified_population(
     adapted: tuple[str, ...] = ADAPTED,
     run_to_run_sd: float = ADAPTATION_SD,
     feedthrough: float = 0.0,
-    motion_spread: float = MOTION_NOISE_SD,
+    spread: Spread = DEFAULT_SPREAD,
 ) -> PopulationResult:
     """Fly the eight conditions with ``n_subjects`` subjects, identify, and run the ANOVA.
 
@@ -129,19 +128,18 @@ def identified_population(
     Raises
     ------
     SignalError
-        A run-to-run variation or motion spread out of range, a feedthrough outside [0,
+        A run-to-run variation out of range, a feedthrough outside [0,
         ``MAX_FEEDTHROUGH``], or a loop that diverged.
+    TypeError
+        A ``spread`` that is not a :class:`~twin.pilot.spread.Spread`.
 
     """
-    adapted = checked_settings(adapted, run_to_run_sd, motion_spread)
-    motion_spread = checked_spread(motion_spread)
+    adapted = checked_settings(adapted, run_to_run_sd, spread)
     check_feedthrough(feedthrough)
-    args, names = identified_tasks(n_subjects, seed, adapted, run_to_run_sd, feedthrough,
-                                   motion_spread=motion_spread)  # fmt: skip
+    args, names = identified_tasks(n_subjects, seed, adapted, run_to_run_sd, feedthrough, spread)
     with using(scheduler) as engine:
         flown = engine.map(identified_subject, args, names, "subjects", progress).values()
-    return identified_result(flown, seed, adapted, run_to_run_sd, feedthrough,
-                             motion_spread=motion_spread)  # fmt: skip
+    return identified_result(flown, seed, adapted, run_to_run_sd, feedthrough, spread)
 
 
 def check_feedthrough(feedthrough: float) -> None:
@@ -157,13 +155,13 @@ def identified_tasks(
     adapted: tuple[str, ...],
     run_to_run_sd: float,
     feedthrough: float,
-    motion_spread: float = MOTION_NOISE_SD,
+    spread: Spread,
 ) -> tuple[list[tuple], list[dict[str, int]]]:
     """Arguments of :func:`identified_subject` per subject of population ``seed``, and names.
 
     :func:`twin.pilot.population.population_tasks`'s, each with the feedthrough.
     """
-    args, names = population_tasks(n_subjects, seed, adapted, run_to_run_sd, motion_spread)
+    args, names = population_tasks(n_subjects, seed, adapted, run_to_run_sd, spread)
     return [(*a, feedthrough) for a in args], names
 
 
@@ -173,9 +171,9 @@ def identified_result(
     adapted: tuple[str, ...],
     run_to_run_sd: float,
     feedthrough: float,
-    motion_spread: float = MOTION_NOISE_SD,
+    spread: Spread,
 ) -> PopulationResult:
     """Assemble the subjects' identified rows (in subject order) and their ANOVA."""
     rows = [row for r in flown for row in r]
     return PopulationResult(rows, anova(rows, IDENTIFIED), seed, adapted, run_to_run_sd,
-                            feedthrough, motion_spread)  # fmt: skip
+                            feedthrough, spread)  # fmt: skip

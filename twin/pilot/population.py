@@ -32,23 +32,23 @@ direction of each main effect (mean at the second level - 1 Hz filter, 35 ms, no
 minus the first), beside the thesis' F and directions.
 
 Assumptions (stated, not from the thesis): the spreads of :data:`SUBJECT_SPREAD` and the
-adaptation noise (the motion perception's spread, :data:`MOTION_NOISE_SD`, chosen from a
-profile against Tables 6.4-6.7, README); the cost J = var(e) + r var(u) and the
-observation-noise remnant of :mod:`twin.pilot.adapt`; where the subjects adapt their visual
-delay too (``adapted`` with ``"tau_v"``), the speed-accuracy trade-off of
-:func:`twin.pilot.adapt.visual_noise_ratio`. What to keep in mind when reading the F values:
-the motion noise of Eq 5.10 changes the predicted var(e) by parts per million, so the noise
-factor is nearly inert in this model (its "no effect" agrees with the thesis by construction);
-behind the filter the adapted loop's gain falls slowly through 0 dB (about -0.5 in log-log
-between 1 and 3 rad/s), so the target crossover moves much with small parameter changes (with
-K_m = 0 the target and disturbance loops coincide), and a few subjects cross over higher
-behind the filter; a population finds the effect about as often as the thesis' own F predicts
-(a replication over populations: :mod:`twin.pilot.replication`). With only the equalisation
-adapted (``adapted=EQUALISATION``, the model before the neuromuscular tuning adapted) the
-filter's effect on var(u) went either way (24 of 45 subjects lower), so no population showed
-it; with the tuning adapted it is lower for 43 of 45 (subjects who all perceived motion as
-well as vision, ``motion_spread=0``). ``bench/pilot_adaptive.py`` prints both
-models side by side.
+adaptation noise (the motion perception's and the visual delay's spreads are settings,
+:class:`twin.pilot.spread.Spread`, chosen from profiles against Tables 6.4-6.7, README); the
+cost J = var(e) + r var(u) and the observation-noise remnant of :mod:`twin.pilot.adapt`; where
+the subjects adapt their visual delay too (``adapted`` with ``"tau_v"``), the speed-accuracy
+trade-off of :func:`twin.pilot.adapt.visual_noise_ratio`. What to keep in mind when reading the
+F values: the motion noise of Eq 5.10 changes the predicted var(e) by parts per million, so the
+noise factor is nearly inert in this model (its "no effect" agrees with the thesis by
+construction); behind the filter the adapted loop's gain falls slowly through 0 dB (about -0.5
+in log-log between 1 and 3 rad/s), so the target crossover moves much with small parameter
+changes (with K_m = 0 the target and disturbance loops coincide), and a few subjects cross over
+higher behind the filter; a population finds the effect about as often as the thesis' own F
+predicts (a replication over populations: :mod:`twin.pilot.replication`). With only the
+equalisation adapted (``adapted=EQUALISATION``, the model before the neuromuscular tuning
+adapted) the filter's effect on var(u) went either way (24 of 45 subjects lower), so no
+population showed it; with the tuning adapted it is lower for 43 of 45 (subjects who all
+perceived motion as well as vision, ``Spread(motion=0)``). ``bench/pilot_adaptive.py`` prints
+both models side by side.
 """
 
 from __future__ import annotations
@@ -79,6 +79,7 @@ from twin.pilot.adapt import (
     stable,
 )
 from twin.pilot.pitch import PitchPilot, open_loops
+from twin.pilot.spread import DEFAULT_SPREAD, VISUAL_DELAY_SD, Spread, checked
 from twin.progress import ProgressFn
 from twin.tasks.engine import Engine, using
 from twin.thesis import TABLE_6_3, TABLES_6_4_TO_6_7
@@ -101,16 +102,11 @@ MEASURES = (
 #: Measures compared with the thesis: the contract's, the lead-lag pair (Table 6.6), the
 #: neuromuscular tuning and the visual delay (Table 6.7; each compared where it is adapted).
 COMPARED = (*MEASURES, "t_lead", "t_lag", "omega_nm", "zeta_nm", "tau_v")
-#: Spread between subjects of how well they perceive motion: the log-normal sd (median 1) of
-#: the felt rate's observation-noise ratio relative to the subject's own ratio (README,
-#: "Subjects who differ in perceiving motion").
-MOTION_NOISE_SD = 0.5
-#: Largest spread accepted (a factor e^3 = 20 between subjects one sd apart).
-MAX_MOTION_SPREAD = 3.0
-#: Subject spread: parameter -> (mean, sd) for limitations; log-normal sd for the priorities
-#: (the motion perception's: :data:`MOTION_NOISE_SD`).
+#: Subject spread: parameter -> (mean, sd) for limitations; log-normal sd for the priorities.
+#: The visual delay's sd and the motion perception's spread are settings (:class:`Spread`): the
+#: sd here is the default's.
 SUBJECT_SPREAD = {
-    "tau_v": (0.30, 0.03),
+    "tau_v": (0.30, VISUAL_DELAY_SD),
     "tau_m": (0.20, 0.03),
     "omega_nm": (11.0, 1.5),
     "zeta_nm": (0.25, 0.05),
@@ -154,16 +150,19 @@ class Subject:
     motion_noise: float = 1.0
 
 
-def subjects(n: int, seed: int = 0, motion_spread: float = MOTION_NOISE_SD) -> list[Subject]:
-    """Draw ``n`` subjects from ``seed`` (:data:`SUBJECT_SPREAD`).
+def subjects(n: int, seed: int = 0, spread: Spread = DEFAULT_SPREAD) -> list[Subject]:
+    """Draw ``n`` subjects from ``seed`` (:data:`SUBJECT_SPREAD`, and ``spread``).
 
-    ``motion_spread`` is the log-normal sd of their motion perception between subjects
-    (:data:`MOTION_NOISE_SD`; 0: every subject perceives motion as well as vision, the other
-    draws unchanged).
+    ``spread`` sets how much they differ in motion perception and visual delay
+    (:class:`twin.pilot.spread.Spread`). Each subject's draws are standard normal deviates
+    scaled by the spreads, so subjects of one seed under other spreads are the same people,
+    more or less alike (``Spread(motion=0)``: every subject perceives motion as well as
+    vision, the other draws unchanged).
     """
     if n < 2:
         raise SignalError(f"an ANOVA needs at least 2 subjects; got {n}")
-    spread = checked_spread(motion_spread)
+    spread = checked(spread)
+    sds = {**SUBJECT_SPREAD, "tau_v": (SUBJECT_SPREAD["tau_v"][0], spread.visual_delay)}
     rng = np.random.default_rng(np.random.SeedSequence([seed, 14]))
     # the motion perception from its own stream: the other draws are those of subjects
     # drawn before it was part of a subject (tag 16 with two entries; the identified runs'
@@ -171,11 +170,11 @@ def subjects(n: int, seed: int = 0, motion_spread: float = MOTION_NOISE_SD) -> l
     motion = np.random.default_rng(np.random.SeedSequence([seed, 16]))
     out = []
     for i in range(n):
-        lim = {k: float(max(rng.normal(*SUBJECT_SPREAD[k]), 0.3 * SUBJECT_SPREAD[k][0]))
+        lim = {k: float(max(rng.normal(*sds[k]), 0.3 * sds[k][0]))
                for k in ("tau_v", "tau_m", "omega_nm", "zeta_nm")}  # fmt: skip
-        w, nr = (float(SUBJECT_SPREAD[k][0] * np.exp(rng.normal(0, SUBJECT_SPREAD[k][1])))
+        w, nr = (float(sds[k][0] * np.exp(rng.normal(0, sds[k][1])))
                  for k in ("weight", "noise_ratio"))  # fmt: skip
-        mn = float(np.exp(motion.normal(0, spread)))
+        mn = float(np.exp(motion.normal(0, spread.motion)))
         out.append(Subject(i + 1, dataclasses.replace(PitchPilot(), **lim), w, nr, mn))
     return out
 
@@ -378,8 +377,8 @@ class PopulationResult:
         None: the pilot-model measures are the flown pilots' own (:func:`fly_subject`); a
         number: identified from the runs, as the thesis did, with a passive feedthrough of
         that relative size (0: none; :mod:`twin.pilot.identified`).
-    motion_spread : float
-        The subjects' spread in motion perception (:func:`subjects`).
+    spread : Spread
+        How the subjects differ in motion perception and visual delay (:func:`subjects`).
 
     """
 
@@ -389,7 +388,7 @@ class PopulationResult:
     adapted: tuple[str, ...] = ADAPTED
     run_to_run_sd: float = ADAPTATION_SD
     identified: float | None = None
-    motion_spread: float = MOTION_NOISE_SD
+    spread: Spread = DEFAULT_SPREAD
 
     def agreement(self) -> dict[str, dict[str, bool]]:
         """Per measure and factor, whether the prediction agrees with the thesis.
@@ -415,7 +414,7 @@ class PopulationResult:
         return {"anova": self.anova, "thesis": thesis, "agreement": self.agreement(),
                 "subjects": len({r["subject"] for r in self.rows}), "seed": self.seed,
                 "adapted": list(self.adapted), "run_to_run_sd": self.run_to_run_sd,
-                "identified": self.identified, "motion_spread": self.motion_spread,
+                "identified": self.identified, **self.spread.to_dict(),
                 "rows": self.rows}  # fmt: skip
 
     def format_table(self) -> str:
@@ -429,8 +428,8 @@ class PopulationResult:
         lines = [
             f"Chapter 6 predicted by {len({r['subject'] for r in self.rows})} adaptive "
             f"subjects (seed {self.seed}; adapting {', '.join(self.adapted)}; run-to-run "
-            f"variation {self.run_to_run_sd:.0%}; motion perception spread "
-            f"{self.motion_spread:g}{how}); repeated-measures ANOVA, main effects",
+            f"variation {self.run_to_run_sd:.0%}; {self.spread.describe()}{how}); "
+            "repeated-measures ANOVA, main effects",
             f"{'measure':30s} {'factor':6s} {'F':>8s} {'p':>7s} dir | thesis F  dir  agrees",
         ]
         for m in self.anova:
@@ -556,7 +555,7 @@ def run_population(
     scheduler: Engine | str | None = None,
     adapted: tuple[str, ...] = ADAPTED,
     run_to_run_sd: float = ADAPTATION_SD,
-    motion_spread: float = MOTION_NOISE_SD,
+    spread: Spread = DEFAULT_SPREAD,
 ) -> PopulationResult:
     """Fly the eight conditions with ``n_subjects`` adaptive subjects and run the ANOVA.
 
@@ -565,56 +564,43 @@ def run_population(
     ``adapted`` names the parameters the subjects adapt (:data:`twin.pilot.adapt.ADAPTED`;
     ``EQUALISATION`` keeps each subject's neuromuscular system, and its measures out of the
     ANOVA); ``run_to_run_sd`` is their run-to-run variation (log-normal sd, 0 to 1);
-    ``motion_spread`` their spread in motion perception (:func:`subjects`).
+    ``spread`` how they differ in motion perception and visual delay (:func:`subjects`).
 
     Raises
     ------
     SignalError
-        A run-to-run variation or motion spread out of range.
+        A run-to-run variation out of range.
+    TypeError
+        A ``spread`` that is not a :class:`~twin.pilot.spread.Spread`.
     TaskError
         When a subject failed (named with its number and seed).
 
     """
-    adapted = checked_settings(adapted, run_to_run_sd, motion_spread)
-    motion_spread = checked_spread(motion_spread)
-    tasks = population_tasks(n_subjects, seed, adapted, run_to_run_sd, motion_spread=motion_spread)
+    adapted = checked_settings(adapted, run_to_run_sd, spread)
+    tasks = population_tasks(n_subjects, seed, adapted, run_to_run_sd, spread)
     with using(scheduler) as engine:
         flown = engine.map(fly_subject, *tasks, "subjects", progress).values()
-    return population_result(flown, seed, adapted, run_to_run_sd, motion_spread=motion_spread)
+    return population_result(flown, seed, adapted, run_to_run_sd, spread)
 
 
 def checked_settings(
-    adapted: tuple[str, ...], run_to_run_sd: float, motion_spread: float = MOTION_NOISE_SD
+    adapted: tuple[str, ...], run_to_run_sd: float, spread: Spread = DEFAULT_SPREAD
 ) -> tuple[str, ...]:
     """Check a population's settings before any subject flies; return the adapted names.
 
     Raises
     ------
     SignalError
-        A run-to-run variation out of [0, 1] or a motion spread out of [0,
-        ``MAX_MOTION_SPREAD``] (or NaN), or a bad choice of adapted names.
+        A run-to-run variation out of [0, 1] (or NaN), or a bad choice of adapted names.
+    TypeError
+        A ``spread`` that is not a :class:`~twin.pilot.spread.Spread`.
 
     """
     if not 0 <= run_to_run_sd <= 1:  # also refuses NaN
         raise SignalError(f"run-to-run variation must be a log-normal sd in [0, 1]; "
                           f"got {run_to_run_sd}")  # fmt: skip
-    checked_spread(motion_spread)
+    checked(spread)
     return adapted_names(adapted)
-
-
-def checked_spread(motion_spread: float) -> float:
-    """Return the subjects' spread in motion perception as a float, checked (-0 is 0).
-
-    Raises
-    ------
-    SignalError
-        A spread out of [0, ``MAX_MOTION_SPREAD``] (or NaN).
-
-    """
-    if not 0 <= motion_spread <= MAX_MOTION_SPREAD:  # also refuses NaN
-        raise SignalError(f"the motion perception's spread must be a log-normal sd in "
-                          f"[0, {MAX_MOTION_SPREAD:g}]; got {motion_spread}")  # fmt: skip
-    return abs(float(motion_spread))
 
 
 def population_tasks(
@@ -622,10 +608,10 @@ def population_tasks(
     seed: int,
     adapted: tuple[str, ...],
     run_to_run_sd: float,
-    motion_spread: float = MOTION_NOISE_SD,
+    spread: Spread,
 ) -> tuple[list[tuple], list[dict[str, int]]]:
     """Arguments of :func:`fly_subject` per subject of population ``seed``, and their names."""
-    subs = subjects(n_subjects, seed, motion_spread)
+    subs = subjects(n_subjects, seed, spread)
     return ([(s, seed, adapted, run_to_run_sd) for s in subs],
             [{"subject": s.number, "seed": seed} for s in subs])  # fmt: skip
 
@@ -635,12 +621,12 @@ def population_result(
     seed: int,
     adapted: tuple[str, ...],
     run_to_run_sd: float,
-    motion_spread: float = MOTION_NOISE_SD,
+    spread: Spread,
 ) -> PopulationResult:
     """Assemble the subjects' rows (:func:`fly_subject`'s, in subject order) and their ANOVA."""
     rows = [row for r in flown for row in r]
     return PopulationResult(rows, anova(rows, compared(adapted)), seed, adapted, run_to_run_sd,
-                            motion_spread=motion_spread)  # fmt: skip
+                            spread=checked(spread))  # fmt: skip
 
 
 def compared(adapted: tuple[str, ...]) -> tuple[str, ...]:

@@ -67,16 +67,15 @@ from twin.pilot.identified import (
 from twin.pilot.population import (
     ADAPTATION_SD,
     FACTORS,
-    MOTION_NOISE_SD,
     PopulationResult,
     checked_settings,
-    checked_spread,
     effect_axes,
     fly_subject,
     population_result,
     population_tasks,
     signed_f,
 )
+from twin.pilot.spread import DEFAULT_SPREAD, Spread
 from twin.progress import ProgressFn
 from twin.tasks.engine import Engine, using
 from twin.thesis import TABLES_6_4_TO_6_7
@@ -309,8 +308,8 @@ class Replication:
         What the subjects adapted.
     run_to_run_sd : float
         Their run-to-run variation.
-    motion_spread : float
-        Their spread in motion perception.
+    spread : Spread
+        How they differ in motion perception and visual delay.
 
     """
 
@@ -319,7 +318,7 @@ class Replication:
     subjects: int
     adapted: tuple[str, ...]
     run_to_run_sd: float
-    motion_spread: float = MOTION_NOISE_SD
+    spread: Spread = DEFAULT_SPREAD
 
     def effect(self, measure: str, factor: str) -> EffectReplication:
         """Return one effect by name."""
@@ -350,7 +349,7 @@ class Replication:
             rep.setdefault(e.measure, {})[e.factor] = e.to_dict()
         return {"replication": rep, "seeds": list(self.seeds), "subjects": self.subjects,
                 "adapted": list(self.adapted), "run_to_run_sd": self.run_to_run_sd,
-                "motion_spread": self.motion_spread,
+                **self.spread.to_dict(),
                 "implausible": [f"{e.measure}/{e.factor}" for e in self.implausible()],
                 "log_density": self.log_density}  # fmt: skip
 
@@ -360,7 +359,7 @@ class Replication:
         lines = [
             f"Chapter 6 replicated by {n} populations of {self.subjects} adaptive subjects "
             f"(seeds {_seed_list(self.seeds)}; run-to-run variation {self.run_to_run_sd:.0%}; "
-            f"motion perception spread {self.motion_spread:g})",
+            f"{self.spread.describe()})",
             f"{'measure':30s} {'factor':6s} {'twin d_z: median':>16s} {'5-95 %':>13s} | "
             f"{'thesis d_z':>10s} {'p draw':>7s} | agree expected",
         ]
@@ -447,7 +446,7 @@ def alike(results: Sequence[PopulationResult]) -> int:
     SignalError
         No populations, repeated seeds, or populations that differ in subjects, adapted
         parameters, run-to-run variation, measures, how they were measured or the subjects'
-        spread in motion perception.
+        spreads (:class:`~twin.pilot.spread.Spread`).
 
     """
     if not results:
@@ -460,14 +459,14 @@ def alike(results: Sequence[PopulationResult]) -> int:
     first = results[0]
     subjects = len({r["subject"] for r in first.rows})
     want = (subjects, first.adapted, first.run_to_run_sd, tuple(first.anova), first.identified,
-            first.motion_spread)  # fmt: skip
+            first.spread)  # fmt: skip
     for r in results[1:]:
         got = (len({row["subject"] for row in r.rows}), r.adapted, r.run_to_run_sd,
-               tuple(r.anova), r.identified, r.motion_spread)  # fmt: skip
+               tuple(r.anova), r.identified, r.spread)  # fmt: skip
         if got != want:
             raise SignalError(f"populations differ in subjects, adapted parameters, run-to-run "
-                              f"variation, measures, identification or motion perception "
-                              f"spread: {got} vs {want}")  # fmt: skip
+                              f"variation, measures, identification or the subjects' "
+                              f"spreads: {got} vs {want}")  # fmt: skip
     return subjects
 
 
@@ -512,7 +511,7 @@ def replicate(results: Sequence[PopulationResult]) -> Replication:
             effects.append(EffectReplication(measure, factor, thesis_f, direction, signed,
                                              subjects, agreed, prob))  # fmt: skip
     return Replication(tuple(effects), tuple(seeds), subjects, first.adapted,
-                       first.run_to_run_sd, first.motion_spread)  # fmt: skip
+                       first.run_to_run_sd, first.spread)  # fmt: skip
 
 
 def run_populations(
@@ -524,7 +523,7 @@ def run_populations(
     adapted: tuple[str, ...] = ADAPTED,
     run_to_run_sd: float = ADAPTATION_SD,
     identified: float | None = None,
-    motion_spread: float = MOTION_NOISE_SD,
+    spread: Spread = DEFAULT_SPREAD,
 ) -> tuple[Replication, list[PopulationResult]]:
     """Fly ``n_populations`` populations (seeds ``seed``, ``seed + 1``, ...) and replicate.
 
@@ -552,9 +551,9 @@ def run_populations(
         Measure the pilot model as the thesis did, identified from the runs, with a passive
         feedthrough of this relative size (0: none; :mod:`twin.pilot.identified`); None (the
         default): the pilots' own measures.
-    motion_spread : float
-        The subjects' spread in motion perception (log-normal sd, 0 to 3;
-        :func:`twin.pilot.population.subjects`).
+    spread : Spread
+        How the subjects differ in motion perception and visual delay
+        (:class:`twin.pilot.spread.Spread`).
 
     Returns
     -------
@@ -565,14 +564,15 @@ def run_populations(
     ------
     SignalError
         Fewer than two populations or subjects, or a bad setting.
+    TypeError
+        A ``spread`` that is not a :class:`~twin.pilot.spread.Spread`.
     TaskError
         When a subject failed (named with its number and seed).
 
     """
     if n_populations < 2:
         raise SignalError(f"a replication needs at least 2 populations; got {n_populations}")
-    adapted = checked_settings(adapted, run_to_run_sd, motion_spread)
-    motion_spread = checked_spread(motion_spread)
+    adapted = checked_settings(adapted, run_to_run_sd, spread)
     seeds = list(range(seed, seed + n_populations))
     if identified is None:
         fly, tasks_of, result_of, extra = fly_subject, population_tasks, population_result, ()
@@ -580,13 +580,12 @@ def run_populations(
         check_feedthrough(identified)
         fly, tasks_of, result_of = identified_subject, identified_tasks, identified_result
         extra = (identified,)
-    tasks = [tasks_of(n_subjects, s, adapted, run_to_run_sd, *extra, motion_spread=motion_spread)
-             for s in seeds]  # fmt: skip
+    tasks = [tasks_of(n_subjects, s, adapted, run_to_run_sd, *extra, spread) for s in seeds]
     args = [a for t in tasks for a in t[0]]
     inputs = [i for t in tasks for i in t[1]]
     with using(scheduler) as engine:
         flown = engine.map(fly, args, inputs, "subjects", progress).values()
     results = [result_of(flown[k * n_subjects : (k + 1) * n_subjects], s, adapted,
-                         run_to_run_sd, *extra, motion_spread=motion_spread)
+                         run_to_run_sd, *extra, spread)
                for k, s in enumerate(seeds)]  # fmt: skip
     return replicate(results), results
