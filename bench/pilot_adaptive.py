@@ -78,6 +78,7 @@ from statsmodels.stats.proportion import proportion_confint
 from twin.chain.config import motion_system
 from twin.errors import SignalError
 from twin.pilot.adapt import ADAPTED, EQUALISATION, SPEED_ACCURACY, adapt
+from twin.pilot.compare_settings import log_density_difference
 from twin.pilot.design import ACCEPTANCE, MAX_SUBJECTS, Design, design
 from twin.pilot.experiment import pitch_remnant_scale
 from twin.pilot.identified import MAX_FEEDTHROUGH
@@ -178,7 +179,8 @@ def populations(sd: float, n: int, adapted: tuple[str, ...] = ADAPTED) -> list[P
 
 def spread_profile(grid: dict[str, tuple[float, ...]], n: int, seed: int = 0) -> None:
     """Section 7: the subjects' spreads and run-to-run variation profiled against Tables
-    6.4-6.7, ``n`` populations of nine a cell from ``seed``."""
+    6.4-6.7, ``n`` populations of nine a cell from ``seed``; then each cell against the best
+    on random halves of the populations (:mod:`twin.pilot.compare_settings`)."""
     filters = [(m, "filter") for m in TABLES_6_4_TO_6_7 if m not in ("tau_v", "tau_m")]
     head = " ".join(f"{m[:9]:>9s}" for m, _ in filters)
     print(f"\n{n} populations of {SUBJECTS} a cell, seeds {seed}-{seed + n - 1}")
@@ -186,9 +188,11 @@ def spread_profile(grid: dict[str, tuple[float, ...]], n: int, seed: int = 0) ->
           f"{'accept9':>7s} | {head}")  # fmt: skip
     cells = [(sd, Spread(m, v)) for sd in grid["run_to_run"] for m in grid["motion"]
              for v in grid["visual_delay"]]  # fmt: skip
+    reps = []
     for k, (sd, spread) in enumerate(cells):
         rep, results = run_populations(n, SUBJECTS, seed, scheduler="local:2",
                                        run_to_run_sd=sd, spread=spread)  # fmt: skip
+        reps.append(rep)
         plausible = len(rep.effects) - len(rep.implausible())
         accept = design(results, resamples=2).acceptance_at(SUBJECTS)
         if k == 0:
@@ -197,6 +201,15 @@ def spread_profile(grid: dict[str, tuple[float, ...]], n: int, seed: int = 0) ->
         d = " ".join(f"{rep.effect(m, f).quantiles()[1]:+9.2f}" for m, f in filters)
         print(f"{spread.motion:6.2f} {spread.visual_delay:8.3f} {sd:5.2f} {rep.log_density:8.1f} "
               f"{plausible:3d}/{len(rep.effects)} {accept:7.2f} | {d}", flush=True)  # fmt: skip
+    if len(cells) > 1 and n >= 4:
+        best = max(range(len(cells)), key=lambda k: reps[k].log_density)
+        sd, spread = cells[best]
+        print(f"against the best ({spread.describe()}, run-to-run {sd:.0%}), on the same "
+              "populations and on random halves of them:")  # fmt: skip
+        for (sd, spread), rep in zip(cells, reps, strict=True):
+            if rep is not reps[best]:
+                diff = log_density_difference(rep, reps[best]).format()
+                print(f"  {spread.motion:4.2f} {spread.visual_delay:6.3f} {sd:4.2f}: {diff}")
 
 
 def design_check(pool: list[PopulationResult], subjects_n: int | None = None) -> None:

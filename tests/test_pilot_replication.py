@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import copy
+import dataclasses
 import json
 
 import numpy as np
@@ -238,3 +239,36 @@ def test_cli_populations_json_and_figure(monkeypatch, tmp_path, capsys):
     assert (
         "(no design of experiments: it pools at least 40 subjects; these populations have 6)" in out
     )
+
+
+def test_random_halves_say_how_sure_a_choice_of_settings_is():
+    """The difference of two settings' log densities is the replications' own; random halves
+    of the populations give its spread; a setting whose effects sit nearer the thesis wins in
+    nearly every half, one barely different does not win in every half."""
+    from twin.pilot.compare_settings import log_density_difference
+
+    results = [PopulationResult(planted_rows(s, subjects=9), {}, s) for s in range(12)]
+    results = [PopulationResult(r.rows, anova(r.rows), r.seed) for r in results]
+    near = replicate(results)
+
+    def weaker(rep, by):  # every effect's F scaled down: d_z further from the thesis'
+        effects = tuple(dataclasses.replace(e, signed_f=tuple(by * f for f in e.signed_f))
+                        for e in rep.effects)  # fmt: skip
+        return dataclasses.replace(rep, effects=effects)
+
+    d = log_density_difference(near, near)
+    assert d.difference == 0.0 and d.low == d.high == 0.0 and d.share == 0.0
+    other = weaker(near, 0.25)
+    d = log_density_difference(near, other, resamples=500, seed=3)
+    assert d.difference == pytest.approx(near.log_density - other.log_density, rel=1e-9)
+    assert 0 < d.low < d.high and d.resamples == 500 and d.share > 0.95
+    close = log_density_difference(near, weaker(near, 0.97), resamples=500, seed=3)
+    assert abs(close.difference) < 0.1 * d.difference and close.share < 0.95, close
+    assert d == log_density_difference(near, other, resamples=500, seed=3)  # seeded
+    assert d.format().endswith("higher in 100% of 500 random halves")
+    with pytest.raises(SignalError, match="same populations"):
+        log_density_difference(near, replicate(results[:6]))
+    with pytest.raises(SignalError, match="at least 100 random halves"):
+        log_density_difference(near, near, resamples=10)
+    with pytest.raises(SignalError, match="at least 4 populations"):
+        log_density_difference(*[replicate(results[:3])] * 2)
