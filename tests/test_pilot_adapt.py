@@ -227,21 +227,20 @@ def test_subjects_differ_in_visual_delay_by_the_spread_set():
     so one seed's subjects are the same people more or less alike in visual delay, and all
     their other draws are unchanged."""
     from twin.pilot.population import subjects
-    from twin.pilot.spread import VISUAL_DELAY_SD, Spread
+    from twin.pilot.spread import Spread
 
     many = subjects(400, seed=5, spread=Spread(visual_delay=0.02))
     tau_v = np.array([s.limitations.tau_v for s in many])
     assert abs(tau_v.mean() - 0.30) < 3 * 0.02 / np.sqrt(400)
     assert np.std(tau_v, ddof=1) == pytest.approx(0.02, rel=0.15)
-    default = subjects(9, 5)
-    for spread in (Spread(visual_delay=0.0), Spread(visual_delay=0.01), Spread(motion=1.0)):
+    reference = subjects(9, 5, Spread(visual_delay=0.03))
+    for spread in (Spread(visual_delay=0.0), Spread(visual_delay=0.01), Spread(1.0, 0.03)):
         other = subjects(9, 5, spread)
-        for a, b in zip(default, other, strict=True):
+        for a, b in zip(reference, other, strict=True):
             assert dataclasses.replace(a.limitations, tau_v=0.3) == dataclasses.replace(
                 b.limitations, tau_v=0.3)  # fmt: skip
             assert (a.weight, a.noise_ratio) == (b.weight, b.noise_ratio)
-            z = (a.limitations.tau_v - 0.30) / VISUAL_DELAY_SD
-            want = 0.30 + spread.visual_delay * z
+            want = 0.30 + spread.visual_delay * (a.limitations.tau_v - 0.30) / 0.03
             assert b.limitations.tau_v == pytest.approx(want, abs=1e-15)
     assert {s.limitations.tau_v for s in subjects(9, 5, Spread(visual_delay=0.0))} == {0.30}
 
