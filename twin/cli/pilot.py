@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from twin.cli import common
+from twin.pilot import spread as spreads
 from twin.plotting import pyplot
 
 DEG2 = (180 / np.pi) ** 2
@@ -150,15 +151,18 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
         metavar="SD",
         help="with --pilot adaptive: how much the subjects differ in perceiving motion, the "
         "log-normal sd of the felt rate's observation noise relative to the visual one "
-        "(0 to 3; default 0.5, from a profile against Tables 6.4-6.7, README; 0: every subject "
-        "perceives motion as well as vision, the subjects of earlier versions)",
+        f"(0 to {spreads.MAX_MOTION_SPREAD:g}; default {spreads.MOTION_NOISE_SD:g}, from profiles "
+        "against Tables 6.4-6.7, README; 0: every subject perceives motion as well as vision, "
+        "the subjects of earlier versions)",
     )
     exp.add_argument(
         "--visual-delay-spread",
         type=float,
         metavar="S",
         help="with --pilot adaptive: how much the subjects differ in visual delay, its sd in s "
-        "around 0.30 s (0 to 0.1; default 0.03; 0: every subject has the mean delay)",
+        f"around 0.30 s (0 to {spreads.MAX_VISUAL_DELAY_SD:g}; default "
+        f"{spreads.VISUAL_DELAY_SD:g}, from profiles against Tables 6.4-6.7, README; 0: every "
+        "subject has the mean delay)",
     )
     exp.add_argument(
         "--populations",
