@@ -164,7 +164,7 @@ def test_a_replication_refuses_one_population_and_mixed_settings():
         run_populations(1)
     with pytest.raises(SignalError, match="run-to-run variation must be"):
         run_populations(2, run_to_run_sd=float("nan"))
-    for other in (Spread(motion=0.0), Spread(visual_delay=0.01)):
+    for other in (Spread(motion=0.0), Spread(visual_delay=VISUAL_DELAY_SD + 0.01)):
         with pytest.raises(SignalError, match="the subjects' spreads"):
             replicate([one, PopulationResult(rows, anova(rows), 1, spread=other)])
     with pytest.raises(TypeError, match=r"spread must be a twin.pilot.spread.Spread .* float"):

@@ -23,7 +23,7 @@ MOTION_NOISE_SD = 0.5
 MAX_MOTION_SPREAD = 3.0
 #: Spread between subjects of their visual delay: the normal sd in s around 0.30 s (the
 #: delays of §6.3).
-VISUAL_DELAY_SD = 0.03
+VISUAL_DELAY_SD = 0.01
 #: Largest visual-delay spread accepted, in s (draws are kept above 0.09 s).
 MAX_VISUAL_DELAY_SD = 0.1
 
