@@ -55,15 +55,20 @@
    agreements counted beside the prediction: is the design right about experiments it did
    not pool?
 7. The subjects' unknown spreads against the thesis (``--spread-profile``, about 7 min a
-   cell): ``SPREAD_POPULATIONS`` populations of nine for each motion perception spread
-   (:data:`twin.pilot.population.MOTION_NOISE_SD` is chosen here) and run-to-run variation
-   of ``SPREAD_GRID``; per cell the log predictive density of the thesis' 36 effects
+   cell): ``SPREAD_POPULATIONS`` populations of nine (``--profile-populations``, from
+   ``--profile-seed``) for each motion perception spread, visual-delay sd and run-to-run
+   variation of ``SPREAD_GRID`` (``--profile-motion``, ``--profile-visual-delay``,
+   ``--profile-run-to-run``; :mod:`twin.pilot.spread`'s defaults are chosen here); per cell
+   the log predictive density of the thesis' 36 effects
    (:attr:`twin.pilot.replication.Replication.log_density`: higher, the thesis' results are
    likelier draws of the twin), how many are plausible draws, the filter effects' d_z beside
-   the thesis', and how often nine subjects meet the acceptance at once (the design's).
+   the thesis', and how often nine subjects meet the acceptance at once (the design's); then
+   every cell against the best on the same populations and on halves of them
+   (:mod:`twin.pilot.compare_settings`).
 
-``--motion-spread SD`` sets the subjects' spread in motion perception for every section but
-7 (0: the subjects before it, with which the README's older Chapter 6 figures were measured).
+``--motion-spread SD`` and ``--visual-delay-spread S`` set the subjects' spreads for every
+section but 7 (``--motion-spread 0 --visual-delay-spread 0.03``: the subjects before either,
+with which the README's older Chapter 6 figures were measured).
 """
 
 import argparse
@@ -123,7 +128,7 @@ SETTINGS = {"spread": DEFAULT_SPREAD}
 #: Section 7's grid by default (``--profile-motion``, ``--profile-visual-delay``,
 #: ``--profile-run-to-run``): motion perception spreads, visual-delay sds (s) and run-to-run
 #: variations; and populations per cell (``--profile-populations``).
-SPREAD_GRID = {"motion": (0.5, 1.0), "visual_delay": (0.0, 0.01, 0.02, VISUAL_DELAY_SD),
+SPREAD_GRID = {"motion": (0.5, 1.0), "visual_delay": (0.0, 0.01, 0.015, 0.02, 0.03),
                "run_to_run": (ADAPTATION_SD,)}  # fmt: skip
 SPREAD_POPULATIONS = 10
 #: Fresh populations flown to check section 6's design, and their first seed.
@@ -180,7 +185,7 @@ def populations(sd: float, n: int, adapted: tuple[str, ...] = ADAPTED) -> list[P
 def spread_profile(grid: dict[str, tuple[float, ...]], n: int, seed: int = 0) -> None:
     """Section 7: the subjects' spreads and run-to-run variation profiled against Tables
     6.4-6.7, ``n`` populations of nine a cell from ``seed``; then each cell against the best
-    on random halves of the populations (:mod:`twin.pilot.compare_settings`)."""
+    on halves of the populations (:mod:`twin.pilot.compare_settings`; from 4 populations)."""
     filters = [(m, "filter") for m in TABLES_6_4_TO_6_7 if m not in ("tau_v", "tau_m")]
     head = " ".join(f"{m[:9]:>9s}" for m, _ in filters)
     print(f"\n{n} populations of {SUBJECTS} a cell, seeds {seed}-{seed + n - 1}")
@@ -201,11 +206,13 @@ def spread_profile(grid: dict[str, tuple[float, ...]], n: int, seed: int = 0) ->
         d = " ".join(f"{rep.effect(m, f).quantiles()[1]:+9.2f}" for m, f in filters)
         print(f"{spread.motion:6.2f} {spread.visual_delay:8.3f} {sd:5.2f} {rep.log_density:8.1f} "
               f"{plausible:3d}/{len(rep.effects)} {accept:7.2f} | {d}", flush=True)  # fmt: skip
+    if len(cells) > 1 and n < 4:
+        print("(no comparison on halves: it needs at least 4 populations a cell)")
     if len(cells) > 1 and n >= 4:
         best = max(range(len(cells)), key=lambda k: reps[k].log_density)
         sd, spread = cells[best]
         print(f"against the best ({spread.describe()}, run-to-run {sd:.0%}), on the same "
-              "populations and on random halves of them:")  # fmt: skip
+              "populations and on halves of them:")  # fmt: skip
         for (sd, spread), rep in zip(cells, reps, strict=True):
             if rep is not reps[best]:
                 diff = log_density_difference(rep, reps[best]).format()
@@ -554,8 +561,8 @@ if __name__ == "__main__":
     )
     parser.add_argument("--motion-spread", type=float, default=MOTION_NOISE_SD, metavar="SD",
                         help="the subjects' spread in motion perception for every section but "
-                             "7 (default: twin.pilot.spread.MOTION_NOISE_SD; 0: the "
-                             "subjects before it)")  # fmt: skip
+                             "7 (default: twin.pilot.spread.MOTION_NOISE_SD; 0 with "
+                             "--visual-delay-spread 0.03: the subjects before either)")  # fmt: skip
     parser.add_argument("--visual-delay-spread", type=float, default=VISUAL_DELAY_SD,
                         metavar="S", help="the subjects' visual-delay sd in s for every "
                         "section but 7 (default: twin.pilot.spread.VISUAL_DELAY_SD)")  # fmt: skip
@@ -570,17 +577,24 @@ if __name__ == "__main__":
     if not all(0 <= r <= MAX_FEEDTHROUGH for r in args.feedthrough):  # also refuses NaN
         parser.error(f"--feedthrough ratios must be 0 to {MAX_FEEDTHROUGH:g}; "
                      f"got {args.feedthrough}")  # fmt: skip
-    try:
-        SETTINGS["spread"] = Spread(args.motion_spread, args.visual_delay_spread)
-        grid = {"motion": args.profile_motion, "visual_delay": args.profile_visual_delay,
-                "run_to_run": args.profile_run_to_run}  # fmt: skip
-        for m in grid["motion"]:
-            for v in grid["visual_delay"]:
-                Spread(m, v)
-        for sd in grid["run_to_run"]:
-            checked_settings(ADAPTED, sd)
-    except SignalError as e:
-        parser.error(str(e))
+    grid = {"motion": args.profile_motion, "visual_delay": args.profile_visual_delay,
+            "run_to_run": args.profile_run_to_run}  # fmt: skip
+    checks = [("--motion-spread", lambda x: Spread(motion=x), [args.motion_spread]),
+              ("--visual-delay-spread", lambda x: Spread(visual_delay=x),
+               [args.visual_delay_spread]),
+              ("--profile-motion", lambda x: Spread(motion=x), grid["motion"]),
+              ("--profile-visual-delay", lambda x: Spread(visual_delay=x),
+               grid["visual_delay"]),
+              ("--profile-run-to-run", lambda x: checked_settings(ADAPTED, x),
+               grid["run_to_run"])]  # fmt: skip
+    for flag, check, values in checks:
+        for x in values:
+            try:
+                check(x)
+            except SignalError as e:
+                parser.error(f"{flag}: {e}")
+    SETTINGS["spread"] = Spread(args.motion_spread, args.visual_delay_spread)
+    grid = {k: tuple(dict.fromkeys(v)) for k, v in grid.items()}  # each value once
     if args.profile_populations < 2 or args.profile_seed < 0:
         parser.error(f"--profile-populations must be >= 2 and --profile-seed >= 0; got "
                      f"{args.profile_populations} and {args.profile_seed}")  # fmt: skip

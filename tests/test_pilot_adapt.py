@@ -256,6 +256,8 @@ def test_subjects_differ_in_visual_delay_by_the_spread_set():
         ({"visual_delay": -0.01}, r"visual delay's spread must be an sd in s in \[0, 0.1\]"),
         ({"visual_delay": float("inf")}, r"visual delay's spread .* got inf"),
         ({"visual_delay": "fast"}, r"visual delay's spread .* got 'fast'"),
+        ({"visual_delay": "0.01"}, r"visual delay's spread .* got '0.01'"),
+        ({"motion": True}, r"motion perception's spread .* got True"),
     ],
 )
 def test_a_spread_out_of_range_is_refused_naming_it(kwargs, message):

@@ -241,10 +241,12 @@ def test_cli_populations_json_and_figure(monkeypatch, tmp_path, capsys):
     )
 
 
-def test_random_halves_say_how_sure_a_choice_of_settings_is():
-    """The difference of two settings' log densities is the replications' own; random halves
-    of the populations give its spread; a setting whose effects sit nearer the thesis wins in
-    nearly every half, one barely different does not win in every half."""
+def test_halves_say_how_sure_a_choice_of_settings_is(monkeypatch):
+    """The difference of two settings' log densities is the replications' own; halves of the
+    populations (every one of the 924 of twelve, or random ones) give its spread; a setting
+    whose effects sit nearer the thesis wins in nearly every half, one barely different does
+    not win in every half."""
+    from twin.pilot import compare_settings
     from twin.pilot.compare_settings import log_density_difference
 
     results = [PopulationResult(planted_rows(s, subjects=9), {}, s) for s in range(12)]
@@ -259,16 +261,24 @@ def test_random_halves_say_how_sure_a_choice_of_settings_is():
     d = log_density_difference(near, near)
     assert d.difference == 0.0 and d.low == d.high == 0.0 and d.share == 0.0
     other = weaker(near, 0.25)
-    d = log_density_difference(near, other, resamples=500, seed=3)
+    d = log_density_difference(near, other)
     assert d.difference == pytest.approx(near.log_density - other.log_density, rel=1e-9)
-    assert 0 < d.low < d.high and d.resamples == 500 and d.share > 0.95
-    close = log_density_difference(near, weaker(near, 0.97), resamples=500, seed=3)
+    assert 0 < d.low < d.high and d.share > 0.95 and d.exact and d.resamples == 924
+    close = log_density_difference(near, weaker(near, 0.97))
     assert abs(close.difference) < 0.1 * d.difference and close.share < 0.95, close
-    assert d == log_density_difference(near, other, resamples=500, seed=3)  # seeded
-    assert d.format().endswith("higher in 100% of 500 random halves")
+    assert d.format().endswith("higher in 100.0% of 924 (all) halves")
+    monkeypatch.setattr(compare_settings, "ALL_HALVES", 100)  # too many: random halves
+    r = log_density_difference(near, other, resamples=500, seed=3)
+    assert not r.exact and r.resamples == 500 and r.difference == d.difference
+    assert r.share > 0.95 and abs(r.low - d.low) < 0.2 * (d.high - d.low)
+    assert r == log_density_difference(near, other, resamples=500, seed=3)  # seeded
     with pytest.raises(SignalError, match="same populations"):
         log_density_difference(near, replicate(results[:6]))
     with pytest.raises(SignalError, match="at least 100 random halves"):
         log_density_difference(near, near, resamples=10)
     with pytest.raises(SignalError, match="at least 4 populations"):
         log_density_difference(*[replicate(results[:3])] * 2)
+    broken = dataclasses.replace(near, effects=(dataclasses.replace(
+        near.effects[0], signed_f=(float("nan"),) * 12), *near.effects[1:]))  # fmt: skip
+    with pytest.raises(SignalError, match="not finite"):
+        log_density_difference(near, broken)

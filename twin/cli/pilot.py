@@ -152,8 +152,8 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
         help="with --pilot adaptive: how much the subjects differ in perceiving motion, the "
         "log-normal sd of the felt rate's observation noise relative to the visual one "
         f"(0 to {spreads.MAX_MOTION_SPREAD:g}; default {spreads.MOTION_NOISE_SD:g}, from profiles "
-        "against Tables 6.4-6.7, README; 0: every subject perceives motion as well as vision, "
-        "the subjects of earlier versions)",
+        "against Tables 6.4-6.7, README; 0: every subject perceives motion as well as vision; "
+        "with --visual-delay-spread 0.03 the subjects of earlier versions)",
     )
     exp.add_argument(
         "--visual-delay-spread",

@@ -46,7 +46,7 @@ from twin.pilot.population import (
     flown_conditions,
     population_tasks,
 )
-from twin.pilot.spread import DEFAULT_SPREAD, Spread
+from twin.pilot.spread import DEFAULT_SPREAD, Spread, checked
 from twin.progress import ProgressFn
 from twin.tasks.engine import Engine, using
 
@@ -176,4 +176,4 @@ def identified_result(
     """Assemble the subjects' identified rows (in subject order) and their ANOVA."""
     rows = [row for r in flown for row in r]
     return PopulationResult(rows, anova(rows, IDENTIFIED), seed, adapted, run_to_run_sd,
-                            feedthrough, spread)  # fmt: skip
+                            feedthrough, checked(spread))  # fmt: skip

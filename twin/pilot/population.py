@@ -47,7 +47,8 @@ predicts (a replication over populations: :mod:`twin.pilot.replication`). With o
 equalisation adapted (``adapted=EQUALISATION``, the model before the neuromuscular tuning
 adapted) the filter's effect on var(u) went either way (24 of 45 subjects lower), so no
 population showed it; with the tuning adapted it is lower for 43 of 45 (subjects who all
-perceived motion as well as vision, ``Spread(motion=0)``). ``bench/pilot_adaptive.py`` prints
+perceived motion as well as vision and differed by 30 ms in visual delay,
+``Spread(0, 0.03)``). ``bench/pilot_adaptive.py`` prints
 both models side by side.
 """
 
@@ -103,8 +104,8 @@ MEASURES = (
 #: neuromuscular tuning and the visual delay (Table 6.7; each compared where it is adapted).
 COMPARED = (*MEASURES, "t_lead", "t_lag", "omega_nm", "zeta_nm", "tau_v")
 #: Subject spread: parameter -> (mean, sd) for limitations; log-normal sd for the priorities.
-#: The visual delay's sd and the motion perception's spread are settings (:class:`Spread`): the
-#: sd here is the default's.
+#: The visual delay's sd and the motion perception's spread are settings (:class:`Spread`):
+#: :func:`subjects` takes tau_v's sd from its ``spread``, the one here is the default's.
 SUBJECT_SPREAD = {
     "tau_v": (0.30, VISUAL_DELAY_SD),
     "tau_m": (0.20, 0.03),

@@ -12,6 +12,7 @@ checked once, so every function that draws subjects takes one value.
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import dataclass
 
 from twin.errors import SignalError
@@ -30,10 +31,9 @@ MAX_VISUAL_DELAY_SD = 0.1
 
 def _checked(value: float, largest: float, name: str, kind: str) -> float:
     """Return ``value`` as a float in [0, ``largest``] (-0 is 0), or raise naming ``name``."""
-    try:
-        x = float(value)
-    except (TypeError, ValueError):
-        raise SignalError(f"{name} must be {kind} in [0, {largest:g}]; got {value!r}") from None
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise SignalError(f"{name} must be {kind} in [0, {largest:g}]; got {value!r}")
+    x = float(value)
     if math.isnan(x) or not 0 <= x <= largest:
         raise SignalError(f"{name} must be {kind} in [0, {largest:g}]; got {value}")
     return abs(x)
@@ -103,5 +103,5 @@ def checked(spread: object) -> Spread:
     """
     if not isinstance(spread, Spread):
         raise TypeError(f"spread must be a twin.pilot.spread.Spread (e.g. Spread(motion=0.5, "
-                        f"visual_delay=0.03)); got {type(spread).__name__} {spread!r}")  # fmt: skip
+                        f"visual_delay=0.01)); got {type(spread).__name__} {spread!r}")  # fmt: skip
     return spread
