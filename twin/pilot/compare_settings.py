@@ -23,13 +23,9 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import NDArray
-from scipy import stats
 
 from twin.errors import SignalError
-from twin.pilot.replication import THESIS_SUBJECTS, EffectReplication, Replication
-
-FloatArray = NDArray[np.float64]
+from twin.pilot.replication import Replication
 
 #: Halves enumerated up to this many (20 populations: 184,756); beyond, ``resamples`` random.
 ALL_HALVES = 200_000
@@ -122,25 +118,9 @@ def log_density_difference(
         rng = np.random.default_rng(np.random.SeedSequence([seed, 17]))
         halves = np.argsort(rng.random((resamples, n)), axis=1)[:, : n // 2]
     full = np.arange(n)[None, :]
-    diff = [sum(_log_densities(ea, picks) - _log_densities(eb, picks)
+    diff = [sum(ea.log_densities(picks) - eb.log_densities(picks)
                 for ea, eb in zip(a.effects, b.effects, strict=True))
             for picks in (full, halves)]  # fmt: skip
     lo, hi = np.percentile(diff[1], [5, 95])
     return ScoreDifference(float(diff[0][0]), float(lo), float(hi), float(np.mean(diff[1] > 0)),
                            len(halves), exact)  # fmt: skip
-
-
-def _log_densities(effect: EffectReplication, picks: np.ndarray) -> FloatArray:
-    """:attr:`EffectReplication.log_density` for each row of population indices ``picks``.
-
-    Vectorised :func:`twin.pilot.replication.predictive_log_density`.
-    """
-    x = effect.d_z[picks]
-    n = x.shape[1]
-    mean, sd = x.mean(axis=1), x.std(axis=1, ddof=1)
-    if np.any(sd == 0):
-        raise SignalError(f"{effect.measure} x {effect.factor}: populations with the same "
-                          "effect leave no spread to predict from")  # fmt: skip
-    spread = sd * np.sqrt(1.0 / n + effect.subjects / THESIS_SUBJECTS)  # as EffectReplication
-    return np.max([stats.t.logpdf((d - mean) / spread, n - 1) - np.log(spread)
-                   for d in effect.thesis_d_z], axis=0)  # fmt: skip

@@ -151,8 +151,8 @@ def predictive_p(draws: ArrayLike, value: float, scale: float = 1.0) -> float:
     1.0
 
     """
-    t, _, df = _predictive_t(draws, value, scale)
-    return float(2 * stats.t.sf(abs(t), df))
+    t, _, df = _predictive_t(_one_row(draws), value, scale)
+    return float(2 * stats.t.sf(abs(t[0]), df))
 
 
 def predictive_log_density(draws: ArrayLike, value: float, scale: float = 1.0) -> float:
@@ -172,22 +172,43 @@ def predictive_log_density(draws: ArrayLike, value: float, scale: float = 1.0) -
         The log of the predictive density at ``value`` (per unit of the draws).
 
     """
-    t, spread, df = _predictive_t(draws, value, scale)
-    return float(stats.t.logpdf(t, df) - np.log(spread))
+    return float(predictive_log_densities(_one_row(draws), value, scale)[0])
 
 
-def _predictive_t(draws: ArrayLike, value: float, scale: float) -> tuple[float, float, int]:
-    """(t, the prediction's spread, degrees of freedom) of :func:`predictive_p`."""
+def predictive_log_densities(draws: ArrayLike, value: float, scale: float = 1.0) -> FloatArray:
+    """:func:`predictive_log_density` for each row of ``draws`` (shape (rows, N)).
+
+    Raises
+    ------
+    SignalError
+        Rows of fewer than 2 draws, a draw that is not finite, or a row without spread.
+
+    """
+    t, spread, df = _predictive_t(np.asarray(draws, dtype=float), value, scale)
+    return stats.t.logpdf(t, df) - np.log(spread)
+
+
+def _one_row(draws: ArrayLike) -> FloatArray:
+    """One set of draws as a single row (a 1-D sequence)."""
     x = np.asarray(draws, dtype=float)
-    if x.size < 2 or not np.all(np.isfinite(x)):
-        raise SignalError(f"a predictive test needs at least 2 finite draws; got {x.tolist()}")
+    if x.ndim != 1:
+        raise SignalError(f"draws must be one sequence; got shape {x.shape}")
+    return x[None, :]
+
+
+def _predictive_t(x: FloatArray, value: float, scale: float) -> tuple[FloatArray, FloatArray, int]:
+    """(t, the prediction's spread, degrees of freedom) of :func:`predictive_p`, per row."""
+    if x.ndim != 2 or x.shape[1] < 2 or not np.all(np.isfinite(x)):
+        raise SignalError(f"a predictive test needs rows of at least 2 finite draws; got "
+                          f"{x.tolist() if x.size <= 40 else f'shape {x.shape}'}")  # fmt: skip
     if not (np.isfinite(value) and np.isfinite(scale) and scale > 0):
         raise SignalError(f"the new draw must be finite and its scale > 0; got {value}, {scale}")
-    sd = float(np.std(x, ddof=1))
-    if sd == 0:
-        raise SignalError(f"the draws are all {x[0]}: no spread to predict a draw from")
-    spread = float(sd * np.sqrt(1.0 / x.size + scale**2))
-    return (value - float(x.mean())) / spread, spread, x.size - 1
+    sd = np.std(x, axis=1, ddof=1)
+    if np.any(sd == 0):
+        raise SignalError(f"the draws are all {x[np.argmin(sd), 0]}: no spread to predict a "
+                          "draw from")  # fmt: skip
+    spread = sd * np.sqrt(1.0 / x.shape[1] + scale**2)
+    return (value - x.mean(axis=1)) / spread, spread, x.shape[1] - 1
 
 
 @dataclass(frozen=True)
@@ -262,8 +283,24 @@ class EffectReplication:
         Where the thesis gave no direction, the likelier sign's (a score: over both signs it
         is not a normalised density).
         """
-        return max(predictive_log_density(self.d_z, d, self._thesis_scale)
-                   for d in self.thesis_d_z)  # fmt: skip
+        return float(self.log_densities(np.arange(self.populations)[None, :])[0])
+
+    def log_densities(self, picks: ArrayLike) -> FloatArray:
+        """:attr:`log_density` over the populations of each row of indices ``picks``.
+
+        Parameters
+        ----------
+        picks : array_like of int, shape (rows, N)
+            Population indices, N >= 2 per row.
+
+        Returns
+        -------
+        ndarray, shape (rows,)
+
+        """
+        draws = self.d_z[np.asarray(picks, dtype=int)]
+        return np.max([predictive_log_densities(draws, d, self._thesis_scale)
+                       for d in self.thesis_d_z], axis=0)  # fmt: skip
 
     @property
     def _thesis_scale(self) -> float:
