@@ -36,7 +36,7 @@ test-all: $(NBSTAMP)
 	$(BIN)/python -m pytest -q -m ''
 
 fuzz: $(STAMP)
-	$(BIN)/python -m pytest -q -n 0 -s -m '' tests/test_fuzz_inputs.py
+	$(BIN)/python -m pytest -q -n 0 -s -m "" tests/test_fuzz_inputs.py tests/test_fuzz_outputs.py
 
 lint: $(STAMP)
 	$(BIN)/ruff check twin tests bench

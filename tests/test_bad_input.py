@@ -18,6 +18,7 @@ import pytest
 
 from twin.cli.main import EXIT_BROKEN_PIPE, EXIT_BUG, error_line, main
 from twin.errors import DataError
+from twin.ownership import MANIFEST
 
 REST = ["simulate", "srs", "--model", "reduced", "--signal", "rest-1", "--quiet"]
 
@@ -64,7 +65,7 @@ def test_output_paths_are_refused_before_any_work(tmp_path, capsys, monkeypatch)
 def test_missing_folders_of_an_output_file_are_made(tmp_path, run):
     rrd = tmp_path / "new" / "deeper" / "run.rrd"
     assert main([*REST, "--out", str(tmp_path / "o"), "--rrd", str(rrd)]) == 0
-    assert rrd.is_file() and not list(rrd.parent.glob(".*"))
+    assert rrd.is_file() and [p.name for p in rrd.parent.glob(".*")] == [MANIFEST]
 
 
 def _full_disk_on(monkeypatch: pytest.MonkeyPatch, name: str) -> None:

@@ -33,6 +33,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from twin.cli.main import main
+from twin.ownership import MANIFEST
 
 FAST = 20
 SLOW = 300
@@ -202,8 +203,8 @@ class Damaged(bytes):
 
 
 def _leftovers(where: Path) -> list[str]:
-    """Hidden files or folders (staging names) anywhere under ``where``."""
-    return [str(p) for p in where.rglob(".*")]
+    """Hidden files or folders (staging names) anywhere under ``where`` (not manifests)."""
+    return [str(p) for p in where.rglob(".*") if p.name != MANIFEST]
 
 
 def check_clean(argv: list[str], work: Path, out: Path | None = None) -> int:

@@ -5,6 +5,7 @@ import json
 import pytest
 
 from twin.cli.main import main
+from twin.ownership import MANIFEST
 
 
 def test_run_writes_a_csv_that_identify_reads(capsys, tmp_path):
@@ -90,7 +91,7 @@ def test_repetitions_are_written_one_file_each_and_identified_together(capsys, t
     out = tmp_path / "rep.csv"
     assert main(["pilot", "run", "condition-8", "--runs", "3", "--out", str(out), "--quiet"]) == 0
     files = [tmp_path / f"rep-{k}.csv" for k in (1, 2, 3)]
-    assert sorted(tmp_path.iterdir()) == files  # nothing else, no partial files
+    assert sorted(tmp_path.iterdir()) == [tmp_path / MANIFEST, *files]  # no partial files
     capsys.readouterr()
     assert main(["pilot", "identify", *map(str, files), "--config", "condition-8", "--json"]) == 0
     doc = json.loads(capsys.readouterr().out, parse_constant=_no_constant)

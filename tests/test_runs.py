@@ -12,6 +12,7 @@ import pytest
 
 from twin.cli.main import main
 from twin.errors import RunFormatError, SignalError
+from twin.ownership import MANIFEST
 from twin.record import read_entities
 from twin.runs import read_run
 from twin.trajectory import uniform_rate
@@ -36,7 +37,7 @@ def test_simulated_run_reads_back(run_dir):
     assert run.imu.shape[1] == 6
     assert np.mean(run.imu[:200, 2]) == pytest.approx(-9.81, abs=0.05)
     assert run.actuators is not None and run.actuators.shape[0] == run.commands.n
-    assert not list(run_dir[0].parent.glob(".*"))  # no temporary leftovers
+    assert [p.name for p in run_dir[0].parent.glob(".*")] == [MANIFEST]  # no leftovers
 
 
 def test_rrd_holds_entities_and_samples(run_dir):

@@ -252,7 +252,7 @@ def test_sweep_refuses_an_out_folder_it_did_not_write(tmp_path, capsys, monkeypa
     mine.mkdir()
     (mine / "keep.txt").write_text("the user's")
     assert main(["sweep", str(grid), "--out", str(mine), "--scheduler", "inline"]) == 2
-    assert "is not an earlier output (no sweep.json)" in capsys.readouterr().err
+    assert "is not an earlier output of this kind" in capsys.readouterr().err
     monkeypatch.chdir(mine)
     assert main(["sweep", str(grid), "--out", ".", "--scheduler", "inline"]) == 2
     assert "current folder" in capsys.readouterr().err

@@ -3,13 +3,16 @@
 :class:`CloseOrAbort` gives a class with ``close()`` (finish: rename the output into place)
 and ``abort()`` (remove the partial output) its context-manager methods, so that leaving the
 block by an exception leaves nothing half-written; :func:`staging_dir` is the hidden folder
-such an output is written into before it is renamed into place, :class:`StagedFolder` such a
+such an output is written into before it is put in place, :class:`StagedFolder` such a
 folder's life (every output folder goes through it: a report by :func:`replacing_dir`, a run
 by :class:`~twin.runs.RunWriter`) and :func:`replacing_file` the ``with`` block for a single
-file. A file that cannot be written (a full disk, ...) is an :class:`~twin.errors.OutputError`
-naming it by its final path (:func:`writing`). :func:`check_output_file`,
-:func:`check_output_dir` and :func:`check_writable` refuse an output path before any work
-(the command line calls them while parsing, :mod:`twin.cli.common`).
+file. Putting an output in place follows :mod:`twin.ownership`: into an existing folder only
+the files the twin wrote there are replaced (:func:`install`), and a file replaces only an
+earlier output of its kind (or, with ``--overwrite``, a file that is no input). A file that
+cannot be written (a full disk, ...) is an :class:`~twin.errors.OutputError` naming it by its
+final path (:func:`writing`). :func:`check_output_file`, :func:`check_output_dir` and
+:func:`check_writable` refuse an output path before any work (the command line calls them
+while parsing, :mod:`twin.cli.common`).
 """
 
 from __future__ import annotations
@@ -25,6 +28,18 @@ from pathlib import Path
 from typing import Self
 
 from twin.errors import OutputError, UsageError
+from twin.ownership import (
+    MANIFEST,
+    check_replace,
+    entry,
+    input_at,
+    kind_of,
+    read_manifest,
+    real,
+    record,
+    unchanged,
+    write_manifest,
+)
 
 #: Errors of writing that the operating system reports without a file name (a full disk or
 #: quota, a file too large): in a staged folder they are the folder's.
@@ -113,13 +128,30 @@ def check_output_file(path: str | Path, suffixes: tuple[str, ...] = ()) -> Path:
 
 
 @contextmanager
-def replacing_file(final: str | Path) -> Iterator[Path]:
+def replacing_file(final: str | Path, kind: str | None = None) -> Iterator[Path]:
     """Yield a hidden name beside ``final`` (same suffix) that becomes ``final`` on success.
 
     The file appears under its name only when complete; on an exception the partial file is
-    removed. Missing parent folders are made.
+    removed. Missing parent folders are made. An existing ``final`` is replaced only as
+    :func:`twin.ownership.check_replace` allows (an earlier output of the same ``kind``, or
+    ``--overwrite``; never an input), and the new file is listed in its folder's manifest.
+
+    Parameters
+    ----------
+    final : str or Path
+        The file to write.
+    kind : str, optional
+        What kind of output it is (default from its suffix, :func:`twin.ownership.kind_of`).
+
+    Raises
+    ------
+    UsageError
+        Before anything is written, for a ``final`` that must not be replaced.
+
     """
     final = check_output_file(final)
+    kind = kind or kind_of(final)
+    check_replace(final, kind)
     tmp = final.with_name(f".{final.stem}.partial{final.suffix}")
     try:
         final.parent.mkdir(parents=True, exist_ok=True)
@@ -133,26 +165,133 @@ def replacing_file(final: str | Path) -> Iterator[Path]:
         with suppress(OSError):
             tmp.unlink(missing_ok=True)
         raise
+    record(final, kind)
 
 
 def check_output_dir(final: str | Path, marker: str) -> None:
-    """Refuse an output folder :func:`replacing_dir` must not replace (see there).
+    """Refuse an output folder :class:`StagedFolder` must not write into (see there).
 
     Commands call it before their work, so a bad ``--out`` costs nothing.
     """
     final = check_writable(final)
+    real(final)  # a link loop is refused by name
     if final.is_symlink():
         raise UsageError(f"output folder {final} is a symbolic link; give the folder itself")
     here = Path.cwd().resolve()
-    where = final.resolve()
+    where = Path(real(final))
     if where == here or where in here.parents:
         raise UsageError(f"output folder {final} is the current folder or above it; give a new "
                          "folder")  # fmt: skip
     if final.exists() and not final.is_dir():
         raise UsageError(f"output folder {final} is a file; give a folder")
-    if final.is_dir() and any(final.iterdir()) and not (final / marker).is_file():
-        raise UsageError(f"output folder {final} exists and is not an earlier output (no "
-                         f"{marker}); give a new folder or remove it")  # fmt: skip
+    hit = input_at(final)
+    if hit is not None and final.exists():
+        what = "is" if real(final) == hit else "lies in"
+        raise UsageError(f"output folder {final} {what} an input of this command ({hit}); give "
+                         "a new folder")  # fmt: skip
+    if not final.is_dir() or not any(p.name != MANIFEST for p in final.iterdir()):
+        return
+    if read_manifest(final)["kind"] != marker:
+        raise UsageError(f"output folder {final} exists and is not an earlier output of this "
+                         f"kind (no twin manifest of a {marker} output); give a new folder or "
+                         "remove it")  # fmt: skip
+
+
+def _staged_files(folder: Path) -> list[str]:
+    """Return every file below ``folder`` by its relative POSIX path (not its own manifest)."""
+    found = []
+    for here, _dirs, files in os.walk(folder):
+        for name in files:
+            rel = (Path(here) / name).relative_to(folder).as_posix()
+            if rel not in (MANIFEST, f"{MANIFEST}.partial"):
+                found.append(rel)
+    return sorted(found)
+
+
+def _inside(folder: Path, rel: str) -> Path | None:
+    """Return ``folder / rel`` if it lies in ``folder`` (links resolved), else None."""
+    if Path(rel).is_absolute() or ".." in Path(rel).parts:
+        return None
+    target = folder / rel
+    top = real(folder).rstrip(os.sep) + os.sep
+    return target if real(target).startswith(top) else None
+
+
+def _remove_empty_parents(path: Path, top: Path) -> None:
+    """Remove the folders from ``path``'s up to (not including) ``top`` while they are empty."""
+    for parent in path.parents:
+        if parent == top or top not in parent.parents:
+            return
+        try:
+            parent.rmdir()
+        except OSError:  # not empty: a user's file, or another output's
+            return
+
+
+def refuse_replacing(final: Path, names: list[str], listed: dict, kind: str) -> None:
+    """Refuse if any of ``names`` exists in ``final`` and is not an unchanged output of ``kind``.
+
+    Raises
+    ------
+    UsageError
+        Naming the first such file (an input of the command, a file the twin did not write or
+        one changed since) and how many more there are.
+
+    """
+    refused = []
+    for rel in sorted(set(names)):
+        target = _inside(final, rel)
+        if target is None:
+            refused.append(f"{final / rel} (outside the folder)")
+        elif target.exists() or target.is_symlink():
+            if input_at(target) is not None:
+                refused.append(f"{target} (an input of this command)")
+            elif not unchanged(target, listed.get(rel), kind):
+                refused.append(f"{target} (not written by twin, or changed since)")
+    if refused:
+        more = f" and {len(refused) - 1} more" if len(refused) > 1 else ""
+        raise UsageError(f"{final}: the new output would replace {refused[0]}{more}; move it "
+                         "away or give another folder")  # fmt: skip
+
+
+def install(tmp: Path, final: Path, kind: str, reserved: tuple[str, ...] = ()) -> None:
+    """Put the complete output folder ``tmp`` in place as ``final`` (see :class:`StagedFolder`).
+
+    A new ``final`` is ``tmp`` renamed. Into an existing one (an earlier output of ``kind``)
+    the new files are moved one by one; files the earlier output listed and the new one does
+    not write are removed if unchanged and not an input; everything else stays.
+
+    Raises
+    ------
+    UsageError
+        Before anything is moved, where a new file would replace one that is not the twin's
+        (or an input), or where a ``reserved`` name is a file the twin did not write.
+
+    """
+    new_files = _staged_files(tmp)
+    new = {rel: entry(tmp / rel, kind) for rel in new_files}
+    if not final.exists():
+        write_manifest(tmp, kind, new)
+        tmp.replace(final)
+        return
+    check_output_dir(final, kind)  # it may have changed while the output was made
+    listed = read_manifest(final)["files"]
+    refuse_replacing(final, [*new_files, *reserved], listed, kind)
+    keep = {}
+    for rel, e in listed.items():
+        target = _inside(final, rel)
+        if target is None or rel in new or not target.is_file():
+            continue
+        if e.get("kind") == kind and input_at(target) is None and unchanged(target, e, kind):
+            target.unlink()
+            _remove_empty_parents(target, final)
+        elif unchanged(target, e):
+            keep[rel] = e  # another kind of output in this folder, or an input: it stays
+    for rel in new_files:
+        (final / rel).parent.mkdir(parents=True, exist_ok=True)
+        (tmp / rel).replace(final / rel)
+    write_manifest(final, kind, {**keep, **new})
+    shutil.rmtree(tmp, ignore_errors=True)
 
 
 class StagedFolder:
@@ -163,9 +302,13 @@ class StagedFolder:
     final : str or Path
         The output folder.
     marker : str
-        A file every output of this kind holds (e.g. ``report.json``): an existing ``final``
-        is replaced only if it is empty or holds it (an earlier output of the same kind), so
-        a user's own folder, the current folder or one holding the inputs is never removed.
+        A file every output of this kind holds (e.g. ``report.json``), the kind's name in the
+        manifest: an existing ``final`` is written into only if it is empty or an earlier
+        output of the same kind, and then only the files that output listed are replaced or
+        removed (:func:`install`); a user's files, and the command's inputs, stay.
+    reserved : tuple of str
+        Names that must not be left in ``final`` unless the twin wrote them (a run's optional
+        files: a user's ``actuators.csv`` beside new commands would be read as the run's).
 
     Attributes
     ----------
@@ -178,20 +321,25 @@ class StagedFolder:
     ------
     UsageError
         Before anything is written, for a ``final`` that is a file, the current folder or one
-        above it, or a non-empty folder that is not an earlier output of this kind.
+        above it, an input of the command, or a non-empty folder that is not an earlier output
+        of this kind; when finishing, for a new file that would replace one the twin did not
+        write.
 
     """
 
-    def __init__(self, final: str | Path, marker: str) -> None:
+    def __init__(self, final: str | Path, marker: str, reserved: tuple[str, ...] = ()) -> None:
         self.final = Path(final)
+        self.marker = marker
+        self.reserved = reserved
         check_output_dir(self.final, marker)
+        if reserved and self.final.is_dir():
+            refuse_replacing(self.final, list(reserved), read_manifest(self.final)["files"],
+                             marker)  # fmt: skip
         self.tmp = staging_dir(self.final)
 
     def finish(self) -> None:
-        """Put the complete folder in place of ``final`` (an earlier output is replaced)."""
-        if self.final.exists():
-            shutil.rmtree(self.final)
-        self.tmp.replace(self.final)
+        """Put the complete folder in place as ``final`` (:func:`install`)."""
+        install(self.tmp, self.final, self.marker, self.reserved)
 
     def discard(self) -> None:
         """Remove the hidden folder and all written into it."""

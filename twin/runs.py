@@ -31,8 +31,16 @@ import numpy as np
 from numpy.typing import NDArray
 
 from twin.checks import ENCODING, not_utf8, number, numbers, read_text
-from twin.errors import ConfigError, OutputError, RunFormatError, SignalError
-from twin.lifecycle import CloseOrAbort, StagedFolder, cannot_write, writing
+from twin.errors import ConfigError, OutputError, RunFormatError, SignalError, UsageError
+from twin.lifecycle import (
+    CloseOrAbort,
+    StagedFolder,
+    cannot_write,
+    check_output_dir,
+    refuse_replacing,
+    writing,
+)
+from twin.ownership import read_manifest
 from twin.platform.facts import PLATFORMS
 from twin.trajectory import Trajectory, uniform_rate
 
@@ -367,6 +375,35 @@ def _write_rows(fh: TextIO, t: FloatArray, values: FloatArray, block: int = 8192
         np.savetxt(fh, rows, delimiter=",", fmt="%.10g")
 
 
+#: The kind of output a run folder is (its marker file, :class:`~twin.lifecycle.StagedFolder`).
+RUN_KIND = "meta.json"
+#: The files of a run: in an existing folder, each must be an earlier run's that the twin wrote
+#: (a user's ``actuators.csv`` beside new commands would be read as the new run's).
+RUN_FILES = (*HEADERS, "meta.json")
+
+
+def check_run_output(folder: str | Path, overwrite: bool = False) -> None:
+    """Refuse a run folder to write, before any work (also done by :class:`RunWriter`).
+
+    A new folder is written; an existing one only with ``overwrite`` and only if it is an
+    earlier run the twin wrote (its own files are replaced, a user's others stay), never an
+    input of the command.
+
+    Raises
+    ------
+    UsageError
+        Naming the folder and what to do instead.
+
+    """
+    folder = Path(folder)
+    if folder.exists() and not overwrite:
+        raise UsageError(f"{folder}: already exists (choose another --out, or --overwrite to "
+                         "replace a run the twin wrote)")  # fmt: skip
+    check_output_dir(folder, RUN_KIND)
+    if folder.is_dir():
+        refuse_replacing(folder, list(RUN_FILES), read_manifest(folder)["files"], RUN_KIND)
+
+
 class RunWriter(CloseOrAbort):
     """Write a run folder incrementally; it appears under its name only when complete.
 
@@ -376,7 +413,8 @@ class RunWriter(CloseOrAbort):
     Parameters
     ----------
     folder : str or Path
-        Destination; must not exist yet (or ``overwrite=True``).
+        Destination; must not exist yet (or ``overwrite=True``: an earlier run the twin wrote
+        there is replaced, a user's other files in the folder stay).
     meta : dict
         ``meta.json`` contents (checked against the format).
     overwrite : bool
@@ -399,11 +437,10 @@ class RunWriter(CloseOrAbort):
         files: Sequence[str] = tuple(HEADERS),
     ) -> None:
         self.folder = Path(folder)
-        if self.folder.exists() and not overwrite:
-            raise RunFormatError(f"{self.folder}: already exists (choose another --out)")
+        check_run_output(self.folder, overwrite)
         self.meta = dict(meta, format=FORMAT)
         _check_meta(self.meta, self.folder)
-        self._staged = StagedFolder(self.folder, "meta.json")  # replaces only an earlier run
+        self._staged = StagedFolder(self.folder, RUN_KIND, reserved=RUN_FILES)
         self.tmp = self._staged.tmp
         self._files: dict[str, TextIO] = {}
         with self._removed_on_error():

@@ -23,13 +23,15 @@ it prints on stderr only when stderr is a terminal and ``--quiet`` is not given.
 from __future__ import annotations
 
 import argparse
+import os
 from collections.abc import Callable, Iterator, Mapping
-from contextlib import contextmanager
+from contextlib import contextmanager, suppress
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 from twin.errors import TwinError, UsageError
 from twin.lifecycle import check_output_file, check_writable
+from twin.ownership import check_replace, kind_of
 from twin.progress import Progress
 
 if TYPE_CHECKING:
@@ -120,7 +122,17 @@ def seed_parent(what: str = "seed of the noise and the IMU") -> argparse.Argumen
     return p
 
 
-def _path_type(check: Callable[[str], object]) -> Callable[[str], str]:
+class OutputFile(str):
+    """A file the command writes, as named on the command line (see :func:`outputs_checked`)."""
+
+
+class OutputFolder(str):
+    """A folder the command writes, as named on the command line."""
+
+
+def _path_type(
+    check: Callable[[str], object], kind: type[str] = OutputFile
+) -> Callable[[str], str]:
     """Return an argparse ``type`` that runs ``check`` on an output path (text kept as given)."""
 
     def parse(text: str) -> str:
@@ -128,7 +140,7 @@ def _path_type(check: Callable[[str], object]) -> Callable[[str], str]:
             check(text)
         except UsageError as e:
             raise argparse.ArgumentTypeError(str(e)) from None
-        return text
+        return kind(text)
 
     return parse
 
@@ -143,7 +155,7 @@ def check_output_dir_path(text: str) -> None:
 
 
 #: ``type=`` of an output folder: not a file, and somewhere this process may write.
-output_dir = _path_type(check_output_dir_path)
+output_dir = _path_type(check_output_dir_path, OutputFolder)
 #: ``type=`` of an output file: not a folder, and somewhere this process may write.
 output_file = _path_type(check_output_file)
 #: ``type=`` of a Rerun recording: a ``.rrd`` file.
@@ -165,6 +177,63 @@ def out_parent(what: str, metavar: str = "DIR") -> argparse.ArgumentParser:
     kind = {"DIR": output_dir, "CSV": csv_file}.get(metavar, output_file)
     p.add_argument("--out", metavar=metavar, type=kind, help=what)
     return p
+
+
+#: ``--overwrite``'s help: the same on every command that writes.
+OVERWRITE_HELP = ("replace existing outputs: a file twin did not write, an earlier run "
+                  "folder (never an input of the command, nor a user's files in an output "
+                  "folder)")  # fmt: skip
+
+
+def _writes(parser: argparse.ArgumentParser) -> bool:
+    """Return whether ``parser`` has an output path option (an :func:`_path_type` type)."""
+    return any(getattr(a.type, "__qualname__", "").startswith("_path_type.")
+               for a in parser._actions)  # fmt: skip
+
+
+def add_overwrite(parser: argparse.ArgumentParser) -> None:
+    """Give ``--overwrite`` to ``parser`` and each of its subcommands that writes an output.
+
+    Called once on the whole ``twin`` parser, so that every command with an output has the
+    same ``--overwrite`` (:data:`OVERWRITE_HELP`).
+    """
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for sub in dict.fromkeys(action.choices.values()):
+                add_overwrite(sub)
+    if _writes(parser) and "--overwrite" not in parser._option_string_actions:
+        parser.add_argument("--overwrite", action="store_true", help=OVERWRITE_HELP)
+
+
+def inputs_of(args: argparse.Namespace) -> list[str]:
+    """Return the command's inputs: every existing path among its arguments but the outputs.
+
+    A name that happens to be a file here too (``mpi`` beside a folder ``mpi``) is protected
+    as well: an input is never replaced, so protecting one too many costs nothing.
+    """
+    found: list[str] = []
+    for value in vars(args).values():
+        for v in value if isinstance(value, list | tuple) else [value]:
+            if isinstance(v, OutputFile | OutputFolder) or not isinstance(v, str | Path):
+                continue
+            with suppress(OSError, ValueError):
+                if str(v) and os.path.lexists(v):
+                    found.append(str(v))
+    return found
+
+
+def outputs_checked(args: argparse.Namespace) -> None:
+    """Refuse, before any work, an output file that would replace what it must not.
+
+    Run within the command's :func:`twin.ownership.output_policy`: an existing file is
+    replaced only if it is an earlier output of the same kind or with ``--overwrite``, never
+    an input (:func:`twin.ownership.check_replace`). Output folders are checked by the
+    command, which knows their kind (:func:`twin.lifecycle.check_output_dir`).
+    """
+    for value in vars(args).values():
+        for v in value if isinstance(value, list | tuple) else [value]:
+            if isinstance(v, OutputFile):
+                check_replace(v, kind_of(v))
 
 
 def rrd_parent(what: str = "save a Rerun recording") -> argparse.ArgumentParser:

@@ -46,7 +46,6 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "--imu-axes", choices=("auto", "frd", "flu"), default="auto",
         help="IMU axes: frd (z down), flu (z up), or auto from gravity (default)",
     )  # fmt: skip
-    p.add_argument("--overwrite", action="store_true", help="replace an existing run folder")
     p.set_defaults(func=_cmd_import)
 
 

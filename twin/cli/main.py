@@ -22,6 +22,7 @@ from twin.cli import common
 from twin.cli.simulate import add_parser as add_simulate
 from twin.errors import TwinError, UsageError
 from twin.frames import DOF_NAMES
+from twin.ownership import output_policy
 
 EXIT_USAGE = 2
 #: Exit code of a bug (``EX_SOFTWARE`` of sysexits.h).
@@ -139,6 +140,7 @@ def build_parser() -> argparse.ArgumentParser:
     from twin.cli.sweep import add_parser as add_sweep
 
     add_sweep(sub)
+    common.add_overwrite(parser)
     return parser
 
 
@@ -203,7 +205,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Run the ``twin`` command; return its exit code (see :func:`error_line`)."""
     try:
         args = _parser().parse_args(argv)
-        return int(args.func(args))
+        policy = output_policy(overwrite=getattr(args, "overwrite", False),
+                               inputs=common.inputs_of(args))  # fmt: skip
+        with policy:  # no output replaces an input, nor a file twin did not write
+            common.outputs_checked(args)
+            return int(args.func(args))
     except BrokenPipeError:
         # the reader of stdout went away (``twin ... | head``): nothing to report
         _quiet_stdout()

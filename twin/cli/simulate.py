@@ -73,7 +73,6 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         metavar="FILE_OR_NAME",
         help=signal_help(),
     )
-    p.add_argument("--overwrite", action="store_true", help="replace an existing run folder")
     view = p.add_mutually_exclusive_group()
     view.add_argument(
         "--rrd", metavar="FILE", type=common.rrd_file, help="also save a Rerun recording"

@@ -49,8 +49,9 @@ from twin.ingest.columns import (
     recognise,
 )
 from twin.ingest.timebase import Regular, check_stamps, decimate, regularise
+from twin.ownership import reading
 from twin.progress import ProgressFn
-from twin.runs import HEADERS, RunWriter, check_values
+from twin.runs import HEADERS, RunWriter, check_run_output, check_values
 from twin.signals import check_signal
 from twin.trajectory import Trajectory, interp_columns
 
@@ -588,8 +589,24 @@ def import_run(
                          f"{platform}")  # fmt: skip
     if clock_offset_s is not None and not np.isfinite(clock_offset_s):
         raise UsageError(f"--clock-offset must be a finite number of seconds; got {clock_offset_s}")
-    if Path(out).exists() and not overwrite:
-        raise UsageError(f"{out}: already exists (choose another --out or give --overwrite)")
+    with reading(*files):  # the logs are inputs: never replaced, --overwrite or not
+        return _import(files, out, cfg, mapping, clock_offset_s, imu_position_m, imu_axes,
+                       overwrite, say)  # fmt: skip
+
+
+def _import(
+    files: Sequence[str | Path],
+    out: str | Path,
+    cfg: MotionSystem,
+    mapping: Sequence[str],
+    clock_offset_s: float | None,
+    imu_position_m: Sequence[float] | None,
+    imu_axes: str,
+    overwrite: bool,
+    say: ProgressFn,
+) -> ImportReport:
+    """Import the logs (:func:`import_run`'s work, once its options are checked)."""
+    check_run_output(out, overwrite)
     sources = _sources(files, parse_mapping(mapping))
     cmd_src, imu_src, copy = _roles(sources)
     notes: list[str] = []

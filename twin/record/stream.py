@@ -14,7 +14,10 @@ import rerun.blueprint as rrb
 
 from twin.errors import UsageError
 from twin.lifecycle import CloseOrAbort, check_output_file
+from twin.ownership import check_replace, record
 
+#: The kind of output a recording is (in the manifest of its folder).
+RECORDING = "recording"
 #: The time axis of every run.
 TIMELINE = "sim_time"
 
@@ -25,11 +28,14 @@ def check_recording_path(rrd: str | Path) -> Path:
     Raises
     ------
     UsageError
-        ``rrd`` is an existing folder, one of its parents is a file, or its folder cannot be
-        written.
+        ``rrd`` is an existing folder, one of its parents is a file, its folder cannot be
+        written, or it is a file that is not an earlier recording of the twin (without
+        ``--overwrite``) or an input (:func:`twin.ownership.check_replace`).
 
     """
-    return check_output_file(rrd)
+    final = check_output_file(rrd)
+    check_replace(final, RECORDING)
+    return final
 
 
 class Recording(CloseOrAbort):
@@ -81,6 +87,7 @@ class Recording(CloseOrAbort):
             except BaseException:
                 self._partial.unlink(missing_ok=True)
                 raise
+            record(self.final, RECORDING)
 
     def abort(self) -> None:
         """Close and delete a partly written ``.rrd``."""
