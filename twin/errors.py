@@ -38,6 +38,10 @@ class ActuatorLimitError(TwinError, ValueError):
     """Commands that need an actuator beyond its stroke, velocity or acceleration (strict mode)."""
 
 
+class PhysicsDivergedError(TwinError, ArithmeticError):
+    """A physics simulation that diverged (a non-finite state, or MuJoCo's own warnings)."""
+
+
 class DataError(SignalError):
     """Recorded data (a run folder, a CSV, a pilot record) that cannot be used as given."""
 

@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from twin.progress import ProgressFn
-from twin.runs import RunWriter
+from twin.runs import SIMULATED, RunWriter
 from twin.signals import DescribingSignal, StepSignal
 from twin.trajectory import interp_columns
 
@@ -147,7 +147,8 @@ def execute(
     responses, records = [], []
     step = commands.duration / PROGRESS_STEPS
     reported = 0.0
-    writer = RunWriter(folder, meta or {}, overwrite=overwrite) if folder else nullcontext()
+    files = (*SIMULATED, "forces.csv") if run.model == "full" else SIMULATED  # legs' forces
+    writer = RunWriter(folder, meta or {}, overwrite, files) if folder else nullcontext()
     with writer as w:
         if w is not None:
             w.write("commands.csv", t_cmd, commands.values)
@@ -159,11 +160,16 @@ def execute(
             if w is not None:
                 # leg lengths at every command time, also between two chunks' samples
                 t, legs = response.t, response.legs
+                if response.leg_force is not None:  # the forces beside the lengths
+                    legs = np.hstack([legs, response.leg_force])
                 if carry is not None:
                     t, legs = np.concatenate([carry[0], t]), np.vstack([carry[1], legs])
                 upto = int(np.searchsorted(t_cmd, t[-1] + 1e-9))
                 sel = slice(written, upto)
-                w.write("actuators.csv", t_cmd[sel], _legs_at(t_cmd[sel], t, legs))
+                at = _legs_at(t_cmd[sel], t, legs)
+                w.write("actuators.csv", t_cmd[sel], at[:, :6])
+                if "forces.csv" in files:
+                    w.write("forces.csv", t_cmd[sel], at[:, 6:])
                 written, carry = upto, (t[-1:], legs[-1:])
                 w.write("imu.csv", imu.t, np.hstack([imu.accel, imu.gyro]))
             if recorder is not None:

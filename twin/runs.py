@@ -8,6 +8,8 @@ Layout::
     RUN/imu.csv          t,ax,ay,az,p,q,r         specific force [m/s^2] (at rest az = -9.81),
                          angular rate [rad/s], cabin axes
     RUN/actuators.csv    t,l1,l2,l3,l4,l5,l6     optional: leg lengths [m]
+    RUN/forces.csv       t,f1,f2,f3,f4,f5,f6     optional: actuator forces along the legs [N]
+                                                 (positive extends; measured, or the full model's)
 
 ``meta.json`` holds ``format`` ("twin-run/1"), ``platform`` ("mpi" or "srs"),
 ``platform_config`` ({"filter_break_hz": number or null, "delay_s": number, "noise": bool},
@@ -50,12 +52,19 @@ HEADERS = {
     "commands.csv": ("t", "x", "y", "z", "roll", "pitch", "yaw"),
     "imu.csv": ("t", "ax", "ay", "az", "p", "q", "r"),
     "actuators.csv": ("t", "l1", "l2", "l3", "l4", "l5", "l6"),
+    "forces.csv": ("t", "f1", "f2", "f3", "f4", "f5", "f6"),
 }
+#: The files a run has at least (the others are optional).
+REQUIRED = ("commands.csv", "imu.csv")
+#: The files of a simulated run: with the full model's leg forces where it has them.
+SIMULATED = (*REQUIRED, "actuators.csv")
 #: Largest magnitude a recorded value may have, per column (beyond it the file is not a
 #: recording of a motion system: a unit or logging error): specific force 1000 m/s^2 (100 g),
-#: angular rate 100 rad/s, leg length 100 m. Commands: :data:`twin.signals.MAX_COMMAND`.
+#: angular rate 100 rad/s, leg length 100 m, leg force 1e8 N. Commands:
+#: :data:`twin.signals.MAX_COMMAND`.
 MAX_VALUE = {"ax": 1e3, "ay": 1e3, "az": 1e3, "p": 1e2, "q": 1e2, "r": 1e2,
-             **{f"l{i}": 1e2 for i in range(1, 7)}}  # fmt: skip
+             **{f"l{i}": 1e2 for i in range(1, 7)},
+             **{f"f{i}": 1e8 for i in range(1, 7)}}  # fmt: skip
 #: Highest sample rate a file may state [Hz] (a 1 MHz log is not a motion-system run).
 MAX_RATE_HZ = 1e6
 #: Allowed relative difference between a file's sample rate and the rate in meta.json.
@@ -80,6 +89,8 @@ class RecordedRun:
         ax, ay, az [m/s^2], p, q, r [rad/s].
     actuators : ndarray, shape (m, 7) or None
         t, l1..l6, if recorded.
+    forces : ndarray, shape (k, 7) or None
+        t, f1..f6 [N], if recorded.
 
     """
 
@@ -89,6 +100,7 @@ class RecordedRun:
     imu_t: FloatArray
     imu: FloatArray
     actuators: FloatArray | None
+    forces: FloatArray | None = None
 
 
 def _read_csv(path: Path) -> FloatArray:
@@ -329,8 +341,9 @@ def read_run(folder: str | Path | RecordedRun) -> RecordedRun:
     act = None
     if (path / "actuators.csv").exists():
         act = _read_csv(path / "actuators.csv")
+    forces = _read_csv(path / "forces.csv") if (path / "forces.csv").exists() else None
     commands = _trajectory(cmd, path / "commands.csv")
-    return RecordedRun(path, meta, commands, imu[:, 0], imu[:, 1:], act)
+    return RecordedRun(path, meta, commands, imu[:, 0], imu[:, 1:], act, forces)
 
 
 #: What a commands file is, as a run folder holds it (messages and help).
@@ -420,7 +433,8 @@ class RunWriter(CloseOrAbort):
     overwrite : bool
         Replace an existing folder.
     files : sequence of str
-        The CSV files the run has (``actuators.csv`` is optional in the format).
+        The CSV files the run has (``actuators.csv`` and ``forces.csv`` are optional in the
+        format).
 
     Raises
     ------
@@ -434,7 +448,7 @@ class RunWriter(CloseOrAbort):
         folder: str | Path,
         meta: dict,
         overwrite: bool = False,
-        files: Sequence[str] = tuple(HEADERS),
+        files: Sequence[str] = SIMULATED,
     ) -> None:
         self.folder = Path(folder)
         check_run_output(self.folder, overwrite)
@@ -450,7 +464,7 @@ class RunWriter(CloseOrAbort):
                     self._files[name].write(",".join(HEADERS[name]) + "\n")
 
     def write(self, name: str, t: FloatArray, values: FloatArray) -> None:
-        """Append rows to ``commands.csv``, ``imu.csv`` or ``actuators.csv``."""
+        """Append rows to one of the run's CSV files (``commands.csv``, ``imu.csv``, ...)."""
         with writing(self.folder / name):
             _write_rows(self._files[name], t, values)
 

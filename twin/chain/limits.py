@@ -32,7 +32,11 @@ class LimitReport:
     mode : str
         ``"limit"`` or ``"strict"``.
     samples : dict of str to int
-        Samples (any leg) beyond the stroke, velocity and acceleration limits.
+        Samples (any leg) beyond the stroke, velocity and acceleration limits of the
+        references.
+    force_samples : int
+        Physics samples with an actuator at its force limit (full model with a
+        ``force_limit``, :mod:`twin.platform.actuators`).
     first : str or None
         Description of the first violation.
     rate_hz : float
@@ -44,22 +48,24 @@ class LimitReport:
     rate_hz: float
     samples: dict[str, int] = field(default_factory=lambda: dict.fromkeys(_KINDS, 0))
     first: str | None = None
+    force_samples: int = 0
 
     @property
     def total(self) -> int:
         """Samples with any violation counted (a sample may count under several limits)."""
-        return sum(self.samples.values())
+        return sum(self.samples.values()) + self.force_samples
 
     def to_dict(self) -> dict[str, object]:
         """JSON-ready summary."""
         return {"mode": self.mode, "rate_hz": self.rate_hz, "samples": dict(self.samples),
-                "first": self.first}  # fmt: skip
+                "force_samples": self.force_samples, "first": self.first}  # fmt: skip
 
     def summary(self) -> str:
         """One line for a report."""
         if not self.total:
             return "actuator limits: none reached"
-        parts = ", ".join(f"{k} {v} samples" for k, v in self.samples.items() if v)
+        counts = {**self.samples, "force": self.force_samples}
+        parts = ", ".join(f"{k} {v} samples" for k, v in counts.items() if v)
         return f"actuator limits LIMITED: {parts}; first: {self.first}"
 
 

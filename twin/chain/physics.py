@@ -25,11 +25,13 @@ from numpy.typing import NDArray
 from twin.chain.limits import ActuatorLimits, LimiterState
 from twin.chain.response import PlatformResponse
 from twin.chain.stepping import Platform, PlatformState, Reference
-from twin.errors import SignalError
+from twin.errors import PhysicsDivergedError, SignalError
 from twin.frames import euler_from_matrix, matrix_from_quat
+from twin.platform.actuators import LegPhysics, ReferenceState, cabin_static, shape_reference
 from twin.platform.facts import load_facts, load_model
 from twin.platform.geometry import load_geometry
-from twin.platform.kinematics import leg_rates
+from twin.platform.kinematics import leg_rates, static_leg_forces
+from twin.platform.payload import Payload
 
 FloatArray = NDArray[np.float64]
 _STATE = mujoco.mjtState.mjSTATE_FULLPHYSICS
@@ -47,6 +49,12 @@ class FullPlatform(Platform):
     timestep_s : float, optional
         Integration step instead of the model's 1 ms (for convergence studies); the
         loop-closure constraints' time constant follows it (two steps, as the builder sets it).
+    physics : LegPhysics, optional
+        The actuators' physics instead of the model's own (friction, play, force limits,
+        a weak or slow leg: :mod:`twin.platform.actuators`), written into the private copy.
+    payload : Payload, optional
+        A rigid body fixed to the cabin (:mod:`twin.platform.payload`): the model is
+        recompiled with it.
 
     Attributes
     ----------
@@ -56,16 +64,29 @@ class FullPlatform(Platform):
         Physics rate [Hz].
     own_lag_s : ndarray, shape (6,)
         The model's equivalent delay per DOF (``platform.toml`` ``[full_model]``).
+    physics : LegPhysics
+        The actuators' physics in effect.
 
     """
 
     kind = "full"
 
     def __init__(
-        self, platform: str, limit_mode: str = "limit", timestep_s: float | None = None
+        self,
+        platform: str,
+        limit_mode: str = "limit",
+        timestep_s: float | None = None,
+        physics: LegPhysics | None = None,
+        payload: Payload | None = None,
     ) -> None:
         self.platform = platform
-        self.model = load_model(platform).__copy__()
+        self.payload = payload
+        self.model = payload.model(platform) if payload else load_model(platform).__copy__()
+        if physics is not None:
+            physics.apply(self.model)
+        self.physics = LegPhysics.of_model(self.model)
+        self._shaped = self.physics.shapes_reference()  # a lag or play on the references
+        self._cabin = cabin_static(self.model)  # mass, centre of gravity, K_s
         if timestep_s is not None:
             if not np.isfinite(timestep_s) or not 1e-5 <= timestep_s <= 2e-3:
                 raise SignalError(f"timestep must be between 1e-5 and 2e-3 s; got {timestep_s}")
@@ -80,9 +101,12 @@ class FullPlatform(Platform):
             name: slice(self.model.sensor(name).adr[0],
                         self.model.sensor(name).adr[0] + self.model.sensor(name).dim[0])
             for name in ("ugp_position", "ugp_orientation", "ugp_velocity",
-                         "ugp_angular_velocity", "imu_accelerometer", "imu_gyro")
+                         "ugp_angular_velocity", "imu_gyro")
         }  # fmt: skip
-        self._legs = [self.model.sensor(f"leg{j + 1}_length").adr[0] for j in range(6)]
+        self._legs, self._forces, self._leg_rates = (
+            [self.model.sensor(f"leg{j + 1}_{kind}").adr[0] for j in range(6)]
+            for kind in ("length", "force", "velocity")
+        )
 
     def _reset_inner(self, runs: int) -> _Physics:
         """Every run at rest at the neutral pose (keyframe ``home``)."""
@@ -99,6 +123,12 @@ class FullPlatform(Platform):
             limiters=[
                 LimiterState(self.geometry.neutral_lengths.copy(), np.zeros(6)) for _ in range(runs)
             ],
+            references=[
+                ReferenceState(
+                    self.geometry.neutral_lengths.copy(), self.geometry.neutral_lengths.copy()
+                )
+                for _ in range(runs)
+            ],
         )
 
     def _advance(self, ref: Reference, state: PlatformState) -> PlatformResponse:
@@ -109,7 +139,8 @@ class FullPlatform(Platform):
         """
         if state.inner.rolled is not None:  # a submitted step's physics comes first
             state.inner.rolled.wait()
-        return self._response(ref, self._roll(self._controls(ref, state), state.inner))
+        rows = self._roll(self._controls(ref, state), state.inner)
+        return self._counted(self._response(ref, rows), state)
 
     def _start(self, ref: Reference, state: PlatformState) -> Callable[[], PlatformResponse]:
         """Limit the legs now; roll the physics in a thread after the previous step's.
@@ -141,7 +172,7 @@ class FullPlatform(Platform):
             done.wait()
             if "error" in box:
                 raise box["error"]
-            return self._response(ref, box["rows"])
+            return self._counted(self._response(ref, box["rows"]), state)
 
         return finish
 
@@ -157,8 +188,25 @@ class FullPlatform(Platform):
             legs, legs_dot = self.limits.apply(
                 ref.t, lengths[r], velocities[r], accelerations[r], limiter, state.report
             )
+            if self._shaped:  # each leg's servo lag and play (twin.platform.actuators)
+                legs, legs_dot = shape_reference(self.physics, 1.0 / self.rate_hz, legs,
+                                                 legs_dot, phys.references[r])  # fmt: skip
             out.append(np.hstack([legs, legs_dot])[None])
         return out
+
+    def _counted(self, response: PlatformResponse, state: PlatformState) -> PlatformResponse:
+        """Count the physics samples at an actuator's force limit (legs with one)."""
+        limit = self.physics.force_limit_n
+        if np.any(limit > 0) and response.leg_force is not None:
+            at = np.abs(response.leg_force) >= np.where(limit > 0, limit, np.inf) * (1 - 1e-9)
+            hits = at.any(axis=-1)
+            if hits.any() and state.report.first is None:
+                k = np.argwhere(hits)[0]
+                leg = int(np.flatnonzero(at[tuple(k)])[0]) + 1
+                state.report.first = (f"leg {leg} at its force limit of {limit[leg - 1]:g} N at "
+                                      f"t = {response.t[k[-1]]:.3f} s")  # fmt: skip
+            state.report.force_samples += int(hits.sum())
+        return response
 
     def _roll(self, controls: list[FloatArray | None], phys: _Physics) -> FloatArray:
         """Sensor rows ``(runs, m + 1, ns)`` of each run's rollout; the states move on."""
@@ -170,15 +218,47 @@ class FullPlatform(Platform):
             states, sens = rollout.rollout(
                 self.model, phys.data, phys.states[r], ctrl, initial_warmstart=phys.warm[r][None]
             )
+            self._check_finite(states, sens, phys.data)
             phys.states[r], phys.warm[r] = states[0, -1], phys.data.qacc_warmstart
             rows.append(np.vstack([sens[0], self._sensors_at(phys.states[r], phys.scratch)]))
         return np.stack(rows)
+
+    def _check_finite(self, states: FloatArray, sens: FloatArray, data: mujoco.MjData) -> None:
+        """Stop a diverging run with one clear error (non-finite state or MuJoCo's warnings).
+
+        Raises
+        ------
+        PhysicsDivergedError
+            Naming the time, what MuJoCo warned of and what usually causes it.
+
+        """
+        warned = [mujoco.mjtWarning(i).name.removeprefix("mjWARN_").lower()
+                  for i, w in enumerate(data.warning) if w.number > 0]  # fmt: skip
+        finite = np.isfinite(states).all(axis=-1)[0]
+        if finite.all() and not warned:
+            return
+        bad = int(np.argmin(finite)) if not finite.all() else states.shape[1] - 1
+        t = float(states[0, bad, 0])  # the state's first element is its time
+        for w in data.warning:
+            w.number = 0
+        why = f"MuJoCo warned: {', '.join(warned)}" if warned else "its state is not finite"
+        raise PhysicsDivergedError(
+            f"the full {self.platform} model diverged at t = {t:.3f} s ({why}); the commands or "
+            "the actuator physics drive it beyond what it can integrate (a force limit far "
+            "below the cabin's weight, a huge friction, or a much smaller gain; try the "
+            "reduced model, or milder settings)"
+        )
 
     def _sensors_at(self, state: FloatArray, data: mujoco.MjData) -> FloatArray:
         """Sensor values of a state (the successor row of a step: its velocities)."""
         mujoco.mj_setState(self.model, data, state, _STATE)
         mujoco.mj_forward(self.model, data)
         return data.sensordata.copy()
+
+    def _static_forces(self, pose: FloatArray) -> FloatArray:
+        """Return the legs' share of the cabin's weight that K_s supplies at ``pose`` [N]."""
+        mass, com, ks = self._cabin
+        return ks * static_leg_forces(self.geometry, pose, mass, com)
 
     def _response(self, ref: Reference, s: FloatArray) -> PlatformResponse:
         """Turn sensor rows ``(runs, m + 1, ns)`` (the last: the successor state) into motion.
@@ -207,8 +287,9 @@ class FullPlatform(Platform):
             omega=np.einsum("...ji,...j->...i", T, s[..., a["ugp_angular_velocity"]]),
             omega_dot=np.einsum("...ji,...j->...i", T, dw),
             legs=s[..., self._legs].copy(),
-            sensor_accelerometer=s[..., a["imu_accelerometer"]].copy(),
             sensor_gyro=s[..., a["imu_gyro"]].copy(),
+            leg_force=s[..., self._forces] + self._static_forces(pose),
+            leg_velocity=s[..., self._leg_rates].copy(),
         )
 
 
@@ -221,4 +302,5 @@ class _Physics:
     states: FloatArray
     warm: FloatArray
     limiters: list[LimiterState]
+    references: list[ReferenceState]
     rolled: threading.Event | None = None  # set when the last submitted step's physics is done

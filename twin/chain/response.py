@@ -35,11 +35,14 @@ class PlatformResponse:
         Angular velocity (p, q, r) and its derivative, cabin axes.
     legs : ndarray, shape (n, 6)
         Leg lengths [m].
-    sensor_accelerometer, sensor_gyro : ndarray, shape (n, 3), or None
-        MuJoCo's own accelerometer and gyro at the model's ``imu`` site (full model only),
-        thesis cabin axes. The gyro equals ``omega``; the accelerometer is NOT reliable under
-        ``implicitfast`` (it misses the implicit damping correction, ~2.4x in heave): use
-        :func:`twin.chain.imu.specific_force`.
+    sensor_gyro : ndarray, shape (n, 3), or None
+        MuJoCo's own gyro at the model's ``imu`` site (full model only), thesis cabin axes;
+        it equals ``omega``. (MuJoCo's accelerometer is not in the models: under
+        ``implicitfast`` it misses the implicit damping correction; the IMU's specific force
+        is :func:`twin.chain.imu.specific_force` of the motion.)
+    leg_force, leg_velocity : ndarray, shape (n, 6), or None
+        Each actuator's force along its leg [N] (the PD of Eq 5.9 after its force limit;
+        positive extends) and the leg's extension rate [m/s] (full model only).
     rotation : ndarray, shape (n, 3, 3), or None
         T_c^b of ``pose`` (Eq A.2) where the platform has computed it already (the reduced
         platform), so that the IMU does not compute it again; None otherwise (and in the
@@ -56,9 +59,17 @@ class PlatformResponse:
     omega: FloatArray
     omega_dot: FloatArray
     legs: FloatArray
-    sensor_accelerometer: FloatArray | None = None
     sensor_gyro: FloatArray | None = None
+    leg_force: FloatArray | None = None
+    leg_velocity: FloatArray | None = None
     rotation: FloatArray | None = None
+
+    @property
+    def leg_power(self) -> FloatArray | None:
+        """Each actuator's mechanical power [W] (force times extension rate; full model)."""
+        if self.leg_force is None or self.leg_velocity is None:
+            return None
+        return self.leg_force * self.leg_velocity
 
     @property
     def rate_hz(self) -> float:

@@ -34,7 +34,16 @@ from numpy.typing import NDArray
 
 from twin.errors import ModelFileError
 from twin.frames import MJ_FROM_THESIS, MJ_FROM_THESIS_QUAT
+from twin.platform.actuators import (
+    BUILD_KEYS,
+    LAG_NUMERIC,
+    PLAY_NUMERIC,
+    LegPhysics,
+    pd_force_ranges,
+)
 from twin.platform.facts import PLATFORMS, model_dir, read_toml
+from twin.platform.geometry import Geometry
+from twin.platform.kinematics import static_leg_forces
 
 N_LEGS = 6
 
@@ -79,6 +88,7 @@ class BuildParameters:
     cylinder_radius: float
     rod_radius: float
     timestep: float
+    actuators: LegPhysics
 
     @property
     def neutral_ugp(self) -> NDArray[np.float64]:
@@ -176,7 +186,17 @@ def read_build_parameters(path: Path) -> BuildParameters:
         cylinder_radius=number(legs, "cylinder_radius", "legs"),
         rod_radius=number(legs, "rod_radius", "legs"),
         timestep=number(phys, "timestep", "physics"),
+        actuators=LegPhysics.from_table(
+            doc.get("actuators", {}), f"{where} [actuators]", BUILD_KEYS, ModelFileError
+        ),
     )
+
+
+def _geometry(p: BuildParameters) -> Geometry:
+    """Return the kinematic geometry of the parameters (statics before the model exists)."""
+    lengths = np.linalg.norm(p.neutral_leg_vectors(), axis=1)
+    return Geometry(p.name, p.base_gimbals, p.cabin_gimbals, p.neutral_ugp,
+                    lengths - p.stroke / 2, lengths + p.stroke / 2)  # fmt: skip
 
 
 def _quat_z_to(u: NDArray[np.float64]) -> list[float]:
@@ -239,8 +259,9 @@ def build_spec(p: BuildParameters) -> mujoco.MjSpec:
     -------
     mujoco.MjSpec
         A spec with the base, cabin, six legs, loop closures, the PD actuators of Eq 5.9
-        (a position actuator with gain K_p and a velocity actuator with gain K_d per leg), IMU
-        and pose sensors, and a ``home`` keyframe at the neutral pose.
+        (a position actuator with gain K_p and a velocity actuator with gain K_d per leg) with
+        the actuators' physics (:mod:`twin.platform.actuators`), gyro, pose and leg sensors
+        (length, force, velocity), and a ``home`` keyframe at the neutral pose.
 
     """
     spec = mujoco.MjSpec()
@@ -339,6 +360,7 @@ def build_spec(p: BuildParameters) -> mujoco.MjSpec:
             ref=round(l0, 9),
             range=[round(lmin, 9), round(lmax, 9)],
         )
+
         rod_len = p.stroke + 0.1 * lmin
         rod.explicitinertial = True
         rod.mass = p.rod_mass
@@ -366,27 +388,47 @@ def build_spec(p: BuildParameters) -> mujoco.MjSpec:
             name2=f"cabin_gimbal_{n}",
         )
 
+    ranges = pd_force_ranges(p.actuators.force_limit_n, p.static_feedback_gain * static_leg_forces(
+        _geometry(p), np.zeros(N_LEGS), p.mass, p.com))  # fmt: skip
     for j in range(N_LEGS):  # the leg's line of action, gimbal centre to gimbal centre
         tendon = spec.add_tendon(name=f"leg{j + 1}_axis", group=5)
         tendon.wrap_site(f"base_gimbal_{j + 1}")
         tendon.wrap_site(f"cabin_gimbal_{j + 1}")
+        act = p.actuators  # friction along the line of action (twin.platform.actuators)
+        if act.coulomb_n[j]:
+            tendon.frictionloss = float(act.coulomb_n[j])
+        if act.viscous_ns_per_m[j]:
+            tendon.damping = [float(act.viscous_ns_per_m[j]), 0.0, 0.0]
+        if act.force_limit_n[j] > 0:  # the largest force: the PD's share of it
+            tendon.actfrclimited = mujoco.mjtLimited.mjLIMITED_TRUE
+            tendon.actfrcrange = _rounded(ranges[j])
     strokes = [
         (round(float(n) - p.stroke / 2, 9), round(float(n) + p.stroke / 2, 9)) for n in neutral
     ]
     for j in range(N_LEGS):  # Eq 5.9, proportional part: K_p (l_ref - l)
         act = spec.add_actuator(name=f"leg{j + 1}_position", target=f"leg{j + 1}_axis",
                                 trntype=mujoco.mjtTrn.mjTRN_TENDON)  # fmt: skip
-        act.set_to_position(kp=p.kp)
+        act.set_to_position(kp=p.kp * float(p.actuators.gain[j]))
         act.ctrlrange = list(strokes[j])
         act.ctrllimited = mujoco.mjtLimited.mjLIMITED_TRUE
     for j in range(N_LEGS):  # Eq 5.9, derivative part: K_d (l_dot_ref - l_dot)
         act = spec.add_actuator(name=f"leg{j + 1}_velocity", target=f"leg{j + 1}_axis",
                                 trntype=mujoco.mjtTrn.mjTRN_TENDON)  # fmt: skip
-        act.set_to_velocity(kv=p.kd)
+        act.set_to_velocity(kv=p.kd * float(p.actuators.gain[j]))
+    # what MuJoCo does not apply itself, for twin.chain.physics: the nominal gains (a leg's
+    # gain factor is relative to them) and each leg's servo lag and play (twin.platform.actuators)
+    for name, values in (
+        ("leg_kp", [p.kp] * N_LEGS),
+        ("leg_kd", [p.kd] * N_LEGS),
+        (LAG_NUMERIC, p.actuators.lag_s),
+        (PLAY_NUMERIC, p.actuators.play_m),
+    ):
+        spec.add_numeric(name=name, data=[float(v) for v in values])
 
+    # MuJoCo's accelerometer and frame-acceleration sensors are not used: under implicitfast
+    # they miss the implicit damping correction (accelerations come from velocity differences,
+    # twin.chain.physics), so the model does not carry them
     site, sens = mujoco.mjtObj.mjOBJ_SITE, mujoco.mjtSensor
-    spec.add_sensor(name="imu_accelerometer", type=sens.mjSENS_ACCELEROMETER, objtype=site,
-                    objname="imu")  # fmt: skip
     spec.add_sensor(name="imu_gyro", type=sens.mjSENS_GYRO, objtype=site, objname="imu")
     for name, kind in (
         ("ugp_position", sens.mjSENS_FRAMEPOS),
@@ -396,14 +438,16 @@ def build_spec(p: BuildParameters) -> mujoco.MjSpec:
     ):  # expressed in the base frame site, i.e. in thesis base-frame coordinates
         spec.add_sensor(name=name, type=kind, objtype=site, objname="ugp", reftype=site,
                         refname="base_frame")  # fmt: skip
-    for name, kind in (  # world (z-up) axes: MuJoCo has no reference frame for these
-        ("ugp_linear_acceleration", sens.mjSENS_FRAMELINACC),
-        ("ugp_angular_acceleration", sens.mjSENS_FRAMEANGACC),
-    ):
-        spec.add_sensor(name=name, type=kind, objtype=site, objname="ugp")
     for j in range(N_LEGS):
         spec.add_sensor(name=f"leg{j + 1}_length", type=sens.mjSENS_JOINTPOS,
                         objtype=mujoco.mjtObj.mjOBJ_JOINT, objname=f"leg{j + 1}")  # fmt: skip
+    tendon = mujoco.mjtObj.mjOBJ_TENDON
+    for j in range(N_LEGS):  # the actuator's force along the leg (P + D, after its limit)
+        spec.add_sensor(name=f"leg{j + 1}_force", type=sens.mjSENS_TENDONACTFRC,
+                        objtype=tendon, objname=f"leg{j + 1}_axis")  # fmt: skip
+    for j in range(N_LEGS):
+        spec.add_sensor(name=f"leg{j + 1}_velocity", type=sens.mjSENS_TENDONVEL,
+                        objtype=tendon, objname=f"leg{j + 1}_axis")  # fmt: skip
 
     model = spec.compile()
     ctrl = np.concatenate([neutral, np.zeros(N_LEGS)])

@@ -109,6 +109,45 @@ def leg_vectors(geo: Geometry, pose: ArrayLike) -> FloatArray:
     return c[..., None, :] + _cabin_gimbals_in_base(geo, p) - geo.base_gimbals
 
 
+def static_leg_forces(
+    geo: Geometry, pose: ArrayLike, mass: float, com: ArrayLike, gravity: float = 9.81
+) -> FloatArray:
+    """Return the leg forces that hold a cabin still at ``pose`` (Eq A.14 at rest).
+
+    Solves sum_j f_j n_j = -m g and sum_j (T a_j) x f_j n_j = -(T c) x m g for the six
+    forces along the legs (positive: the leg pushes, extending).
+
+    Parameters
+    ----------
+    geo : Geometry
+        The platform.
+    pose : array_like, shape (..., 6)
+        Pose offsets from neutral (m, rad).
+    mass : float
+        Cabin mass [kg].
+    com : array_like, shape (3,)
+        Its centre of gravity in the cabin frame [m].
+    gravity : float
+        [m/s^2], along +z of the base frame (z down).
+
+    Returns
+    -------
+    ndarray, shape (..., 6)
+        [N].
+
+    """
+    p = as_pose(pose)
+    L = leg_vectors(geo, p)
+    n = L / np.linalg.norm(L, axis=-1, keepdims=True)
+    a_b = _cabin_gimbals_in_base(geo, p)
+    rot = rotation_matrix(p[..., 3:])
+    weight = np.array([0.0, 0.0, mass * gravity])
+    c_b = np.einsum("...ij,j->...i", rot, np.asarray(com, dtype=float))
+    wrench = np.concatenate([np.broadcast_to(weight, c_b.shape), np.cross(c_b, weight)], axis=-1)
+    columns = np.concatenate([n, np.cross(a_b, n)], axis=-1)  # (..., 6 legs, 6): row j
+    return np.linalg.solve(np.swapaxes(columns, -1, -2), -wrench[..., None])[..., 0]
+
+
 def inverse(geo: Geometry, pose: ArrayLike, check: bool = True) -> FloatArray:
     """Inverse position kinematics (Eq A.5-A.6): leg lengths for poses.
 

@@ -18,7 +18,8 @@ Entity paths
 (static, cabin frame); ``world/command`` (``Transform3D`` per frame) with its translucent
 shapes; ``translation/<dof>/command|actual`` [m], ``rotation/<dof>/command|actual`` [deg],
 ``legs/l1`` ... ``legs/l6`` [m] with the stroke's ends ``legs/shortest`` and ``legs/longest``,
-``imu/accel/x|y|z`` [m/s^2], ``imu/gyro/p|q|r`` [deg/s]; an AGARD session adds each
+``leg_forces/f1`` ... ``leg_forces/f6`` [N] (full model), ``imu/accel/x|y|z`` [m/s^2],
+``imu/gyro/p|q|r`` [deg/s]; an AGARD session adds each
 describing function under ``df/<dof>`` (:meth:`Recorder.log_describing_function`).
 """
 
@@ -63,6 +64,7 @@ def blueprint(kind: str = "simulate", df_dofs: tuple[str, ...] = ()) -> rrb.Blue
         rrb.TimeSeriesView(origin="/translation", name="translation [m]: command vs actual"),
         rrb.TimeSeriesView(origin="/rotation", name="rotation [deg]: command vs actual"),
         rrb.TimeSeriesView(origin="/legs", name="leg lengths [m]"),
+        rrb.TimeSeriesView(origin="/leg_forces", name="leg forces [N] (full model)"),
         rrb.TimeSeriesView(origin="/imu/accel", name="IMU specific force [m/s^2]"),
         rrb.TimeSeriesView(origin="/imu/gyro", name="IMU angular rate [deg/s]"),
     ]
@@ -192,6 +194,9 @@ class Recorder:
         for j in range(6):
             style = rr.SeriesLines(colors=[DOF_COLOURS[j]], names=[f"leg {j + 1} [m]"])
             log(f"legs/l{j + 1}", style, static=True)
+            log(f"leg_forces/f{j + 1}", rr.SeriesLines(colors=[DOF_COLOURS[j]],
+                                                       names=[f"leg {j + 1} force [N]"]),
+                static=True)  # fmt: skip
         for end in ("shortest", "longest"):
             log(f"legs/{end}", rr.SeriesLines(colors=[[0, 0, 0]], names=[f"{end} leg [m]"],
                                               widths=[0.75]), static=True)  # fmt: skip
@@ -256,6 +261,9 @@ class Recorder:
         for j in range(6):
             self.rec.send_columns(f"legs/l{j + 1}", indexes=[times],
                                   columns=rr.Scalars.columns(scalars=r.legs[idx, j]))  # fmt: skip
+            if r.leg_force is not None:
+                force = rr.Scalars.columns(scalars=r.leg_force[idx, j])
+                self.rec.send_columns(f"leg_forces/f{j + 1}", indexes=[times], columns=force)
         if idx.size:  # the stroke's ends, at the chunk's first and last logged sample
             ends = rr.TimeColumn(TIMELINE, duration=r.t[idx[[0, -1]]])
             for end, value in (("shortest", self.geo.leg_min.max()),
