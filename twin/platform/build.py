@@ -51,6 +51,19 @@ GENERATED_NOTE = (
 )
 
 
+#: The tables of ``build.toml`` and their keys.
+BUILD_KEYS = {
+    "model": ("name", "title"),
+    "geometry": ("base_gimbals_xy", "cabin_gimbals_xy", "base_gimbal_z", "cabin_gimbal_z",
+                 "neutral_height", "stroke"),
+    "cabin": ("mass", "com", "inertia", "imu_position"),
+    "controller": ("kp", "kd", "static_feedback_gain"),
+    "legs": ("cylinder_mass", "rod_mass", "slide_armature", "hinge_damping", "hinge_armature",
+             "cylinder_radius", "rod_radius"),
+    "physics": ("timestep",),
+}  # fmt: skip
+
+
 @dataclass(frozen=True)
 class BuildParameters:
     """Physical parameters of one platform, as read from its ``build.toml``.
@@ -133,7 +146,7 @@ def read_build_parameters(path: Path) -> BuildParameters:
         If the file is missing, not TOML, or a value is missing or malformed.
 
     """
-    doc = read_toml(path)
+    doc = read_toml(path, BUILD_KEYS)
     where = str(path)
 
     def section(name: str) -> dict:
@@ -485,7 +498,7 @@ def write_model(platform: str) -> list[Path]:
     for filename, text in render(params).items():
         target = folder / filename
         tmp = target.with_suffix(target.suffix + ".tmp")
-        tmp.write_text(text)
+        tmp.write_text(text, encoding="utf-8")
         tmp.replace(target)
         written.append(target)
     return written
