@@ -17,7 +17,7 @@ from twin.chain.config import motion_system
 from twin.chain.physics import FullPlatform
 from twin.chain.simulate import simulate
 from twin.errors import ConfigError, ModelFileError, PhysicsDivergedError
-from twin.platform.actuators import BUILD_KEYS, LegPhysics
+from twin.platform.actuators import TOML_KEYS, LegPhysics
 from twin.platform.build import read_build_parameters
 from twin.platform.facts import PLATFORMS, model_dir
 from twin.platform.kinematics import leg_vectors
@@ -145,7 +145,7 @@ def test_actuator_tables_are_checked():
     with pytest.raises(ConfigError, match=r"gain\[2\] must be a number in \[0.01, 100\]"):
         LegPhysics.from_table({"gain": [1, 1, 0, 1, 1, 1]}, "physics")
     with pytest.raises(ModelFileError, match="one number or a list of 6"):
-        LegPhysics.from_table({"play": [0.0, 0.0]}, "build.toml [actuators]", BUILD_KEYS,
+        LegPhysics.from_table({"play": [0.0, 0.0]}, "build.toml [actuators]", TOML_KEYS,
                               ModelFileError)  # fmt: skip
 
 

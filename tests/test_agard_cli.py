@@ -57,7 +57,10 @@ def test_omct_json_checks_the_points_against_the_bounds_file(capsys):
     [
         (["agard", "df", "nosuch", "--dof", "heave"], "unknown configuration 'nosuch'"),
         (["agard", "df", "mpi"], "give --dof"),
-        (["agard", "df", "mpi", "--dof", "heave", "--break-hz", "-1"], "--break-hz must be"),
+        (
+            ["agard", "df", "mpi", "--dof", "heave", "--break-hz", "-1"],
+            "--break-hz: must be a number in [0, 1000]; got -1",
+        ),
         (
             ["agard", "omct", "srs", "--dof", "heave", "--bounds", "/no/such.toml"],
             "no such OMCT bounds file",

@@ -53,7 +53,7 @@ def test_no_library_module_imports_the_cli():
         (["simulate", "srs", "--signal", "rest-1", "--delay-ms", "-5"], "delay"),
         (["simulate", "srs"], "the following arguments are required: --signal"),
         (["simulate", "srs", "--signal", "rest-1", "--model", "half"], "invalid choice: 'half'"),
-        (["pilot", "lead", "srs", "--break-hz", "-1"], "--break-hz must be"),
+        (["pilot", "lead", "srs", "--break-hz", "-1"], "--break-hz: must be a number in [0, 1000]"),
         (["diagnose", "/no/such/run", "--delay-ms", "10"], "/no/such/run"),
     ],
 )

@@ -37,7 +37,8 @@ def test_vocabulary_is_the_fixed_set_of_effects():
     ("effect", "pars", "dofs", "match"),
     [
         ("wobble", {}, (), "unknown effect 'wobble'"),
-        ("delay", {"delay": 0.1}, (), "takes parameters extra_delay_s"),
+        ("delay", {"delay": 0.1}, (), "unknown parameter 'delay'.*allowed: extra_delay_s"),
+        ("delay", {}, (), "takes parameters extra_delay_s; got none"),
         ("gain", {"gain": -1.0}, (), r"gain must be a number in \[0.001, 1000\]; got -1.0"),
         ("gain", {"gain": float("nan")}, (), "must be a number"),
         ("gain", {"gain": "2"}, (), "must be a number"),

@@ -326,7 +326,7 @@ def test_cli_adapt_prints_parameters_and_margins(capsys):
     assert main(["pilot", "experiment", "--pilot", "adaptive", "--subjects", "1"]) == 2
     assert "--subjects: must be an integer in [2, 1,000]" in capsys.readouterr().err
     assert main(["pilot", "adapt", "srs", "--weight", "0"]) == 2
-    assert "--weight (the control weight r) must be > 0" in capsys.readouterr().err
+    assert "--weight: must be a number in (0, 1000]; got 0" in capsys.readouterr().err
     assert main(["pilot", "experiment", "--fixed-neuromuscular"]) == 2
     assert "give it with --pilot adaptive" in capsys.readouterr().err
     assert main(["pilot", "adapt", "condition-5", "--fixed-neuromuscular", "--json"]) == 0

@@ -65,7 +65,7 @@ def test_montecarlo_and_lead_json(capsys):
     [
         (["pilot", "run", "nosuch"], "unknown configuration"),
         (["pilot", "run", "srs", "--runs", "0"], "--runs: must be an integer in [1, 1,000]"),
-        (["pilot", "run", "srs", "--remnant", "1.5"], "--remnant must be"),
+        (["pilot", "run", "srs", "--remnant", "1.5"], "--remnant: must be a number in [0, 1)"),
         (["pilot", "identify", "/no/such.csv"], "no such pilot-run file"),
         (["pilot", "identify", "/no/such.csv", "--break-hz", "2"], "give it with --config"),
         (["pilot", "identify", "/no/such.csv", "--break-hz", "0"], "--break-hz changes a config"),

@@ -46,7 +46,7 @@ def test_identify_is_refused_where_it_means_nothing(capsys):
     for argv, needs in ((["--feedthrough", "0.5"], "--identify"),
                         (["--identify"], "--pilot adaptive"),
                         (["--pilot", "adaptive", "--identify", "--populations", "3",
-                          "--feedthrough", "1.5"], "--feedthrough must be")):  # fmt: skip
+                          "--feedthrough", "1.5"], "--feedthrough: must be a")):  # fmt: skip
         assert main(["pilot", "experiment", *argv]) == 2
         assert needs in capsys.readouterr().err
     with pytest.raises(SignalError, match=r"feedthrough must be .* \[0, 1\]; got nan"):

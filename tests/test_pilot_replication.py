@@ -201,14 +201,18 @@ def test_cli_populations_only_with_adaptive_subjects(capsys):
     assert "--motion-spread sets how adaptive subjects differ" in capsys.readouterr().err
     assert main(["pilot", "experiment", "--pilot", "adaptive", "--motion-spread", "nan"]) == 2
     err = capsys.readouterr().err.strip()
-    assert err.startswith("twin: error: --motion-spread") and "[0, 3]" in err and "\n" not in err
+    assert (
+        err.startswith("twin: error: argument --motion-spread:")
+        and "[0, 3]" in err
+        and "\n" not in err
+    )
     assert main(["pilot", "experiment", "--visual-delay-spread", "0.01"]) == 2
     assert "--visual-delay-spread sets how adaptive subjects differ" in capsys.readouterr().err
     for bad in ("nan", "-0.01", "0.2"):
         assert main(["pilot", "experiment", "--pilot", "adaptive",
                      "--visual-delay-spread", bad]) == 2  # fmt: skip
         err = capsys.readouterr().err.strip()
-        assert err.startswith("twin: error: --visual-delay-spread") and "[0, 0.1]" in err
+        assert err.startswith("twin: error: argument --visual-delay-spread:") and "[0, 0.1]" in err
         assert "\n" not in err
 
 

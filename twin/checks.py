@@ -1,9 +1,10 @@
 """Checks of values read from files and command lines: types and ranges, named in the error.
 
 Every reader of the twin (``twin-run/1``, ``twin-config/1``, ``twin-pilot/1``, OMCT bounds,
-sweep files) takes its numbers, flags and text through these helpers, so that a string where
-a number belongs, a NaN, a value out of range, a binary file or a byte-order mark gets the
-same kind of message: the file, the key and what is allowed.
+sweep files, ``platform.toml``) takes its numbers, flags, text, documents and keys through these
+helpers, so that a string where a number belongs, a NaN, a value out of range, a binary file, a
+byte-order mark, a 5000-digit integer or a misspelt key gets the same kind of message: the
+file, the key and what is allowed (a misspelt key also gets a did-you-mean).
 
 Examples
 --------
@@ -15,13 +16,21 @@ Traceback (most recent call last):
 twin.errors.DataError: delay_s must be a number >= 0; got 'x'
 >>> numbers([1, 2, 3], "position_m", size=3).tolist()
 [1.0, 2.0, 3.0]
+>>> check_keys({"dealy_s": 0.1}, ("delay_s",), "cfg.json")
+Traceback (most recent call last):
+...
+twin.errors.DataError: cfg.json: unknown key 'dealy_s' (did you mean 'delay_s'?); allowed: delay_s
 
 """
 
 from __future__ import annotations
 
+import difflib
+import json
 import math
 import os
+import tomllib
+from collections.abc import Callable, Iterable, Mapping
 from contextlib import suppress
 from pathlib import Path
 
@@ -158,6 +167,96 @@ def read_text(path: str | Path, what: str, error: type[Exception] = DataError) -
         raise error(f"{p}: no such file; expected {what}") from None
     except OSError as e:
         raise error(f"{p}: cannot be read ({e.strerror}); expected {what}") from None
+
+
+def did_you_mean(word: str, allowed: Iterable[str]) -> str:
+    """Return `` (did you mean 'x'?)`` for the allowed word closest to ``word``, else ``""``."""
+    near = difflib.get_close_matches(word, list(allowed), n=1, cutoff=0.6)
+    return f" (did you mean {near[0]!r}?)" if near else ""
+
+
+def check_keys(
+    mapping: Mapping[str, object],
+    allowed: Iterable[str],
+    where: str,
+    error: type[Exception] = DataError,
+    kind: str = "key",
+) -> None:
+    """Refuse a key of ``mapping`` that is not ``allowed``, with a did-you-mean.
+
+    The one check of every reader of a JSON or TOML file: a misspelt key (``dealy_s``,
+    ``dof`` for ``dofs``) would otherwise be ignored and the file's intent silently lost.
+
+    Parameters
+    ----------
+    mapping : mapping
+        A table or object as read.
+    allowed : iterable of str
+        Its allowed keys (in the order the message lists them).
+    where : str
+        Names the file and the table (``"cfg.json: platform_config"``).
+    error : type of Exception
+        Raised for the first unknown key.
+    kind : str
+        What a key is called in the message (``"key"``, ``"axis"``, ``"table"``).
+
+    """
+    names = list(allowed)
+    for key in mapping:
+        if key not in names:
+            word = key if isinstance(key, str) else str(key)
+            raise error(f"{where}: unknown {kind} {_shown(key)}{did_you_mean(word, names)}; "
+                        f"allowed: {', '.join(names)}")  # fmt: skip
+
+
+def _parse(parse: Callable[[str], object], text: str, path: str | Path, kind: str,
+           what: str, error: type[Exception]) -> object:  # fmt: skip
+    """Parse ``text`` with ``parse``; every way it can fail is ``error`` naming the file."""
+    try:
+        return parse(text)
+    except json.JSONDecodeError as e:
+        why = f"{e.msg}, line {e.lineno}"
+    except tomllib.TOMLDecodeError as e:
+        why = str(e)
+    except RecursionError:
+        why = "nested too deeply"
+    except ValueError as e:  # an integer beyond Python's int-from-string limit (4300 digits)
+        why = "an integer with too many digits" if "digits" in str(e) else str(e)[:200]
+    raise error(f"{path}: not valid {kind} ({why}); expected {what}")
+
+
+def read_json(path: str | Path, what: str, error: type[Exception] = DataError) -> object:
+    """Read a JSON file (UTF-8, see :func:`read_text`); any failure is ``error`` naming it.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file.
+    what : str
+        What it should be (``"a twin-config/1 file"``), for the message.
+    error : type of Exception
+        Raised when it cannot be read or is not JSON: bad syntax, nesting too deep for the
+        parser, an integer of more than 4300 digits.
+
+    """
+    return _parse(json.loads, read_text(path, what, error), path, "JSON", what, error)
+
+
+def read_toml(path: str | Path, what: str, error: type[Exception] = DataError) -> dict:
+    """Read a TOML file (UTF-8, see :func:`read_text`); any failure is ``error`` naming it.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file.
+    what : str
+        What it should be (``"a TOML sweep file"``), for the message.
+    error : type of Exception
+        Raised when it cannot be read or is not TOML (as :func:`read_json`).
+
+    """
+    doc = _parse(tomllib.loads, read_text(path, what, error), path, "TOML", what, error)
+    return doc  # type: ignore[return-value]
 
 
 #: Memory a simulated run holds per second of motion [bytes]: commands, the IMU at 819.2 Hz,

@@ -81,7 +81,7 @@ def run_demo(out: Path, progress: ProgressFn | None = None, shown_as: Path | Non
         fig.tight_layout()
         fig.savefig(out / f"df-{dof}.png", dpi=120)
         plt.close(fig)
-    (out / "df.json").write_text(json.dumps(payload, indent=2) + "\n")
+    (out / "df.json").write_text(json.dumps(payload, indent=2) + "\n", encoding="utf-8")
     lines.append(
         f"figures, results and recordings in {shown_as or out}/: df-pitch.png, df-heave.png, "
         "df.json, " + ", ".join(f"{c}-{m}.rrd" for c, m in BENCHES)

@@ -23,7 +23,6 @@ read from a user-supplied TOML file (:func:`read_bounds`)::
 
 from __future__ import annotations
 
-import tomllib
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -32,7 +31,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from twin.agard.session import Session
-from twin.checks import number, numbers, read_text
+from twin.checks import check_keys, number, numbers, read_toml
 from twin.errors import SignalError, TwinError
 from twin.frames import DOF_NAMES, dof_index
 from twin.measurement.describing_function import ResponseMixin, describing_function, phase_deg
@@ -47,7 +46,9 @@ OMCT_RAD_S = 10.0 ** (np.arange(-5, 7) / 5.0)
 #: Illustrative boundaries shipped with the twin (not ICAO 9625's).
 EXAMPLE_BOUNDS = Path(__file__).with_name("omct_bounds_illustrative.toml")
 BOUNDS_FORMAT = "twin-omct-bounds/1"
+#: The keys of each table of a bounds file, and the keys outside them.
 _KEYS = ("frequency_rad_s", "gain_min", "gain_max", "phase_min_deg", "phase_max_deg")
+_TOP_KEYS = ("format", "title")
 
 
 class BoundsFileError(TwinError, ValueError):
@@ -88,28 +89,28 @@ def read_bounds(path: str | Path = EXAMPLE_BOUNDS) -> OmctBounds:
     Raises
     ------
     BoundsFileError
-        Naming the file and what is wrong (missing file, bad TOML, wrong format, a missing key,
-        arrays of different lengths, non-increasing frequencies, min above max).
+        Naming the file and what is wrong (missing file, bad TOML, wrong format, a missing or
+        unknown key or table, arrays of different lengths, non-increasing frequencies, min
+        above max).
 
     """
     p = Path(path)
     if not p.is_file():
         raise BoundsFileError(f"{p}: no such OMCT bounds file")
-    text = read_text(p, f"a {BOUNDS_FORMAT} TOML file", BoundsFileError)
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as e:
-        raise BoundsFileError(f"{p}: not valid TOML ({e})") from None
+    data = read_toml(p, f"a {BOUNDS_FORMAT} TOML file", BoundsFileError)
+    given = {k: v for k, v in data.items() if isinstance(v, dict)}
+    keys = {k: v for k, v in data.items() if k not in given}
+    if "format" not in data:  # a misspelt "format" is named as such
+        check_keys(keys, _TOP_KEYS, str(p), BoundsFileError)
     if data.get("format") != BOUNDS_FORMAT:
         raise BoundsFileError(f"{p}: format must be {BOUNDS_FORMAT!r}; got {data.get('format')!r}")
+    check_keys(keys, _TOP_KEYS, str(p), BoundsFileError)
+    check_keys(given, ("default", *DOF_NAMES), str(p), BoundsFileError, "table")
+    if not isinstance(data.get("title", ""), str):
+        raise BoundsFileError(f"{p}: title must be text; got {data['title']!r}")
     tables = {}
-    for name, table in data.items():
-        if not isinstance(table, dict):
-            continue
-        if name != "default" and name not in DOF_NAMES:
-            raise BoundsFileError(
-                f"{p}: unknown table [{name}]; use [default] or a DOF ({', '.join(DOF_NAMES)})"
-            )
+    for name, table in given.items():
+        check_keys(table, _KEYS, f"{p}: [{name}]", BoundsFileError)
         missing = [k for k in _KEYS if k not in table]
         if missing:
             raise BoundsFileError(f"{p}: [{name}] misses {', '.join(missing)}")

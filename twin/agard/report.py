@@ -73,9 +73,9 @@ def write_report(
                         path.write_bytes(data)
         report, md = _assemble(bench, parts)
         with writing(tmp / "report.json") as path:
-            path.write_text(json.dumps(report, indent=2) + "\n")
+            path.write_text(json.dumps(report, indent=2) + "\n", encoding="utf-8")
         with writing(tmp / "summary.md") as path:
-            path.write_text(md)
+            path.write_text(md, encoding="utf-8")
     return report
 
 

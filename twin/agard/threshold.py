@@ -22,6 +22,7 @@ from scipy.optimize import brentq, least_squares
 from twin.agard.session import Session
 from twin.chain.config import MotionSystem
 from twin.chain.filter import PlatformFilter
+from twin.checks import number
 from twin.errors import SignalError
 from twin.frames import DOF_NAMES, acceleration_unit, dof_index
 from twin.measurement.measure import Measurement, driven_dof
@@ -30,6 +31,12 @@ from twin.signals import square_steps
 from twin.trajectory import Trajectory
 
 FloatArray = NDArray[np.float64]
+#: Least change of the commanded acceleration in one sample, over its range, that makes a step
+#: (the §3.3.4 pattern's is a half; a multi-sine's under a tenth at 100 Hz).
+MIN_STEP_SHARE = 0.25
+#: Longest delay tau_d of the Eq 3.7 fit [s]: the free fit searches [0, 1] s, and a fixed one
+#: is allowed as far.
+MAX_FIT_DELAY_S = 1.0
 
 
 def lag_delay_response(t: FloatArray, u: FloatArray, tau: float, delay: float) -> FloatArray:
@@ -96,11 +103,18 @@ def fit_eq_3_7(
     t, u, y : ndarray, shape (n,)
         Uniform times, commanded and measured acceleration.
     fixed_delay_s : float, optional
-        Keep tau_d at this value and fit tau only.
+        Keep tau_d at this value [s] and fit tau only: in [0, :data:`MAX_FIT_DELAY_S`].
+
+    Raises
+    ------
+    SignalError
+        For a zero input or a fixed delay that is not a number in the range.
 
     """
     if not np.any(u):
         raise SignalError("the input of the step fit is zero")
+    if fixed_delay_s is not None:
+        number(fixed_delay_s, "fixed tau_d [s]", lo=0, hi=MAX_FIT_DELAY_S, error=SignalError)
 
     def residual(x: FloatArray) -> FloatArray:
         delay = fixed_delay_s if fixed_delay_s is not None else x[1]
@@ -111,7 +125,8 @@ def fit_eq_3_7(
     for tau0 in (0.02, 0.1, 0.3):
         for d0 in delays:
             x0 = [tau0] if fixed_delay_s is not None else [tau0, d0]
-            lo, hi = ([1e-4], [5.0]) if fixed_delay_s is not None else ([1e-4, 0.0], [5.0, 1.0])
+            lo, hi = ([1e-4], [5.0]) if fixed_delay_s is not None else \
+                ([1e-4, 0.0], [5.0, MAX_FIT_DELAY_S])  # fmt: skip
             sol = least_squares(residual, x0, bounds=(lo, hi), x_scale=[0.05] * len(x0))
             if best is None or sol.cost < best.cost:
                 best = sol
@@ -227,12 +242,32 @@ class ThresholdResult:
 def analyse_threshold(
     m: Measurement, dof: str | None = None, fixed_delay_s: float | None = None
 ) -> ThresholdResult:
-    """Fit Eq 3.7 to a step-signal measurement (and the analytic model to the same input)."""
+    """Fit Eq 3.7 to a step-signal measurement (and the analytic model to the same input).
+
+    Raises
+    ------
+    SignalError
+        For a run whose ``meta.json`` says it was driven by another signal than steps (a
+        multi-sine), or whose commanded acceleration holds no steps: its largest change from
+        one sample to the next is under :data:`MIN_STEP_SHARE` of its range (a multi-sine's
+        is under a tenth; the §3.3.4 pattern's is a half).
+
+    """
+    sig = m.meta.get("signal")
+    sig = sig if isinstance(sig, dict) else {}
+    kind = sig.get("kind")
+    if kind is not None and kind != "steps":
+        raise SignalError(f"{m.source}: a {kind} signal (meta.json signal.kind); the dynamic "
+                          "threshold needs acceleration steps (run twin agard threshold on a "
+                          "configuration to record them)")  # fmt: skip
     k = driven_dof(m, dof)
     u = m.commanded[:, k]
     du = np.abs(np.diff(u))
-    if du.max() <= 0:
-        raise SignalError(f"{m.source}: the commands hold no acceleration steps")
+    if du.max() <= MIN_STEP_SHARE * np.ptp(u):
+        raise SignalError(f"{m.source}: the {DOF_NAMES[k]} commands hold no acceleration steps "
+                          f"(their acceleration changes by at most {du.max():.3g} a sample over "
+                          f"a range of {np.ptp(u):.3g}); the dynamic threshold needs steps (run "
+                          "twin agard threshold on a configuration to record them)")  # fmt: skip
     steps = np.flatnonzero(du > 0.3 * du.max())
     first, last = m.t[steps[0]], m.t[steps[-1]]
     span = (m.t >= first - 0.5) & (m.t <= min(last + 1.5, m.t[-1]))
@@ -249,7 +284,6 @@ def analyse_threshold(
         y_a = PlatformFilter(model.breaks_hz)(acc).values[:, k]
     y_a = np.interp(t - model.delay_s, t, y_a, left=0.0)
     analytic = fit_eq_3_7(t, uu, y_a, fixed_delay_s)
-    sig = m.meta.get("signal", {})
     amplitude = float(sig.get("amplitude", np.abs(u).max()))
     step_s = float(sig.get("step_s", np.median(np.diff(m.t[steps]))))
     return ThresholdResult(

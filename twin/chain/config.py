@@ -43,7 +43,7 @@ from twin.chain.filter import MAX_BREAK_HZ, MIN_BREAK_HZ, PlatformFilter, check_
 from twin.chain.lti import LinearModel
 from twin.chain.noise import MotionNoise
 from twin.chain.resonance import Resonance
-from twin.checks import flag, number, read_text
+from twin.checks import check_keys, did_you_mean, flag, number, read_json
 from twin.errors import ConfigError, SignalError, UnknownPlatformError
 from twin.lifecycle import replacing_file
 from twin.platform.facts import PLATFORMS, load_facts
@@ -51,6 +51,11 @@ from twin.thesis import TABLE_6_3
 
 #: Format tag of a configuration file (``twin diagnose --save-config``).
 CONFIG_FORMAT = "twin-config/1"
+#: The keys of a ``twin-config/1`` file.
+FILE_KEYS = ("format", "platform", "description", "platform_config")
+#: The keys of a ``platform_config`` (of a configuration file or a run's ``meta.json``).
+CONFIG_KEYS = ("name", "filter_break_hz", "delay_s", "noise", "noise_highpass_hz", "resonance",
+               "extensions")  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -283,11 +288,13 @@ class MotionSystem:
         Raises
         ------
         ConfigError
-            For a missing or malformed key (the message names it).
+            For a missing, unknown or malformed key (the message names it; an unknown one
+            with the allowed keys and a did-you-mean).
 
         """
         if not isinstance(cfg, dict):
             raise ConfigError(f"platform_config must be an object; got {cfg!r}")
+        check_keys(cfg, CONFIG_KEYS, "platform_config", ConfigError)
         for key in ("filter_break_hz", "delay_s", "noise"):
             if key not in cfg:
                 raise ConfigError(f"platform_config lacks {key!r}")
@@ -318,7 +325,7 @@ class MotionSystem:
             ),
             resonance=flag(cfg.get("resonance", False), "platform_config resonance", ConfigError),
             description=description,
-            extensions=tuple(Extension.from_json(e) for e in exts),
+            extensions=tuple(_extension(e, k) for k, e in enumerate(exts)),
         )
 
     def save(self, path: str | Path) -> Path:
@@ -331,8 +338,16 @@ class MotionSystem:
             "platform_config": self.to_meta(),
         }
         with replacing_file(path) as tmp:
-            tmp.write_text(json.dumps(data, indent=2) + "\n")
+            tmp.write_text(json.dumps(data, indent=2) + "\n", encoding="utf-8")
         return path
+
+
+def _extension(data: object, k: int) -> Extension:
+    """Parse the ``k``-th extension of a ``platform_config``; an error names which one."""
+    try:
+        return Extension.from_json(data)
+    except ConfigError as e:
+        raise ConfigError(f"platform_config extensions[{k}]: {e}") from None
 
 
 def _sensed(ext: Extension) -> NDArray[np.bool_]:
@@ -344,17 +359,26 @@ def _sensed(ext: Extension) -> NDArray[np.bool_]:
 
 
 def load_config(path: str | Path) -> MotionSystem:
-    """Read a ``twin-config/1`` file (written by :meth:`MotionSystem.save`)."""
+    """Read a ``twin-config/1`` file (written by :meth:`MotionSystem.save`).
+
+    Raises
+    ------
+    ConfigError
+        Naming the file: not UTF-8 JSON, not ``twin-config/1``, an unknown key (with the
+        allowed ones and a did-you-mean) or a value that is missing or out of range.
+    UnknownPlatformError
+        For a platform the twin does not know.
+
+    """
     path = Path(path)
-    text = read_text(path, f"a {CONFIG_FORMAT} configuration file", ConfigError)
-    try:
-        data = json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise ConfigError(f"{path}: not valid JSON ({exc.msg}, line {exc.lineno})") from exc
+    data = read_json(path, f"a {CONFIG_FORMAT} configuration file", ConfigError)
+    if isinstance(data, dict) and "format" not in data:  # a misspelt "format" is named as such
+        check_keys(data, FILE_KEYS, str(path), ConfigError)
     if not isinstance(data, dict) or data.get("format") != CONFIG_FORMAT:
         raise ConfigError(
             f"{path}: not a {CONFIG_FORMAT} file (its 'format' must be {CONFIG_FORMAT!r})"
         )
+    check_keys(data, FILE_KEYS, str(path), ConfigError)
     if not isinstance(data.get("platform"), str) or data["platform"] not in PLATFORMS:
         raise UnknownPlatformError(
             f"{path}: unknown platform {data.get('platform')!r}; "
@@ -428,6 +452,6 @@ def motion_system(name: str) -> MotionSystem:
     if name.startswith("condition-") and name[10:].isdigit() and int(name[10:]) in TABLE_6_3:
         return _condition(int(name[10:]))
     raise UnknownPlatformError(
-        f"unknown configuration {name!r}; expected one of {', '.join(config_names())} "
-        "or a twin-config/1 .json file"
+        f"unknown configuration {name!r}{did_you_mean(name, config_names())}; expected one of "
+        f"{', '.join(config_names())} or a twin-config/1 .json file"
     )

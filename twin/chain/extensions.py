@@ -37,7 +37,7 @@ from scipy import signal
 
 from twin.chain.block import Backlash, Block, Gain, Lead, backlash  # noqa: F401 (re-exported)
 from twin.chain.lti import LtiBlock
-from twin.checks import number
+from twin.checks import check_keys, did_you_mean, number
 from twin.errors import ConfigError, SignalError
 from twin.frames import DOF_NAMES
 
@@ -68,6 +68,8 @@ RANGES: Mapping[str, tuple[float, float, bool]] = {
     "play": (0.0, 10.0, False),
     "scale": (0.0, 1e3, False),
 }
+#: The keys of an extension's JSON form.
+JSON_KEYS = ("effect", "parameters", "dofs")
 IMU_CHANNELS = ("ax", "ay", "az", "p", "q", "r")
 #: The IMU channel that measures each DOF's acceleration (after App. C.2.3 processing).
 DOF_CHANNEL = dict(zip(DOF_NAMES, IMU_CHANNELS, strict=True))
@@ -103,9 +105,11 @@ class Extension:
         """Check the effect, its parameters and the DOFs."""
         if self.effect not in EFFECTS:
             raise ConfigError(
-                f"unknown effect {self.effect!r}; expected one of {', '.join(EFFECTS)}"
+                f"unknown effect {self.effect!r}{did_you_mean(self.effect, EFFECTS)}; expected "
+                f"one of {', '.join(EFFECTS)}"
             )
         names = EFFECTS[self.effect]
+        check_keys(self.parameters, names, f"effect {self.effect!r}", ConfigError, "parameter")
         if set(self.parameters) != set(names):
             raise ConfigError(
                 f"effect {self.effect!r} takes parameters {', '.join(names)}; "
@@ -113,7 +117,8 @@ class Extension:
             )
         for dof in self.dofs:
             if dof not in DOF_NAMES:
-                raise ConfigError(f"unknown DOF {dof!r}; expected one of {', '.join(DOF_NAMES)}")
+                raise ConfigError(f"unknown DOF {dof!r}{did_you_mean(str(dof), DOF_NAMES)}; "
+                                  f"expected one of {', '.join(DOF_NAMES)}")  # fmt: skip
         for name in names:
             if name != "channels":
                 lo, hi, lo_open = RANGES[name]
@@ -159,7 +164,12 @@ class Extension:
 
     @classmethod
     def from_json(cls, data: object) -> Extension:
-        """Parse the JSON form (raises :class:`~twin.errors.ConfigError` on anything malformed)."""
+        """Parse the JSON form (raises :class:`~twin.errors.ConfigError` on anything malformed).
+
+        An unknown key (``dof`` for ``dofs``) is refused with a did-you-mean, not ignored.
+        """
+        if isinstance(data, Mapping):
+            check_keys(data, JSON_KEYS, "extension", ConfigError)
         if not isinstance(data, Mapping) or "effect" not in data or "parameters" not in data:
             raise ConfigError(f"an extension needs 'effect' and 'parameters'; got {data!r}")
         pars = data["parameters"]

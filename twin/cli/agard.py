@@ -15,6 +15,7 @@ from pathlib import Path
 from twin.cli import common
 from twin.frames import DOF_NAMES, dof_index
 from twin.lifecycle import check_output_dir, replacing_dir, replacing_file
+from twin.signals import MAX_STEP
 
 TESTS = ("df", "noise", "snr", "threshold", "omct")
 HELP = {
@@ -24,6 +25,19 @@ HELP = {
     "threshold": "dynamic threshold (§3.3.4): Eq 3.7 fitted to acceleration steps",
     "omct": "Objective Motion Cueing Test (§5.3.2): DF at the twelve OMCT frequencies",
 }
+
+
+#: ``agard threshold --amplitude``: up to the largest step the signals build.
+AMPLITUDE = common.number(0, MAX_STEP, lo_open=True)
+#: ``agard threshold --step-s``: up to 10 minutes a level.
+STEP_S = common.number(0, 600, lo_open=True)
+#: ``agard threshold --fix-delay-ms``: as far as the free fit searches
+#: (:data:`twin.agard.threshold.MAX_FIT_DELAY_S`; not imported: the parser stays light).
+FIX_DELAY_MS = common.number(0, 1000)
+#: ``agard threshold --repeats``.
+REPEATS = common.count(1, 1000)
+#: ``agard omct --fraction`` of the system limit.
+FRACTION = common.number(0, 1, lo_open=True)
 
 
 def _common(out: str) -> list[argparse.ArgumentParser]:
@@ -67,19 +81,21 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
         if name == "threshold":
             p.add_argument(
                 "--amplitude",
-                type=float,
-                help="step amplitude, m/s^2 or rad/s^2 (default 0.1, §3.3.4)",
+                type=AMPLITUDE,
+                help=f"step amplitude, m/s^2 or rad/s^2 ({AMPLITUDE.span}; default 0.1, §3.3.4)",
             )
-            p.add_argument("--step-s", type=float, help="step length, s (default 1)")
+            p.add_argument("--step-s", type=STEP_S,
+                           help=f"step length, s ({STEP_S.span}; default 1)")  # fmt: skip
             p.add_argument(
                 "--fix-delay-ms",
-                type=float,
-                help="keep tau_d at this value (the thesis fixed it to the DF's)",
+                type=FIX_DELAY_MS,
+                help="keep tau_d at this value, ms (the thesis fixed it to the DF's; "
+                f"{FIX_DELAY_MS.span}, as far as the free fit searches)",
             )
             p.add_argument(
                 "--repeats",
-                type=int,
-                help="run the 8-step pattern this many times (default 1)",
+                type=REPEATS,
+                help=f"run the 8-step pattern this many times ({REPEATS.span}; default 1)",
             )
         if name == "omct":
             p.add_argument(
@@ -90,10 +106,12 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
             )
             p.add_argument(
                 "--fraction",
-                type=float,
-                help="sine amplitude as a fraction of the system limit (default 0.1)",
+                type=FRACTION,
+                help=f"sine amplitude as a fraction of the system limit ({FRACTION.span}; "
+                "default 0.1)",
             )
-        p.set_defaults(func=_cmd_test)
+        # None: not given (a recorded run refuses them); a configuration: full, seed 0
+        p.set_defaults(func=_cmd_test, model=None, seed=None)
     rep = tests.add_parser(
         "report",
         parents=[
@@ -130,7 +148,9 @@ def _bench(args: argparse.Namespace, target: str):
     from twin.measurement.measure import Bench
 
     config = common.configured(target, args)
-    return Bench(config, args.model, args.seed, common.imu_of(config, args))
+    model = common.DEFAULT_MODEL if args.model is None else args.model
+    seed = 0 if args.seed is None else args.seed
+    return Bench(config, model, seed, common.imu_of(config, args))
 
 
 def _simulate(args: argparse.Namespace, out: Path | None):
@@ -158,8 +178,10 @@ def _simulate(args: argparse.Namespace, out: Path | None):
         return omct.run_omct(s, args.dof, _given(args.fraction, 0.1)), bench.config
 
 
-#: Options that shape the signals of a simulated test: a recorded run has its own.
-SIGNAL_OPTIONS = ("amplitude", "step_s", "repeats", "fraction")
+#: Options of a simulated test only (their ``dest``): a recorded run has its own configuration,
+#: model, seed, IMU and signals, and nothing is simulated to record.
+SIMULATION_OPTIONS = ("model", "break_hz", "delay_ms", "no_noise", "resonance", "ideal_imu",
+                      "seed", "rrd", "amplitude", "step_s", "repeats", "fraction")  # fmt: skip
 
 
 def _given(value, default):
@@ -173,13 +195,15 @@ def _analyse(args: argparse.Namespace):
     from twin.agard import df, noise_level, omct, snr, threshold
     from twin.measurement.measure import from_run
 
-    given = [o for o in SIGNAL_OPTIONS if getattr(args, o, None) is not None]
+    values = {o: getattr(args, o, None) for o in SIMULATION_OPTIONS}
+    given = [o for o, v in values.items() if v is not None and v is not False]  # 0 is given
     if given:
         from twin.errors import UsageError
 
         names = ", ".join("--" + o.replace("_", "-") for o in given)
-        raise UsageError(f"{names}: shape the signals of a simulated test; the run "
-                         f"{args.target} has its own")  # fmt: skip
+        raise UsageError(f"{names}: only for a test simulated on a configuration; the recorded "
+                         f"run {args.target} has its own configuration, model, seed and "
+                         "signals (leave them out)")  # fmt: skip
     m = from_run(args.target)
     if args.test == "df":
         return df.analyse_df(m, args.dof), m.config
@@ -233,7 +257,7 @@ def _save(out: Path, test: str, result, payload: dict, config, bounds) -> None:
     import matplotlib.pyplot as plt
 
     with replacing_file(out / "result.json") as tmp:
-        tmp.write_text(json.dumps(payload, indent=2) + "\n")
+        tmp.write_text(json.dumps(payload, indent=2) + "\n", encoding="utf-8")
     png = str(out / f"{test}.png")
     if test == "df":
         fig = result.plot(png, config=config)
@@ -263,7 +287,11 @@ def _cmd_report(args: argparse.Namespace) -> int:
     with common.engine(args) as engine:
         report = write_report(bench, args.dof, out, args.rrd, common.progress(args),
                               scheduler=engine)  # fmt: skip
-    print(json.dumps(report, indent=2) if args.json else (out / "summary.md").read_text())
+    print(
+        json.dumps(report, indent=2)
+        if args.json
+        else (out / "summary.md").read_text(encoding="utf-8")
+    )
     return 0
 
 

@@ -5,6 +5,8 @@ type and help everywhere:
 
 ``--json``                    print the result as JSON
 ``--seed N``                  seed of the noise and the IMU (integer >= 0; default 0)
+numbers                       every numeric option's ``type`` is :func:`number` or :func:`count`:
+                              finite and in a range its help gives
 ``--out DIR``                 where results go (the command says what it writes)
 ``--rrd FILE``                save a Rerun recording
 ``--quiet``                   no progress on stderr
@@ -23,12 +25,15 @@ it prints on stderr only when stderr is a terminal and ``--quiet`` is not given.
 from __future__ import annotations
 
 import argparse
+import math
 import os
 from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager, suppress
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from twin.chain.delay import MAX_DELAY_S
+from twin.chain.filter import MAX_BREAK_HZ, MIN_BREAK_HZ
 from twin.errors import TwinError, UsageError
 from twin.lifecycle import check_output_file, check_writable
 from twin.ownership import check_replace, kind_of
@@ -50,30 +55,105 @@ def _parent() -> argparse.ArgumentParser:
     return argparse.ArgumentParser(add_help=False)
 
 
-def seed_type(text: str) -> int:
-    """Parse a ``--seed``: an integer >= 0 (argparse ``type``)."""
-    try:
-        seed = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"seed must be an integer >= 0; got {text!r}") from None
-    if seed < 0:
-        raise argparse.ArgumentTypeError(f"seed must be an integer >= 0; got {seed}")
-    return seed
+# --- numbers: every numeric option is a finite number in a range, given in its help --------
 
 
-def count(lo: int, hi: int) -> Callable[[str], int]:
-    """Return an argparse ``type``: an integer in [lo, hi] (``--runs``, ``--subjects``)."""
+class Number:
+    """An argparse ``type``: a finite number (or an integer) in a range.
 
-    def parse(text: str) -> int:
-        try:
-            n = int(text)
+    Made by :func:`number` (and :func:`count`, :func:`seed_type`); every numeric option of
+    the twin takes one, so ``nan``, ``inf``, ``1e9`` or ``-1`` where they make no sense are
+    refused while parsing, with one line naming the option and the range. :attr:`span` is the
+    range as the help shows it.
+
+    Parameters
+    ----------
+    lo, hi : float
+        The range (``math.inf`` for none on that side).
+    lo_open, hi_open : bool
+        Exclude the bound itself.
+    integer : bool
+        Only integers (``--runs``, ``--seed``).
+    name : str
+        Begins the message (``seed``); argparse adds the option's name in front anyway.
+
+    Examples
+    --------
+    >>> number(0, 90)("45")
+    45.0
+    >>> number(0, 90).span
+    'in [0, 90]'
+    >>> number(0, 90)("nan")
+    Traceback (most recent call last):
+    ...
+    argparse.ArgumentTypeError: must be a number in [0, 90]; got nan
+
+    """
+
+    def __init__(self, lo: float, hi: float, *, lo_open: bool = False, hi_open: bool = False,
+                 integer: bool = False, name: str = "") -> None:  # fmt: skip
+        self.lo, self.hi, self.lo_open, self.hi_open = lo, hi, lo_open, hi_open
+        self.integer = integer
+        self.name = name
+
+    def _bound(self, x: float) -> str:
+        return f"{int(x):,}" if self.integer else f"{x:g}"
+
+    @property
+    def span(self) -> str:
+        """The range: ``in [0, 90]``, ``in (0, 1]``, ``>= 0``."""
+        lo, hi = math.isinf(self.lo), math.isinf(self.hi)
+        if hi:
+            return "" if lo else f"{'>' if self.lo_open else '>='} {self._bound(self.lo)}"
+        if lo:
+            return f"{'<' if self.hi_open else '<='} {self._bound(self.hi)}"
+        return (f"in {'(' if self.lo_open else '['}{self._bound(self.lo)}, "
+                f"{self._bound(self.hi)}{')' if self.hi_open else ']'}")  # fmt: skip
+
+    def __call__(self, text: str) -> float:
+        """Return the number ``text`` gives, else raise :class:`argparse.ArgumentTypeError`."""
+        value: float | None
+        try:  # int(): no "1e3" or "1.5"; an integer of more than 4300 digits is a ValueError
+            value = int(text) if self.integer else float(text)
         except ValueError:
-            n = None
-        if n is None or not lo <= n <= hi:
-            raise argparse.ArgumentTypeError(f"must be an integer in [{lo}, {hi:,}]; got {text!r}")
-        return n
+            value = None
+        if value is not None and (self.integer or math.isfinite(value)) and self._within(value):
+            return value + 0  # -0.0 is 0.0
+        if value is None:  # not a number at all: shown as typed (a 5000-digit one cut short)
+            shown = repr(_cut(text))
+        else:
+            shown = _cut(str(value)) if self.integer else f"{value:g}"
+        what = "an integer" if self.integer else "a number"
+        raise argparse.ArgumentTypeError(
+            f"{self.name + ' ' if self.name else ''}must be {what} {self.span}; got {shown}"
+        )
 
-    return parse
+    def _within(self, v: float) -> bool:
+        above = v > self.lo if self.lo_open else v >= self.lo
+        return above and (v < self.hi if self.hi_open else v <= self.hi)
+
+
+def _cut(text: str, width: int = 40) -> str:
+    return text if len(text) <= width else text[: width - 3] + "..."
+
+
+def number(lo: float, hi: float, *, lo_open: bool = False, hi_open: bool = False) -> Number:
+    """Return an argparse ``type``: a finite number in [lo, hi] (bounds excluded if open)."""
+    return Number(lo, hi, lo_open=lo_open, hi_open=hi_open)
+
+
+def count(lo: int, hi: int) -> Number:
+    """Return an argparse ``type``: an integer in [lo, hi] (``--runs``, ``--subjects``)."""
+    return Number(lo, hi, integer=True)
+
+
+#: ``type=`` of ``--seed``: an integer >= 0.
+seed_type = Number(0, math.inf, integer=True, name="seed")
+#: ``--break-hz``: 0 (no filter) up to the largest break frequency (the library refuses the gap
+#: between 0 and the smallest, naming both).
+BREAK_HZ = number(0, MAX_BREAK_HZ)
+#: ``--delay-ms`` (and delays given in ms): 0 up to the longest delay the chain holds.
+DELAY_MS = number(0, MAX_DELAY_S * 1e3)
 
 
 @contextmanager
@@ -118,7 +198,8 @@ def json_parent(what: str = "the result") -> argparse.ArgumentParser:
 def seed_parent(what: str = "seed of the noise and the IMU") -> argparse.ArgumentParser:
     """Return a parent parser with ``--seed`` (an integer >= 0, default 0)."""
     p = _parent()
-    p.add_argument("--seed", type=seed_type, default=0, metavar="N", help=f"{what} (default 0)")
+    p.add_argument("--seed", type=seed_type, default=0, metavar="N",
+                   help=f"{what} (an integer {seed_type.span}; default 0)")  # fmt: skip
     return p
 
 
@@ -306,10 +387,11 @@ def overrides_parent(imu: bool = True) -> argparse.ArgumentParser:
     """
     p = _parent()
     g = p.add_argument_group("configuration overrides")
-    g.add_argument(
-        "--break-hz", type=float, metavar="HZ", help="platform-filter break frequency, Hz (0: none)"
-    )
-    g.add_argument("--delay-ms", type=float, metavar="MS", help="total motion-system delay, ms")
+    g.add_argument("--break-hz", type=BREAK_HZ, metavar="HZ",
+                   help=f"platform-filter break frequency, Hz ({BREAK_HZ.span}; 0: none, else at "
+                   f"least {MIN_BREAK_HZ:g})")  # fmt: skip
+    g.add_argument("--delay-ms", type=DELAY_MS, metavar="MS",
+                   help=f"total motion-system delay, ms ({DELAY_MS.span})")  # fmt: skip
     g.add_argument("--no-noise", action="store_true", help="switch the Eq 5.10 noise off")
     g.add_argument(
         "--resonance", action="store_true", help="add the SRS resonance terms of Eq 5.12/5.13"

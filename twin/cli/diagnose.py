@@ -10,6 +10,12 @@ from pathlib import Path
 from twin.cli import common
 from twin.lifecycle import check_output_dir
 
+#: ``--max-hz``: the band :func:`twin.diagnose.diagnosis.check_options` allows (below the
+#: 50 Hz Nyquist frequency of the 100 Hz grid; not imported: the parser stays light).
+MAX_HZ = common.number(0.5, 45, lo_open=True)
+#: ``--imu-noise``: the factors :func:`twin.diagnose.diagnosis.check_options` allows.
+IMU_NOISE = common.number(1e-3, 1e3)
+
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
     """Add ``twin diagnose`` to the ``twin`` parser."""
@@ -47,11 +53,13 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         type=common.output_file,
         help="write the extended configuration (JSON)",
     )
-    p.add_argument("--max-hz", type=float, default=15.0, help="top of the band (default 15 Hz)")
+    p.add_argument("--max-hz", type=MAX_HZ, default=15.0,
+                   help=f"top of the band, Hz ({MAX_HZ.span}; default 15)")  # fmt: skip
     p.add_argument("--dof", nargs="+", help="DOFs to analyse (default: the driven ones)")
-    p.add_argument("--imu-noise", type=float, metavar="FACTOR",
+    p.add_argument("--imu-noise", type=IMU_NOISE, metavar="FACTOR",
                    help="the IMU's noise over its data sheet's, when known (e.g. from a "
-                   "recording at rest); default: fitted as a nuisance")  # fmt: skip
+                   f"recording at rest; {IMU_NOISE.span}); default: fitted as a "
+                   "nuisance")  # fmt: skip
     p.add_argument("--no-figures", action="store_true", help="skip figures and the .rrd")
     p.add_argument("--each", action="store_true",
                    help="a batch: each RUN_DIR (a run folder, or a folder of run folders "
@@ -92,7 +100,7 @@ def _cmd_each(args: argparse.Namespace) -> int:
         b = diagnose_each(args.runs, config, engine, common.progress(args), **options)
     table = write_batch(b, out, figures=not args.no_figures)
     if args.json:
-        print((out / "batch.json").read_text(), end="")
+        print((out / "batch.json").read_text(encoding="utf-8"), end="")
     else:
         for row in b.rows():
             print(f"{row['measurement']}: {row['describe'] or 'no finding'}")

@@ -8,6 +8,11 @@ from pathlib import Path
 
 from twin.cli import common
 
+#: ``--clock-offset``: any offset of two clocks, one of them counting from 1970 included.
+CLOCK_OFFSET_S = common.number(-1e10, 1e10)
+#: ``--imu-position``, each coordinate: within 5 m of the UGP (as the importer allows).
+IMU_POSITION_M = common.number(-5, 5)
+
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
     """Add ``twin import`` to the ``twin`` parser."""
@@ -37,11 +42,13 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--map", action="append", default=[], metavar="TARGET=COLUMN[:UNIT]",
                    help="a column the names do not give, e.g. z=heave_cmd:mm or q=gy:deg/s "
                    "(targets t x y z roll pitch yaw ax ay az p q r); repeat")  # fmt: skip
-    p.add_argument("--clock-offset", type=float, metavar="S",
-                   help="IMU clock minus command clock [s], when known")  # fmt: skip
-    p.add_argument("--imu-position", type=float, nargs=3, metavar=("X", "Y", "Z"),
+    p.add_argument("--clock-offset", type=CLOCK_OFFSET_S, metavar="S",
+                   help=f"IMU clock minus command clock [s] ({CLOCK_OFFSET_S.span}: clocks in "
+                   "seconds since 1970 too), when known")  # fmt: skip
+    p.add_argument("--imu-position", type=IMU_POSITION_M, nargs=3, metavar=("X", "Y", "Z"),
                    help="IMU mount relative to the UGP, cabin axes (x fwd, y right, z down) "
-                   "[m]; estimated from the rotation when not given")  # fmt: skip
+                   f"[m], each {IMU_POSITION_M.span}; estimated from the rotation when not "
+                   "given")  # fmt: skip
     p.add_argument(
         "--imu-axes", choices=("auto", "frd", "flu"), default="auto",
         help="IMU axes: frd (z down), flu (z up), or auto from gravity (default)",

@@ -18,7 +18,7 @@ from collections.abc import Sequence
 from typing import NoReturn
 
 from twin import __version__
-from twin.cli import common
+from twin.cli import common, terminal
 from twin.cli.simulate import add_parser as add_simulate
 from twin.errors import TwinError, UsageError
 from twin.frames import DOF_NAMES
@@ -202,7 +202,12 @@ def _quiet_stdout() -> None:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run the ``twin`` command; return its exit code (see :func:`error_line`)."""
+    """Run the ``twin`` command; return its exit code (see :func:`error_line`).
+
+    Whatever the locale: files are read and written as UTF-8, and a terminal that cannot
+    encode the twin's text gets ASCII spellings (:mod:`twin.cli.terminal`).
+    """
+    terminal.fit_streams(sys.stdout, sys.stderr)
     try:
         args = _parser().parse_args(argv)
         policy = output_policy(overwrite=getattr(args, "overwrite", False),

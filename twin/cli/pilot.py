@@ -34,6 +34,24 @@ MC_BATCH = 500
 #: Most runs of ``pilot montecarlo`` (:data:`twin.pilot.montecarlo.MAX_RUNS`, not imported
 #: so that the parser stays light).
 MAX_MC_RUNS = 100_000_000
+#: Largest ``--feedthrough`` (:data:`twin.pilot.identified.MAX_FEEDTHROUGH`, not imported).
+MAX_FEEDTHROUGH = 1.0
+#: Largest ``--weight``: the control weight r of :func:`twin.pilot.adapt.adapt` (its default
+#: is 0.03); beyond it the pilot hardly acts.
+MAX_WEIGHT = 1000.0
+#: Ranges of the numeric options (argparse ``type``; their help gives the range).
+RUNS = common.count(1, MAX_RUNS)
+SUBJECTS = common.count(2, MAX_SUBJECTS)
+POPULATIONS = common.count(1, MAX_POPULATIONS)
+MC_RUNS = common.count(2, MAX_MC_RUNS)
+FIT_RUNS = common.count(0, MC_BATCH)
+REMNANT = common.number(0, 1, hi_open=True)
+FEEDTHROUGH = common.number(0, MAX_FEEDTHROUGH)
+MOTION_SPREAD = common.number(0, spreads.MAX_MOTION_SPREAD)
+VISUAL_DELAY_SPREAD = common.number(0, spreads.MAX_VISUAL_DELAY_SD)
+WEIGHT = common.number(0, MAX_WEIGHT, lo_open=True)
+#: ``--margin-deg``: as :func:`twin.pilot.lead.analyse_lead` allows.
+MARGIN_DEG = common.number(0, 90)
 
 
 def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
@@ -72,13 +90,13 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
         "write the runs as twin-pilot/1 CSVs for `twin pilot identify` (--out).",
     )
     run.add_argument("config", metavar="CONFIG", help=config_help())
-    run.add_argument("--runs", type=common.count(1, MAX_RUNS), default=1,
-                     help=f"runs with fresh remnant (default 1; at most {MAX_RUNS})")  # fmt: skip
+    run.add_argument("--runs", type=RUNS, default=1,
+                     help=f"runs with fresh remnant ({RUNS.span}; default 1)")  # fmt: skip
     run.add_argument(
         "--remnant",
-        type=float,
+        type=REMNANT,
         default=0.15,
-        help="remnant power over control power (default 0.15; 0: none)",
+        help=f"remnant power over control power ({REMNANT.span}; default 0.15; 0: none)",
     )
     run.set_defaults(func=_cmd_run)
     exp = cmds.add_parser(
@@ -99,8 +117,8 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
         "equalisation and neuromuscular tuning to each motion system, analysed with the "
         "thesis' repeated-measures ANOVA (--pilot adaptive).",
     )
-    exp.add_argument("--runs", type=common.count(1, MAX_RUNS),
-                     help=f"runs per condition of the fixed pilot (default 5; at most {MAX_RUNS}; "
+    exp.add_argument("--runs", type=RUNS,
+                     help=f"runs per condition of the fixed pilot ({RUNS.span}; default 5; "
                      "adaptive subjects fly the thesis' five repetitions)")  # fmt: skip
     exp.add_argument(
         "--plot",
@@ -123,8 +141,9 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
     _adaptation_options(exp, " (with --pilot adaptive)")
     exp.add_argument(
         "--subjects",
-        type=common.count(2, MAX_SUBJECTS),
-        help="simulated subjects with --pilot adaptive (default 9, the thesis' participants)",
+        type=SUBJECTS,
+        help=f"simulated subjects with --pilot adaptive ({SUBJECTS.span}; default 9, the thesis' "
+        "participants)",
     )
     exp.add_argument(
         "--identify",
@@ -137,37 +156,38 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
     )
     exp.add_argument(
         "--feedthrough",
-        type=float,
+        type=FEEDTHROUGH,
         default=0.0,
         metavar="R",
         help="with --identify: each subject also has a passive path from the motion to the "
-        "stick, R (0 to 1) of its condition-1 motion response at 3 rad/s "
+        f"stick, R ({FEEDTHROUGH.span}) of its condition-1 motion response at 3 rad/s "
         "(twin.pilot.pitch.Feedthrough; an assumption: only the simulated subjects have it, no "
         "fit models it; default 0: none; about 5x slower)",
     )
     exp.add_argument(
         "--motion-spread",
-        type=float,
+        type=MOTION_SPREAD,
         metavar="SD",
         help="with --pilot adaptive: how much the subjects differ in perceiving motion, the "
         "log-normal sd of the felt rate's observation noise relative to the visual one "
-        f"(0 to {spreads.MAX_MOTION_SPREAD:g}; default {spreads.MOTION_NOISE_SD:g}, from profiles "
+        f"({MOTION_SPREAD.span}; default {spreads.MOTION_NOISE_SD:g}, from profiles "
         "against Tables 6.4-6.7, README; 0: every subject perceives motion as well as vision; "
         "with --visual-delay-spread 0.03 the subjects of earlier versions)",
     )
     exp.add_argument(
         "--visual-delay-spread",
-        type=float,
+        type=VISUAL_DELAY_SPREAD,
         metavar="S",
         help="with --pilot adaptive: how much the subjects differ in visual delay, its sd in s "
-        f"around 0.30 s (0 to {spreads.MAX_VISUAL_DELAY_SD:g}; default "
+        f"around 0.30 s ({VISUAL_DELAY_SPREAD.span}; default "
         f"{spreads.VISUAL_DELAY_SD:g}, from profiles against Tables 6.4-6.7, README; 0: every "
         "subject has the mean delay)",
     )
     exp.add_argument(
         "--populations",
-        type=common.count(1, MAX_POPULATIONS),
-        help="with --pilot adaptive: seeded populations (seeds SEED, SEED + 1, ...); from 2 on, "
+        type=POPULATIONS,
+        help=f"with --pilot adaptive: seeded populations ({POPULATIONS.span}; seeds SEED, "
+        "SEED + 1, ...); from 2 on, "
         "each effect's standardised size over populations (median, 5-95 %%) beside the "
         "thesis', and whether the thesis is a plausible draw of them; with 40 subjects or "
         "more in all, how many subjects an experiment needs to find each effect, for "
@@ -187,7 +207,7 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
     )
     ada.add_argument("config", metavar="CONFIG", help=config_help())
     ada.add_argument(
-        "--weight", type=float, default=None, help="r of the cost (default: twin.pilot.adapt's)"
+        "--weight", type=WEIGHT, help=f"r of the cost ({WEIGHT.span}; default: twin.pilot.adapt's)"
     )
     _adaptation_options(ada)
     ada.set_defaults(func=_cmd_adapt)
@@ -243,10 +263,11 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
         "standard deviation (Eq 2.16) against the spread; with --fit-runs, pilot-model fits "
         "too.",
     )
-    mc.add_argument("--runs", type=common.count(2, MAX_MC_RUNS), default=1000,
-                    help="closed-loop runs (default 1000)")  # fmt: skip
-    mc.add_argument("--fit-runs", type=common.count(0, MC_BATCH), default=0,
-                    help=f"pilot-model fits per batch of {MC_BATCH} runs (default 0)")  # fmt: skip
+    mc.add_argument("--runs", type=MC_RUNS, default=1000,
+                    help=f"closed-loop runs ({MC_RUNS.span}; default 1000)")  # fmt: skip
+    mc.add_argument("--fit-runs", type=FIT_RUNS, default=0,
+                    help=f"pilot-model fits per batch of {MC_BATCH} runs ({FIT_RUNS.span}; "
+                    "default 0)")  # fmt: skip
     mc.set_defaults(func=_cmd_montecarlo)
     lead = cmds.add_parser(
         "lead",
@@ -260,23 +281,21 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
     lead.add_argument("config", metavar="CONFIG", help=config_help())
     lead.add_argument(
         "--margin-deg",
-        type=float,
+        type=MARGIN_DEG,
         default=45.0,
-        help="allowed lag behind an integrator over 0.06-2.8 Hz (default 45)",
+        help=f"allowed lag behind an integrator over 0.06-2.8 Hz, deg ({MARGIN_DEG.span}; "
+        "default 45)",
     )
     lead.set_defaults(func=_cmd_lead)
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
-    from twin.errors import SignalError
     from twin.lifecycle import check_output_file
     from twin.pilot.experiment import pitch_remnant_scale
     from twin.pilot.forcing import pitch_task
     from twin.pilot.pitch import PitchPilot, open_loops, simulate_pitch, variance_decomposition
     from twin.pilot.records import repetition_paths, stale_repetitions, write_pilot_runs
 
-    if not 0 <= args.remnant < 1:
-        raise SignalError(f"--remnant must be in [0, 1); got {args.remnant}")
     if args.out:  # every file the runs will go to, before the work
         for path in repetition_paths(args.out, args.runs):
             check_output_file(path)

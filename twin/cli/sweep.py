@@ -49,7 +49,7 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
         result = run_sweep(grid, engine, common.progress(args))
     table = write_sweep(result, out, args.format)
     if args.json:
-        print((out / "sweep.json").read_text(), end="")
+        print((out / "sweep.json").read_text(encoding="utf-8"), end="")
     else:
         print(f"{len(result.points) - len(result.failures)} of {len(result.points)} points "
               f"({result.scheduler}); table: {table}")  # fmt: skip

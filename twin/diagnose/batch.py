@@ -191,7 +191,7 @@ def write_batch(result: BatchResult, out: str | Path, figures: bool = True) -> P
                 write_report(d, tmp / name, figures=figures, rrd=figures)
                 d.extended_config.save(tmp / name / "extended.json")
         rows = result.rows()
-        with open(tmp / "batch.csv", "w", newline="") as fh:
+        with open(tmp / "batch.csv", "w", newline="", encoding="utf-8") as fh:
             w = csv.DictWriter(fh, COLUMNS)
             w.writeheader()
             w.writerows(rows)
@@ -202,5 +202,5 @@ def write_batch(result: BatchResult, out: str | Path, figures: bool = True) -> P
             "findings": rows,
             "failures": [f.to_dict() for f in result.failures],
         }
-        (tmp / "batch.json").write_text(json.dumps(doc, indent=2) + "\n")
+        (tmp / "batch.json").write_text(json.dumps(doc, indent=2) + "\n", encoding="utf-8")
     return out / "batch.csv"

@@ -150,8 +150,10 @@ def write_report(d: Diagnosis, out: str | Path, figures: bool = True, rrd: bool 
     """Write ``summary.md``, ``diagnosis.json``, figures and ``diagnosis.rrd`` to ``out``."""
     out = Path(out)
     with replacing_dir(out, "diagnosis.json") as tmp:
-        (tmp / "summary.md").write_text(summary(d))
-        (tmp / "diagnosis.json").write_text(json.dumps(d.to_dict(), indent=2) + "\n")
+        (tmp / "summary.md").write_text(summary(d), encoding="utf-8")
+        (tmp / "diagnosis.json").write_text(
+            json.dumps(d.to_dict(), indent=2) + "\n", encoding="utf-8"
+        )
         if figures:
             _figures(d, tmp)
         if rrd:

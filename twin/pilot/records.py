@@ -85,7 +85,8 @@ def write_pilot_runs(path: str | Path, columns: dict[str, FloatArray]) -> list[P
             tmp = stack.enter_context(replacing_file(final))
             data = np.column_stack([np.asarray(columns[n], dtype=float) if n in shared
                                     else np.atleast_2d(columns[n])[k] for n in names])  # fmt: skip
-            np.savetxt(tmp, data, delimiter=",", header=",".join(names), comments="", fmt="%.10g")
+            np.savetxt(tmp, data, delimiter=",", header=",".join(names), comments="", fmt="%.10g",
+                       encoding="utf-8")  # fmt: skip
     return paths
 
 

@@ -50,7 +50,7 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
-from twin.checks import number
+from twin.checks import check_keys, number
 from twin.errors import ConfigError, ModelFileError
 from twin.platform.geometry import geometry_from_model
 from twin.platform.kinematics import static_leg_forces
@@ -71,7 +71,7 @@ RANGES: dict[str, tuple[float, float]] = {
     "play_m": (0.0, 0.1),
 }
 #: The ``build.toml`` ``[actuators]`` key of each field.
-BUILD_KEYS = {
+TOML_KEYS = {
     "coulomb_n": "coulomb_friction",
     "viscous_ns_per_m": "viscous_friction",
     "force_limit_n": "force_limit",
@@ -143,10 +143,7 @@ class LegPhysics:
 
         """
         keys = dict(keys or {f: f for f in IDEAL})
-        unknown = sorted(set(table) - set(keys.values()))
-        if unknown:
-            raise error(f"{where}: unknown key {unknown[0]!r}; allowed: "
-                        f"{', '.join(sorted(keys.values()))}")  # fmt: skip
+        check_keys(table, keys.values(), where, error)
         out = {}
         for f, key in keys.items():
             lo, hi = RANGES[f]

@@ -35,9 +35,9 @@ from numpy.typing import NDArray
 from twin.errors import ModelFileError
 from twin.frames import MJ_FROM_THESIS, MJ_FROM_THESIS_QUAT
 from twin.platform.actuators import (
-    BUILD_KEYS,
     LAG_NUMERIC,
     PLAY_NUMERIC,
+    TOML_KEYS,
     LegPhysics,
     pd_force_ranges,
 )
@@ -58,6 +58,20 @@ GENERATED_NOTE = (
     "run `make models`. Frames: the base and cabin bodies carry the thesis frames (x forward, "
     "y right, z down) by a half turn about x, so their local coordinates are thesis coordinates. "
 )
+
+
+#: The tables of ``build.toml`` and their keys.
+BUILD_KEYS = {
+    "model": ("name", "title"),
+    "geometry": ("base_gimbals_xy", "cabin_gimbals_xy", "base_gimbal_z", "cabin_gimbal_z",
+                 "neutral_height", "stroke"),
+    "cabin": ("mass", "com", "inertia", "imu_position"),
+    "controller": ("kp", "kd", "static_feedback_gain"),
+    "legs": ("cylinder_mass", "rod_mass", "slide_armature", "hinge_damping", "hinge_armature",
+             "cylinder_radius", "rod_radius"),
+    "physics": ("timestep",),
+    "actuators": tuple(TOML_KEYS.values()),
+}  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -143,7 +157,7 @@ def read_build_parameters(path: Path) -> BuildParameters:
         If the file is missing, not TOML, or a value is missing or malformed.
 
     """
-    doc = read_toml(path)
+    doc = read_toml(path, BUILD_KEYS)
     where = str(path)
 
     def section(name: str) -> dict:
@@ -187,7 +201,7 @@ def read_build_parameters(path: Path) -> BuildParameters:
         rod_radius=number(legs, "rod_radius", "legs"),
         timestep=number(phys, "timestep", "physics"),
         actuators=LegPhysics.from_table(
-            doc.get("actuators", {}), f"{where} [actuators]", BUILD_KEYS, ModelFileError
+            doc.get("actuators", {}), f"{where} [actuators]", TOML_KEYS, ModelFileError
         ),
     )
 
@@ -529,7 +543,7 @@ def write_model(platform: str) -> list[Path]:
     for filename, text in render(params).items():
         target = folder / filename
         tmp = target.with_suffix(target.suffix + ".tmp")
-        tmp.write_text(text)
+        tmp.write_text(text, encoding="utf-8")
         tmp.replace(target)
         written.append(target)
     return written

@@ -10,17 +10,27 @@ The models folder is the repository's ``models/``; set ``TWIN_MODELS_DIR`` to us
 from __future__ import annotations
 
 import os
-import tomllib
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from functools import cache
 from pathlib import Path
 
 import mujoco
 
+from twin import checks
+from twin.checks import check_keys, number
 from twin.errors import ModelFileError, UnknownPlatformError
 
 #: Platform name -> model folder name.
 PLATFORMS: dict[str, str] = {"mpi": "mpi_stewart", "srs": "simona_srs"}
+#: The tables of ``platform.toml`` and their keys.
+FACT_KEYS: Mapping[str, Sequence[str]] = {
+    "platform": ("name", "model", "command_rate_hz"),
+    "actuator_limits": ("max_velocity", "max_acceleration"),
+    "motion_system": ("filter_break_hz", "delay_s", "noise"),
+    "imu": ("model", "rate_hz", "accel_range", "gyro_range_deg_s"),
+    "full_model": ("equivalent_delay_s",),
+}
 
 
 def models_root() -> Path:
@@ -35,14 +45,30 @@ def models_root() -> Path:
     return root
 
 
-def read_toml(path: Path) -> dict:
-    """Read a TOML file, raising :class:`ModelFileError` naming the file if missing or invalid."""
-    try:
-        return tomllib.loads(path.read_text())
-    except FileNotFoundError:
-        raise ModelFileError(f"{path}: no such file") from None
-    except tomllib.TOMLDecodeError as e:
-        raise ModelFileError(f"{path}: not valid TOML ({e})") from None
+def read_toml(path: Path, tables: Mapping[str, Sequence[str]]) -> dict:
+    """Read a model folder's TOML file (UTF-8, whatever the locale) and check its keys.
+
+    Parameters
+    ----------
+    path : Path
+        The file (``platform.toml``, ``build.toml``).
+    tables : mapping of str to sequence of str
+        Its tables and each one's keys.
+
+    Raises
+    ------
+    ModelFileError
+        Naming the file: missing, not UTF-8 TOML, or a table or key not in ``tables`` (with a
+        did-you-mean).
+
+    """
+    doc = checks.read_toml(path, f"TOML with the tables {', '.join(tables)}", ModelFileError)
+    check_keys(doc, tables, str(path), ModelFileError, "table")
+    for name, table in doc.items():
+        if not isinstance(table, dict):
+            raise ModelFileError(f"{path}: {name} must be a table ([{name}])")
+        check_keys(table, tables[name], f"{path}: [{name}]", ModelFileError)
+    return doc
 
 
 def check_platform(name: str) -> str:
@@ -145,7 +171,7 @@ def load_facts(name: str) -> PlatformFacts:
 
     """
     path = model_dir(name) / "platform.toml"
-    doc = read_toml(path)
+    doc = read_toml(path, FACT_KEYS)
 
     def get(section: str, key: str) -> float:
         try:
@@ -154,9 +180,7 @@ def load_facts(name: str) -> PlatformFacts:
             raise ModelFileError(f"{path}: missing [{section}] {key}") from None
         if isinstance(value, bool):
             return value
-        if not isinstance(value, int | float) or value < 0:
-            raise ModelFileError(f"{path}: [{section}] {key} must be a number >= 0")
-        return float(value)
+        return number(value, f"{path}: [{section}] {key}", lo=0, error=ModelFileError)
 
     return PlatformFacts(
         name=name,

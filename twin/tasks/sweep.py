@@ -40,7 +40,6 @@ columns (``point`` numbers the point), then the measures:
 from __future__ import annotations
 
 import itertools
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -50,7 +49,7 @@ import numpy as np
 from twin.chain.config import MotionSystem, load_config, motion_system
 from twin.chain.delay import MAX_DELAY_S
 from twin.chain.filter import MAX_BREAK_HZ, check_break_hz
-from twin.checks import number, read_text
+from twin.checks import check_keys, number, read_toml
 from twin.errors import ConfigError, TwinError
 from twin.frames import DOF_NAMES
 from twin.pilot.pitch import MAX_RUNS
@@ -159,17 +158,16 @@ def read_grid(path: str | Path) -> Grid:
 
     """
     path = Path(path)
-    text = read_text(path, "a TOML sweep file", SweepError)
-    try:
-        doc = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as e:
-        raise SweepError(f"{path} is not a TOML sweep file: {e}") from None
+    doc = read_toml(path, "a TOML sweep file", SweepError)
     return parse_grid(doc, str(path), path.parent)
 
 
 def parse_grid(doc: dict[str, Any], source: str = "<grid>", base: Path | None = None) -> Grid:
     """Check a sweep document (the parsed TOML) and return its :class:`Grid`."""
     task = doc.get("task")
+    if task is None:  # a misspelt ``task`` is named as such
+        keys = {k: None for t in TASKS for k in [*SETTINGS[t], *AXES, *TASK_AXES[t]]}
+        check_keys(doc, ["task", *keys, "grid"], source, SweepError)
     if not isinstance(task, str) or task not in TASKS:
         raise SweepError(f"{source}: task must be one of {', '.join(map(repr, TASKS))}; "
                          f"got {task!r}")  # fmt: skip
@@ -183,21 +181,16 @@ def parse_grid(doc: dict[str, Any], source: str = "<grid>", base: Path | None = 
     grid = doc.get("grid", {})
     if not isinstance(grid, dict):
         raise SweepError(f"{source}: [grid] must be a table of axes; got {grid!r}")
+    check_keys(doc, ["task", *settings, *axes_types, "grid"], f"{source} (task {task!r})",
+               SweepError)  # fmt: skip
     for key, value in doc.items():
-        if key in ("task", "grid"):
-            continue
         if key in settings:
             settings[key] = _setting(source, task, key, value)
         elif key in axes_types:
             fixed[key] = _value(source, key, value, axes_types[key])
-        else:
-            raise SweepError(f"{source}: unknown key {key!r} for task {task!r}; allowed: "
-                             f"{', '.join([*settings, *axes_types, 'grid'])}")  # fmt: skip
+    check_keys(grid, axes_types, f"{source}: [grid] (task {task!r})", SweepError, "axis")
     axes: dict[str, list[Any]] = {}
     for key, values in grid.items():
-        if key not in axes_types:
-            raise SweepError(f"{source}: unknown axis [grid].{key} for task {task!r}; "
-                             f"allowed: {', '.join(axes_types)}")  # fmt: skip
         if not isinstance(values, list) or not values:
             raise SweepError(f"{source}: [grid].{key} must be a non-empty list; got {values!r}")
         axes[key] = [_value(source, f"[grid].{key}", v, axes_types[key]) for v in values]

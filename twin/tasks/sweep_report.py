@@ -55,7 +55,7 @@ def write_sweep(result: SweepResult, out: str | Path, table_format: str = "csv")
             if r is not None:
                 doc = {"point": p, "config": c.to_meta(), **r["result"]}
                 (tmp / "points" / f"{i:04d}.json").write_text(
-                    json.dumps(doc, indent=1, default=_plain) + "\n"
+                    json.dumps(doc, indent=1, default=_plain) + "\n", encoding="utf-8"
                 )
         manifest = {
             "format": "twin-sweep/1",
@@ -70,7 +70,9 @@ def write_sweep(result: SweepResult, out: str | Path, table_format: str = "csv")
             "table": name,
             "failures": [f.to_dict() for f in result.failures],
         }
-        (tmp / "sweep.json").write_text(json.dumps(manifest, indent=2, default=_plain) + "\n")
+        (tmp / "sweep.json").write_text(
+            json.dumps(manifest, indent=2, default=_plain) + "\n", encoding="utf-8"
+        )
         if len(table):
             pyplot().close(plot_sweep(result, tmp / "sweep.png"))
     return out / name
