@@ -21,9 +21,12 @@ import numpy as np
 import pytest
 from scipy import signal
 
+from twin.chain.config import motion_system
+from twin.chain.extensions import Extension
 from twin.chain.imu import G
 from twin.chain.simulate import default_imu, prepare
 from twin.cli.main import main
+from twin.diagnose.diagnosis import diagnose
 from twin.errors import DataError, RunFormatError
 from twin.frames import DOF_NAMES
 from twin.ingest import import_run
@@ -206,3 +209,50 @@ def test_the_full_models_runs_and_rest_pass(tmp_path) -> None:
     execute(run, run_meta(run, "rest"), tmp_path / "rest")
     rec = read_run(tmp_path / "rest")
     assert np.ptp(rec.imu, axis=0).max() == 0.0 and rec.notes == ()
+
+
+def test_the_same_run_twice_is_refused(runs, tmp_path, capsys) -> None:
+    """The same folder twice, a copy of it, or a run also given for validation: refused
+    before any work (it would count twice, and the detection limits would shrink)."""
+    copy = tmp_path / "copy"
+    shutil.copytree(runs[0], copy)
+    with pytest.raises(RunFormatError, match=r"given twice \(the same folder as"):
+        diagnose([runs[0], runs[0]])
+    with pytest.raises(RunFormatError, match=r"given twice \(the same commands and IMU as"):
+        diagnose([runs[0], copy])
+    with pytest.raises(RunFormatError, match="given twice"):
+        diagnose([runs[0], runs[1]], validate=[copy])
+    out = tmp_path / "report"
+    code = main(["diagnose", str(runs[0]), str(copy), "--out", str(out), "--no-figures", "--quiet"])
+    assert code == 2 and not out.exists()
+    assert "given twice" in _one_error_line(capsys)
+
+
+def test_a_fit_at_its_search_bound_is_no_finding(tmp_path, monkeypatch, capsys) -> None:
+    """Pitch responding at 5 % of the commands (a gain below the search's 0.1): the gain
+    fitted at 0.1 was named a finding; now it is reported "at the bound" in the terminal,
+    the summary and the JSON, and nothing is named. (The search is restricted to gain to
+    keep the test quick.)"""
+    from twin.diagnose import diagnosis
+    from twin.diagnose.hidden import record_runs
+
+    monkeypatch.setattr(diagnosis, "DYNAMIC", ("gain",))
+    srs = motion_system("srs")
+    truth = srs.replace(extensions=(Extension("gain", {"gain": 0.05}, ("pitch",)),))
+    run = record_runs(truth, srs, "pitch", tmp_path, 5, signals=(1,))[0]
+    out = tmp_path / "report"
+    assert main(["diagnose", str(run), "--out", str(out), "--no-figures", "--quiet"]) == 0
+    terminal = capsys.readouterr().out
+    assert "at the bound: gain in pitch: gain 0.1 at the lower bound of its search (0.1 to 10)" in (
+        terminal
+    )
+    assert "not a finding" in terminal and "no finding within the search bounds" in terminal
+    doc = json.loads((out / "diagnosis.json").read_text())
+    assert doc["findings"] == [] and doc["extended_config"]["extensions"] == []
+    [entry] = doc["at_bound"]
+    assert (entry["effect"], entry["parameter"], entry["bound"]) == ("gain", "gain", "lower")
+    assert entry["value"] == pytest.approx(0.1) and entry["search"] == [0.1, 10.0]
+    assert doc["nominal"]["dofs"]["pitch"]["at_bound"][0]["effect"] == "gain"
+    summary = (out / "summary.md").read_text()
+    assert "## At the bound (not findings)" in summary
+    assert "- gain in pitch: gain 0.1 at the lower bound" in summary
