@@ -5,10 +5,11 @@ resonance, lead, gain and sensor filter; no noise, no backlash, no platform dyna
 the cabin as the commands ask, and an ideal IMU at the run's mount reads that motion: specific
 force with gravity and angular rate, thesis cabin axes (x forward, y right, z down; at rest
 (0, 0, -9.81) m/s^2), as :func:`twin.chain.imu.specific_force`. Both that reading and the
-recorded IMU are band-limited alike (:data:`BAND_HZ`, zero phase) onto one grid of
-:data:`GRID_HZ`, the recorded one :data:`SEARCH_S` beyond the commands on either side, so
-that they can be cross-correlated over lags (:class:`Comparison`). What is compared is cheap:
-no simulation, a few FFTs and filters per run.
+recorded IMU (without single-sample glitches) are band-limited alike (:data:`BAND_HZ`, zero
+phase) onto one grid of :data:`GRID_HZ`, the recorded one :data:`SEARCH_S` beyond the
+commands on either side, so that they can be cross-correlated over lags
+(:class:`Comparison`). What is compared is cheap: no simulation, a few FFTs and filters per
+run.
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy import signal
+from scipy import ndimage, signal
 
 from twin.chain.config import MotionSystem
 from twin.chain.response import GRAVITY_BASE
@@ -38,6 +39,10 @@ BAND_ORDER = 4
 #: Lags searched on either side of the commands' clock [s]: a clock offset of a few tenths of
 #: a second to seconds (a logger started late, stamps of another epoch) shows within it.
 SEARCH_S = 2.0
+#: The recorded IMU goes through a running median of this many samples first: a single-sample
+#: glitch (a logger's spike of 12 g) would otherwise dominate the band-limited signal and its
+#: correlations; any motion within the band passes it nearly unchanged.
+DESPIKE_SAMPLES = 3
 #: Least time commands and IMU must cover for their motion to be compared [s].
 MIN_COMPARED_S = 2.0
 
@@ -189,5 +194,6 @@ def compare(run: RecordedRun, config: MotionSystem) -> Comparison | None:
     if inside.sum() < MIN_COMPARED_S * GRID_HZ:
         return None
     measured = np.full((grid.size, 6), np.nan)
-    measured[inside] = interp_columns(grid[inside], t_imu, band_limited(imu, rate))
+    despiked = ndimage.median_filter(imu, size=(DESPIKE_SAMPLES, 1), mode="nearest")
+    measured[inside] = interp_columns(grid[inside], t_imu, band_limited(despiked, rate))
     return Comparison(expected, measured, np.arange(-search, search + 1) / GRID_HZ)
