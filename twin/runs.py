@@ -91,6 +91,9 @@ class RecordedRun:
         t, l1..l6, if recorded.
     forces : ndarray, shape (k, 7) or None
         t, f1..f6 [N], if recorded.
+    notes : tuple of str
+        What the reader did to the data, one sentence each (e.g. an IMU resampled to a rate
+        the analyses are made for: :func:`twin.run_checks.supported_rate`).
 
     """
 
@@ -101,6 +104,7 @@ class RecordedRun:
     imu: FloatArray
     actuators: FloatArray | None
     forces: FloatArray | None = None
+    notes: tuple[str, ...] = ()
 
 
 def _read_csv(path: Path) -> FloatArray:
@@ -313,12 +317,17 @@ def _check_optional(meta: dict, where: str) -> None:
 def read_run(folder: str | Path | RecordedRun) -> RecordedRun:
     """Read and validate a ``twin-run/1`` folder (a run already read is returned as it is).
 
+    Beyond the format, the data must be plausible for a motion system
+    (:func:`twin.run_checks.plausible_run`): gravity, units, axes, clock and IMU rate. An
+    IMU faster than the analyses are made for comes back resampled, with a note in
+    :attr:`RecordedRun.notes`.
+
     Raises
     ------
     RunFormatError
         Naming the file (and row) that is wrong: missing file, wrong header, a value that is
         not a finite number, time not uniform and strictly increasing, or a rate that does not
-        match ``meta.json``.
+        match ``meta.json``; or what is implausible in it, and how to fix it.
 
     """
     if isinstance(folder, RecordedRun):
@@ -343,7 +352,9 @@ def read_run(folder: str | Path | RecordedRun) -> RecordedRun:
         act = _read_csv(path / "actuators.csv")
     forces = _read_csv(path / "forces.csv") if (path / "forces.csv").exists() else None
     commands = _trajectory(cmd, path / "commands.csv")
-    return RecordedRun(path, meta, commands, imu[:, 0], imu[:, 1:], act, forces)
+    from twin.run_checks import plausible_run
+
+    return plausible_run(RecordedRun(path, meta, commands, imu[:, 0], imu[:, 1:], act, forces))
 
 
 #: What a commands file is, as a run folder holds it (messages and help).

@@ -112,6 +112,7 @@ def _cmd_each(args: argparse.Namespace) -> int:
 
 
 def _cmd_diagnose(args: argparse.Namespace) -> int:
+    from twin.diagnose.candidates import describe_bound
     from twin.diagnose.diagnosis import check_options, diagnose
     from twin.diagnose.report import write_report
 
@@ -132,11 +133,17 @@ def _cmd_diagnose(args: argparse.Namespace) -> int:
     if args.json:
         print(json.dumps(d.to_dict(), indent=2))
         return 0
-    if not d.findings:
+    for note in d.notes:
+        print(f"note: {note}")
+    for b in d.at_bound:
+        print(f"at the bound: {describe_bound(b)}")
+    if not d.findings and not d.at_bound:
         print("no finding: the runs agree with the nominal model within their noise; they "
               "could have shown:")  # fmt: skip
         for line in d.statements():
             print(f"  {line}")
+    elif not d.findings:
+        print("no finding within the search bounds")
     for i, f in enumerate(d.findings, 1):
         g = f.gain
         if "chi2_per_line_before" in g:

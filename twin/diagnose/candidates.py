@@ -33,6 +33,7 @@ from twin.diagnose.data import Case, Channel, simulate_measurement
 from twin.diagnose.evidence import Lines
 from twin.errors import SignalError
 from twin.frames import dof_index
+from twin.run_checks import MAX_EXTRA_DELAY_S
 
 FloatArray = NDArray[np.float64]
 ComplexArray = NDArray[np.complex128]
@@ -173,8 +174,8 @@ def search_space(effect: str, case: Case, dof: str, channels: Sequence[Channel])
     """Return the physical range searched for each effect (stated in the report)."""
     k = dof_index(dof)
     if effect == "delay":
-        lo = -float(case.config.delay_s)
-        return Space(("extra_delay_s",), (np.arange(lo, 0.3001, 0.002),), ((lo, 0.3),))
+        lo, hi = -float(case.config.delay_s), MAX_EXTRA_DELAY_S
+        return Space(("extra_delay_s",), (np.arange(lo, hi + 1e-4, 0.002),), ((lo, hi),))
     if effect == "gain":
         return Space(("gain",), (np.geomspace(0.2, 5.0, 81),), ((0.1, 10.0),))
     if effect == "platform_filter":
@@ -245,6 +246,55 @@ class SetFit:
 def numeric_names(effect: str) -> tuple[str, ...]:
     """Return the fitted (numeric) parameter names of an effect."""
     return tuple(k for k in EFFECTS[effect] if k != "channels")
+
+
+#: A fitted parameter within this share of its search range of an end (log scale for the
+#: scale-like ones) is at the bound: the data ask for more than the search allows, so the
+#: value is a limit reached, not a measurement (on garbage: gain 0.1, break 0.1 Hz, 0.3 s).
+AT_BOUND_SHARE = 1e-3
+
+
+def at_bounds(fit: SetFit, model: Model, evidence: Sequence[Lines]) -> list[dict[str, object]]:
+    """Return the fitted parameters of a set that lie at an end of their search range.
+
+    Returns
+    -------
+    list of dict
+        ``effect``, ``dofs``, ``parameter``, ``value``, ``bound`` ("lower" or "upper"),
+        ``search`` ([low, high]) and ``set`` (the effects fitted with it), one per parameter
+        at a bound.
+
+    """
+    channels = list({id(x.channel): x.channel for x in evidence}.values())
+    out: list[dict[str, object]] = []
+    for ext in fit.extensions:
+        space = search_space(ext.effect, model.case, model.dof, channels)
+        for name, (lo, hi) in zip(space.names, space.bounds, strict=True):
+            u, ends = _searched(name, ext.value(name)), (_searched(name, lo), _searched(name, hi))
+            for side, end in zip(("lower", "upper"), ends, strict=True):
+                if abs(u - end) <= AT_BOUND_SHARE * (ends[1] - ends[0]):
+                    out.append({"effect": ext.effect, "dofs": [model.dof], "parameter": name,
+                                "value": ext.value(name), "bound": side, "set": list(fit.effects),
+                                "search": [float(lo), float(hi)]})  # fmt: skip
+    return out
+
+
+def _searched(name: str, value: float) -> float:
+    """Return a parameter on the scale it is searched on (log for the scale-like ones)."""
+    return float(np.log(value)) if name in _LOG else float(value)
+
+
+def describe_bound(entry: dict[str, object]) -> str:
+    """Say that a parameter lies at its bound (:func:`at_bounds`) and is not a finding."""
+    lo, hi = entry["search"]  # type: ignore[misc]
+    dofs = ", ".join(entry["dofs"])  # type: ignore[arg-type]
+    others = [e for e in entry.get("set", []) if e != entry["effect"]]  # type: ignore[attr-defined]
+    jointly = f", nor {' and '.join(others)} fitted with it" if others else ""
+    return (
+        f"{entry['effect']} in {dofs}: {entry['parameter']} {entry['value']:.4g} at the "
+        f"{entry['bound']} bound of its search ({lo:.4g} to {hi:.4g}): not a finding{jointly} "
+        "(the runs ask for what no motion system has: check their units, axes and clock)"
+    )
 
 
 class _Layout:

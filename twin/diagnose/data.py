@@ -29,6 +29,7 @@ from twin.errors import RunFormatError, SignalError
 from twin.frames import DOF_NAMES, dof_index
 from twin.measurement.measure import Measurement, from_imu, from_run
 from twin.progress import ProgressFn
+from twin.run_checks import check_distinct
 from twin.runs import RecordedRun, read_run
 from twin.trajectory import Trajectory, interp_columns
 
@@ -311,7 +312,8 @@ def load_case(
     Raises
     ------
     RunFormatError
-        A run folder is malformed (also for a malformed ``platform_config``).
+        A run folder is malformed (also for a malformed ``platform_config``), or a run is
+        given twice (:func:`twin.run_checks.check_distinct`).
     SignalError
         Unknown model, platforms that differ, nothing driven.
 
@@ -322,9 +324,10 @@ def load_case(
         raise SignalError("give at least one run folder to diagnose")
     if realisations < 2:
         raise SignalError(f"need at least 2 noise realisations; got {realisations}")
+    recs = [read_run(path) for path in runs]
+    check_distinct(recs)
     measurements = []
-    for path in runs:
-        rec = read_run(path)
+    for rec in recs:
         try:
             measurements.append(from_run(rec))
         except SignalError as e:

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import json
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -23,7 +23,7 @@ import numpy as np
 from twin.chain.config import MotionSystem
 from twin.chain.extensions import Extension
 from twin.checks import number
-from twin.diagnose.candidates import DYNAMIC, Model
+from twin.diagnose.candidates import DYNAMIC, Model, describe_bound
 from twin.diagnose.data import NOISE_REALISATIONS, Case, load_case
 from twin.diagnose.detect import smallest_detectable
 from twin.diagnose.evidence import lines
@@ -43,7 +43,8 @@ from twin.errors import SignalError, UsageError
 from twin.jsonable import plain
 from twin.plotting import finish, pyplot
 from twin.progress import ProgressFn
-from twin.runs import RecordedRun
+from twin.run_checks import check_distinct
+from twin.runs import RecordedRun, read_run
 
 
 @dataclass(eq=False)
@@ -142,6 +143,7 @@ class DofReport:
                 "held_out": self.noise.held_out,
             },
             "sets_tried": self.selection.table[:12],
+            "at_bound": list(self.selection.at_bound),
         }
 
 
@@ -161,6 +163,8 @@ class Diagnosis:
         Validation run folders (empty: held-out halves were used).
     max_hz : float
         Top of the analysis band.
+    notes : list of str
+        What reading the runs did to them (:attr:`twin.runs.RecordedRun.notes`).
 
     """
 
@@ -169,6 +173,7 @@ class Diagnosis:
     runs: list[str]
     validation: list[str]
     max_hz: float
+    notes: list[str] = field(default_factory=list)
 
     @property
     def findings(self) -> list[Finding]:
@@ -177,6 +182,11 @@ class Diagnosis:
         An effect found with the same parameters in several DOFs is one finding with its DOFs.
         """
         return merge_across_dofs([f for r in self.dofs.values() for f in r.findings])
+
+    @property
+    def at_bound(self) -> list[dict[str, object]]:
+        """Effects whose fitted parameters lie at a search bound: reported, not findings."""
+        return [b for r in self.dofs.values() for b in r.selection.at_bound]
 
     @property
     def extended_config(self) -> MotionSystem:
@@ -204,12 +214,14 @@ class Diagnosis:
         """Return the ``--json`` document: ``findings`` and ``nominal`` (numpy values)."""
         return {
             "findings": [f.to_json() for f in self.findings],
+            "at_bound": [{**b, "describe": describe_bound(b)} for b in self.at_bound],
             "nominal": {
                 "platform": self.case.config.platform,
                 "platform_config": self.case.config.to_meta(),
                 "model": self.case.model,
                 "runs": self.runs,
                 "validation_runs": self.validation,
+                "notes": self.notes,
                 "band_hz": [None, self.max_hz],
                 "criterion": "joint fits of every effect and pair of effects on the excited "
                 "lines, uncertainty from the measurement's own noise; a set is named when its "
@@ -320,12 +332,20 @@ def diagnose(
         The recording IMU's noise over the data sheet's (amplitude) when known, e.g. from a
         recording at rest; by default it is fitted as a nuisance.
 
+    Raises
+    ------
+    RunFormatError
+        A run that is malformed or implausible (:func:`twin.runs.read_run`), or one given
+        twice, among the runs or between them and the validation runs.
+
     """
     check_options(max_hz, imu_noise)
-    case = load_case(runs, config, model, seed, dofs, realisations, progress)
+    recs, vals = [read_run(r) for r in runs], [read_run(r) for r in validate]
+    check_distinct([*recs, *vals])
+    case = load_case(recs, config, model, seed, dofs, realisations, progress)
     val = None
-    if validate:
-        val = load_case(validate, case.config, model, seed + 1, None, realisations, progress)
+    if vals:
+        val = load_case(vals, case.config, model, seed + 1, None, realisations, progress)
     reports = {}
     for i, dof in enumerate(case.dofs):
         if progress:
@@ -364,7 +384,8 @@ def diagnose(
         )
         if progress:
             progress("diagnosis [DOFs]", i + 1, len(case.dofs))
-    return Diagnosis(case, reports, _names(runs), _names(validate), max_hz)
+    notes = [n for r in (*recs, *vals) for n in r.notes]
+    return Diagnosis(case, reports, _names(runs), _names(validate), max_hz, notes)
 
 
 def _names(runs: Sequence[str | Path | RecordedRun]) -> list[str]:

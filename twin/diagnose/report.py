@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
+from twin.diagnose.candidates import describe_bound
 from twin.diagnose.diagnosis import Diagnosis, DofReport
 from twin.diagnose.residual_figure import plot_residual
 from twin.lifecycle import replacing_dir
@@ -52,11 +53,13 @@ def summary(d: Diagnosis) -> str:
         "## Findings",
         "",
     ]
-    if not d.findings:
+    if not d.findings and not d.at_bound:
         out += [
             "No finding: the runs are consistent with the nominal model within their noise.",
             "",
         ]
+    elif not d.findings:
+        out += ["No finding within the search bounds (see below).", ""]
     for i, f in enumerate(d.findings, 1):
         std = f.evidence.get("parameter_std", {})
         pars = ", ".join(
@@ -87,6 +90,12 @@ def summary(d: Diagnosis) -> str:
                 f"{' + '.join(a['effects'])} (BIC {a['delta_bic_below_named']:.1f} lower)"
                 for a in alts))  # fmt: skip
     out.append("")
+    if d.at_bound:
+        out += ["## At the bound (not findings)", ""]
+        out += [f"- {describe_bound(b)}" for b in d.at_bound]
+        out.append("")
+    if d.notes:
+        out += ["## Notes on the runs", "", *[f"- {n}" for n in d.notes], ""]
     for dof, r in d.dofs.items():
         out += _dof_section(dof, r)
     return "\n".join(out) + "\n"

@@ -18,6 +18,12 @@ forward-backward selection over all pairs: a cause that only looked best alone i
 two others
 explain the data better.
 
+Before it, the bound gate: a set with a fitted parameter at an end of its search range
+(:func:`twin.diagnose.candidates.at_bounds`: gain 0.1, a 0.1 Hz break, 0.3 s more delay)
+explains the runs only beyond what a motion system has: that is a limit reached, not a
+measurement, and the values fitted jointly with it are no better. Nothing of the set is named;
+the parameters at their bound are reported "at the bound" (:attr:`Selection.at_bound`).
+
 Then the held-out gate: every named effect must improve the data it was not fitted on, on the
 evidence it claims to explain: the set is refitted with and without the effect on one half of
 the measurement window and scored on the other (two-fold, both ways), or on validation runs;
@@ -40,7 +46,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from twin.chain.extensions import Extension
-from twin.diagnose.candidates import DYNAMIC, Model, SetFit, fit_set, numeric_names
+from twin.diagnose.candidates import DYNAMIC, Model, SetFit, at_bounds, fit_set, numeric_names
 from twin.diagnose.data import Case
 from twin.diagnose.evidence import Lines, lines, measured_line_sd
 from twin.progress import ProgressFn
@@ -105,6 +111,9 @@ class Selection:
         Every set tried: effects, chi2, parameters, BIC improvement over the nominal model.
     observations : int
         Real observations (2 x lines).
+    at_bound : tuple of dict
+        Effects of the selected set whose fitted parameters lie at a bound of their search
+        (:func:`twin.diagnose.candidates.at_bounds`): reported, never named.
 
     """
 
@@ -112,6 +121,7 @@ class Selection:
     delta_bic: dict[str, float]
     table: list[dict[str, object]]
     observations: int
+    at_bound: tuple[dict[str, object], ...] = ()
 
 
 def bic_gain(chi2_0: float, chi2_1: float, extra_parameters: int, n: int) -> float:
@@ -328,6 +338,9 @@ def name_causes(
     chi0, n = base.chi2(evidence), sel.observations
     dropped: list[str] = []
     while True:  # drop what the held-out data do not support, re-check what is left
+        edge = at_bounds(fit, base, evidence)
+        if edge:  # a limit reached: the set explains the runs only beyond what is searched
+            return [], base, Selection(None, {}, sel.table, n, tuple(edge))
         gains = held_out(base, fit, fold_list)
         g = {e: (gains[e]["chi2_per_line_before"], gains[e]["chi2_per_line_after"]) for e in gains}
         bad = [e for e in fit.effects if not g[e][1] < g[e][0]]

@@ -51,17 +51,21 @@ from twin.ingest.columns import (
 from twin.ingest.timebase import Regular, check_stamps, decimate, regularise
 from twin.ownership import reading
 from twin.progress import ProgressFn
-from twin.runs import HEADERS, RunWriter, check_run_output, check_values
+from twin.run_checks import IMU_RATE_HZ, MAX_EXTRA_DELAY_S, check_plausible
+from twin.runs import HEADERS, RecordedRun, RunWriter, check_run_output, check_values
 from twin.signals import check_signal
 from twin.trajectory import Trajectory, interp_columns
 
 FloatArray = NDArray[np.float64]
 #: Rate of the grids the clocks are compared on [Hz].
 ALIGN_RATE_HZ = 100.0
-#: An apparent extra lag beyond this [s] is not taken for a motion-system delay.
-MAX_PLAUSIBLE_DELAY_S = 0.3
+#: An apparent extra lag beyond this [s] is not taken for a motion-system delay (what the
+#: reader allows, :data:`twin.run_checks.MAX_EXTRA_DELAY_S`).
+MAX_PLAUSIBLE_DELAY_S = MAX_EXTRA_DELAY_S
 #: Accelerometer units tried, with the magnitude of gravity each would read.
 _GRAVITY_UNITS = ("m/s^2", "g", "mg", "ft/s^2")
+#: IMU axes ``--imu-axes`` may name (besides ``auto``), and what they are.
+AXES = {"frd": "z down", "flu": "z up"}
 #: Sample rates a motion log must lie in [Hz].
 RATE_RANGE_HZ = (20.0, 20000.0)
 #: Commands logged faster than this are resampled to :data:`COMMAND_RATE_HZ` [Hz].
@@ -350,6 +354,11 @@ def _imu(src: _Source, commands: Trajectory, axes: str, notes: list[str]) -> Reg
     if missing:
         notes.append(f"{Path(src.name).name}: no {', '.join(missing)}; taken as at rest")
     gravity = np.median(values[:, :3], axis=0)
+    if axes in AXES and abs(gravity[2]) >= 0.8 * G and (gravity[2] > 0) != (axes == "flu"):
+        implied = "flu" if gravity[2] > 0 else "frd"
+        raise DataError(f"{src.name}: --imu-axes {axes}, but gravity reads az {gravity[2]:+.2f} "
+                        f"m/s^2 at rest, which is {AXES[implied]} ({implied}); give --imu-axes "
+                        f"{implied}, or auto to take the axes from gravity")  # fmt: skip
     if axes == "auto":
         if abs(gravity[2]) < 0.8 * G:
             raise DataError(f"{src.name}: gravity reads ({', '.join(f'{g:.2f}' for g in gravity)})"
@@ -366,7 +375,11 @@ def _imu(src: _Source, commands: Trajectory, axes: str, notes: list[str]) -> Reg
         values[:, [1, 2, 4, 5]] *= -1
     elif axes != "frd":
         raise UsageError(f"IMU axes must be auto, frd or flu; got {axes!r}")
-    return regularise(data[:, 0] * tf, values, src.name, smooth=False)
+    reg = regularise(data[:, 0] * tf, values, src.name, smooth=False)
+    if reg.rate_hz < IMU_RATE_HZ[0]:
+        raise DataError(f"{src.name}: the IMU is logged at {reg.rate_hz:.4g} Hz; the analyses "
+                        f"need at least {IMU_RATE_HZ[0]:g} Hz (App. C.2.3's grid)")  # fmt: skip
+    return reg
 
 
 def _grid(t0: float, t1: float) -> FloatArray:
@@ -643,6 +656,8 @@ def _import(
     }
     imu = np.hstack([rec.accel, rec.gyro])
     check_values(imu, HEADERS["imu.csv"][1:], f"the IMU of {imu_src.name} (in m/s^2 and rad/s)")
+    check_plausible(RecordedRun(Path(out), meta, commands, rec.t - t0, imu, None),
+                    f"the IMU of {imu_src.name}, imported")  # fmt: skip
     with RunWriter(out, meta, overwrite=overwrite, files=("commands.csv", "imu.csv")) as w:
         w.write("commands.csv", commands.t, commands.values)
         w.write("imu.csv", rec.t - t0, imu)
