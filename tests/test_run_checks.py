@@ -32,8 +32,8 @@ from twin.frames import DOF_NAMES
 from twin.ingest import import_run
 from twin.measurement.describing_function import fourier_coefficients
 from twin.measurement.measure import from_run
+from twin.run_checks import read_plausible_run
 from twin.run_folder import execute, run_meta
-from twin.runs import read_run
 from twin.signals import MultiSine, periodic_signal, rest
 
 IMU_HEADER = "t,ax,ay,az,p,q,r"
@@ -103,7 +103,7 @@ def test_an_implausible_run_is_refused_in_one_line(runs, tmp_path, capsys, case)
     t, v = damage(imu[:, 0], imu[:, 1:])
     bad = _with_imu(runs[0], tmp_path / "bad", np.column_stack([t, v]))
     with pytest.raises(RunFormatError, match=re.escape(message)) as e:
-        read_run(bad)
+        read_plausible_run(bad)
     assert str(e.value).startswith(f"{bad}/imu.csv: ")
     out = tmp_path / "report"
     code = main(["diagnose", str(bad), "--out", str(out), "--no-figures", "--quiet"])
@@ -118,7 +118,7 @@ def test_another_runs_imu_is_refused(runs, tmp_path) -> None:
     n = min(len(other), len(_imu(runs[0])))
     bad = _with_imu(runs[0], tmp_path / "bad", other[:n])
     with pytest.raises(RunFormatError, match="the IMU does not follow the commands"):
-        read_run(bad)
+        read_plausible_run(bad)
 
 
 def _line(run, window: tuple[float, float], f: list[float]) -> np.ndarray:
@@ -145,11 +145,13 @@ def test_a_20_khz_imu_is_resampled_with_a_note(tmp_path) -> None:
     t = imu[0, 0] + np.arange(len(up)) / 20_000.0
     keep = t <= imu[-1, 0]
     fast = _with_imu(run, tmp_path / "fast", np.column_stack([t[keep], up[keep]]), 20_000.0)
-    rec = read_run(fast)
+    rec = read_plausible_run(fast)
     assert rec.meta["imu"]["rate_hz"] == pytest.approx(819.2)
     assert len(rec.notes) == 1 and "sampled at 20000 Hz" in rec.notes[0]
     assert "resampled to 819.2 Hz" in rec.notes[0]
-    ratio = _line(rec, sig.window, [0.2, 1.4]) / _line(read_run(run), sig.window, [0.2, 1.4])
+    ratio = _line(rec, sig.window, [0.2, 1.4]) / _line(
+        read_plausible_run(run), sig.window, [0.2, 1.4]
+    )
     assert np.all(np.abs(20 * np.log10(np.abs(ratio))) < 0.01)
     assert np.all(np.abs(np.degrees(np.angle(ratio))) < 0.1)
 
@@ -158,13 +160,13 @@ def test_an_imu_slower_than_the_analysis_grid_is_refused(runs, tmp_path) -> None
     """Every 16th sample: 51.2 Hz, below the 100 Hz grid the analyses put the IMU on."""
     bad = _with_imu(runs[0], tmp_path / "bad", _imu(runs[0])[::16], 819.2 / 16)
     with pytest.raises(RunFormatError, match=r"sampled at 51.2 Hz, below the 100 Hz"):
-        read_run(bad)
+        read_plausible_run(bad)
 
 
 def test_imu_axes_that_gravity_contradicts_are_refused(runs, tmp_path, capsys) -> None:
     """A lab log whose IMU reads gravity z down, imported with ``--imu-axes flu``: obeyed
     (and every axis turned) before; now refused, naming the axes gravity implies."""
-    rec = read_run(runs[0])
+    rec = read_plausible_run(runs[0])
     pitch = np.degrees(rec.commands.at(rec.imu_t)[:, 4])
     log = tmp_path / "log.csv"
     np.savetxt(log, np.column_stack([rec.imu_t, pitch, rec.imu]), delimiter=",", fmt="%.8g",
@@ -178,7 +180,7 @@ def test_imu_axes_that_gravity_contradicts_are_refused(runs, tmp_path, capsys) -
     assert code == 2 and not out.exists()
     assert "--imu-axes frd" in _one_error_line(capsys)
     import_run([log], tmp_path / "frd", platform="srs", imu_axes="frd")  # what gravity says
-    assert read_run(tmp_path / "frd").imu[:, 2].mean() == pytest.approx(-G, abs=0.05)
+    assert read_plausible_run(tmp_path / "frd").imu[:, 2].mean() == pytest.approx(-G, abs=0.05)
 
 
 def _twin_run(out: Path, platform: str, dof: str, model: str, ideal: bool, seed: int) -> Path:
@@ -197,17 +199,20 @@ def test_the_twins_own_runs_pass(tmp_path, dof) -> None:
     """No false alarm: every DOF on both platforms (reduced model), with the data sheet's
     noise and with an ideal IMU (no noise, yet nothing constant where it moves)."""
     for k, (platform, ideal) in enumerate([("mpi", False), ("srs", True)]):
-        rec = read_run(_twin_run(tmp_path / f"{k}", platform, dof, "reduced", ideal, k))
+        rec = read_plausible_run(_twin_run(tmp_path / f"{k}", platform, dof, "reduced", ideal, k))
         assert rec.notes == ()
 
 
 def test_the_full_models_runs_and_rest_pass(tmp_path) -> None:
     """The full (MuJoCo) model's heave noise and dynamics, and a rest run of an ideal IMU
     (every channel constant: nothing commanded moves, gravity reads -9.81)."""
-    assert read_run(_twin_run(tmp_path / "full", "mpi", "pitch", "full", False, 7)).notes == ()
+    assert (
+        read_plausible_run(_twin_run(tmp_path / "full", "mpi", "pitch", "full", False, 7)).notes
+        == ()
+    )
     run = prepare("srs", rest(3.0), "reduced", 0, default_imu("srs").ideal())
     execute(run, run_meta(run, "rest"), tmp_path / "rest")
-    rec = read_run(tmp_path / "rest")
+    rec = read_plausible_run(tmp_path / "rest")
     assert np.ptp(rec.imu, axis=0).max() == 0.0 and rec.notes == ()
 
 

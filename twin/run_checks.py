@@ -29,6 +29,7 @@ import dataclasses
 import hashlib
 from collections.abc import Sequence
 from fractions import Fraction
+from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
@@ -38,7 +39,7 @@ from twin.chain.config import MotionSystem
 from twin.chain.imu import G
 from twin.errors import RunFormatError
 from twin.run_expected import BAND_HZ, Comparison, compare, ideal_imu
-from twin.runs import HEADERS, RecordedRun
+from twin.runs import HEADERS, RecordedRun, read_run
 
 FloatArray = NDArray[np.float64]
 CHANNELS = HEADERS["imu.csv"][1:]
@@ -366,6 +367,15 @@ def check_plausible(run: RecordedRun, where: str | None = None) -> None:
     check_gravity(run, cmp, where)
     check_gyro_scale(cmp, where)
     check_timing(cmp, config, where)
+
+
+def read_plausible_run(folder: str | Path | RecordedRun) -> RecordedRun:
+    """Read a ``twin-run/1`` folder (:func:`twin.runs.read_run`) and check it is plausible.
+
+    The reader every analysis uses: the format first, then the physics (:func:`plausible_run`).
+    A run already read is checked as it is.
+    """
+    return plausible_run(read_run(folder))
 
 
 def plausible_run(run: RecordedRun) -> RecordedRun:

@@ -317,17 +317,17 @@ def _check_optional(meta: dict, where: str) -> None:
 def read_run(folder: str | Path | RecordedRun) -> RecordedRun:
     """Read and validate a ``twin-run/1`` folder (a run already read is returned as it is).
 
-    Beyond the format, the data must be plausible for a motion system
-    (:func:`twin.run_checks.plausible_run`): gravity, units, axes, clock and IMU rate. An
-    IMU faster than the analyses are made for comes back resampled, with a note in
-    :attr:`RecordedRun.notes`.
+    This is the format only; the analyses read runs through
+    :func:`twin.run_checks.read_plausible_run`, which also checks that the data are plausible
+    for a motion system (gravity, units, axes, clock and IMU rate) and resamples an IMU faster
+    than the analyses are made for, with a note in :attr:`RecordedRun.notes`.
 
     Raises
     ------
     RunFormatError
         Naming the file (and row) that is wrong: missing file, wrong header, a value that is
         not a finite number, time not uniform and strictly increasing, or a rate that does not
-        match ``meta.json``; or what is implausible in it, and how to fix it.
+        match ``meta.json``.
 
     """
     if isinstance(folder, RecordedRun):
@@ -352,9 +352,7 @@ def read_run(folder: str | Path | RecordedRun) -> RecordedRun:
         act = _read_csv(path / "actuators.csv")
     forces = _read_csv(path / "forces.csv") if (path / "forces.csv").exists() else None
     commands = _trajectory(cmd, path / "commands.csv")
-    from twin.run_checks import plausible_run
-
-    return plausible_run(RecordedRun(path, meta, commands, imu[:, 0], imu[:, 1:], act, forces))
+    return RecordedRun(path, meta, commands, imu[:, 0], imu[:, 1:], act, forces)
 
 
 #: What a commands file is, as a run folder holds it (messages and help).

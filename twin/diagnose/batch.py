@@ -29,7 +29,8 @@ from twin.diagnose.diagnosis import Diagnosis, diagnose
 from twin.errors import RunFormatError
 from twin.lifecycle import replacing_dir
 from twin.progress import ProgressFn
-from twin.runs import RecordedRun, read_run
+from twin.run_checks import read_plausible_run
+from twin.runs import RecordedRun
 from twin.tasks.engine import Engine, using
 from twin.tasks.outcome import Failure
 
@@ -143,7 +144,7 @@ def diagnose_each(
     """
     groups = [measurement_runs(t) for t in targets]
     names = _unique([Path(t).resolve().name or "measurement" for t in targets])
-    data = [[read_run(p) for p in g] for g in groups]
+    data = [[read_plausible_run(p) for p in g] for g in groups]
     with using(scheduler) as engine:
         outcome = engine.map(
             diagnose_measurement,

@@ -29,8 +29,8 @@ from twin.errors import RunFormatError, SignalError
 from twin.frames import DOF_NAMES, dof_index
 from twin.measurement.measure import Measurement, from_imu, from_run
 from twin.progress import ProgressFn
-from twin.run_checks import check_distinct
-from twin.runs import RecordedRun, read_run
+from twin.run_checks import check_distinct, read_plausible_run
+from twin.runs import RecordedRun
 from twin.trajectory import Trajectory, interp_columns
 
 FloatArray = NDArray[np.float64]
@@ -324,7 +324,7 @@ def load_case(
         raise SignalError("give at least one run folder to diagnose")
     if realisations < 2:
         raise SignalError(f"need at least 2 noise realisations; got {realisations}")
-    recs = [read_run(path) for path in runs]
+    recs = [read_plausible_run(path) for path in runs]
     check_distinct(recs)
     measurements = []
     for rec in recs:

@@ -43,8 +43,8 @@ from twin.errors import SignalError, UsageError
 from twin.jsonable import plain
 from twin.plotting import finish, pyplot
 from twin.progress import ProgressFn
-from twin.run_checks import check_distinct
-from twin.runs import RecordedRun, read_run
+from twin.run_checks import check_distinct, read_plausible_run
+from twin.runs import RecordedRun
 
 
 @dataclass(eq=False)
@@ -340,7 +340,7 @@ def diagnose(
 
     """
     check_options(max_hz, imu_noise)
-    recs, vals = [read_run(r) for r in runs], [read_run(r) for r in validate]
+    recs, vals = [read_plausible_run(r) for r in runs], [read_plausible_run(r) for r in validate]
     check_distinct([*recs, *vals])
     case = load_case(recs, config, model, seed, dofs, realisations, progress)
     val = None

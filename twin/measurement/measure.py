@@ -30,7 +30,8 @@ from twin.chain.imu import ImuRecord, ImuSpec, postprocess
 from twin.chain.simulate import MODELS, Run, Simulation, prepare
 from twin.errors import RunFormatError, SignalError, UnknownPlatformError
 from twin.frames import DOF_NAMES, dof_index
-from twin.runs import RecordedRun, read_run
+from twin.run_checks import read_plausible_run
+from twin.runs import RecordedRun
 from twin.signals import check_signal
 from twin.trajectory import Trajectory
 
@@ -109,7 +110,7 @@ def from_imu(
 
 def run_config(run: RecordedRun | str | Path) -> MotionSystem:
     """Return the configuration a recorded run's ``meta.json`` names."""
-    rec = run if isinstance(run, RecordedRun) else read_run(run)
+    rec = run if isinstance(run, RecordedRun) else read_plausible_run(run)
     return MotionSystem.from_meta(
         rec.meta["platform"], rec.meta["platform_config"], f"from {rec.path}/meta.json"
     )
@@ -117,7 +118,7 @@ def run_config(run: RecordedRun | str | Path) -> MotionSystem:
 
 def from_run(run: RecordedRun | str | Path) -> Measurement:
     """Return the :class:`Measurement` of a recorded ``twin-run/1`` folder (validated)."""
-    rec = run if isinstance(run, RecordedRun) else read_run(run)
+    rec = run if isinstance(run, RecordedRun) else read_plausible_run(run)
     config = run_config(rec)
     _check_not_cut(rec)
     imu = ImuRecord(rec.imu_t, rec.imu[:, :3], rec.imu[:, 3:])
