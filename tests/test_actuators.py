@@ -212,3 +212,57 @@ def test_payloads_are_checked():
         Payload.scaling("mpi", 0.5)
     with pytest.raises(ConfigError, match="more than 10 times"):
         Payload.of(1e6).model("mpi")
+
+
+# --- physics in a configuration -----------------------------------------------------------------
+
+
+def test_a_configurations_physics_reaches_the_full_model_and_round_trips(tmp_path, capsys):
+    import json
+
+    from twin.chain.config import load_config
+    from twin.cli.main import main
+    from twin.runs import read_run
+
+    physics = {"legs": {"coulomb_n": [0, 800, 0, 0, 0, 0]},
+               "payload": {"mass_kg": 150.0, "position_m": [0.3, 0.0, -0.5],
+                           "inertia": [20.0, 30.0, 20.0]}}  # fmt: skip
+    cfg = motion_system("mpi").to_meta() | {"physics": physics}
+    path = tmp_path / "calibrated.json"
+    path.write_text(json.dumps({"format": "twin-config/1", "platform": "mpi",
+                                "platform_config": cfg}))  # fmt: skip
+    ms = load_config(path)
+    assert ms.physics.legs.coulomb_n.tolist() == [0, 800, 0, 0, 0, 0]
+    assert ms.physics.payload.mass_kg == 150.0
+    again = load_config(ms.save(tmp_path / "again.json"))
+    assert again.to_meta() == ms.to_meta()
+    runs = {}
+    for name, config in (("nominal", "mpi"), ("calibrated", str(path))):
+        out = tmp_path / name
+        assert main(["simulate", config, "--signal", "multisine1-heave", "--quiet", "--out",
+                     str(out)]) == 0  # fmt: skip
+        runs[name] = read_run(out)
+    assert runs["calibrated"].meta["platform_config"]["physics"] == again.to_meta()["physics"]
+    static = runs["calibrated"].forces[:50, 1:].sum() / runs["nominal"].forces[:50, 1:].sum()
+    mass = float(FullPlatform("mpi").model.body("cabin").mass[0])
+    assert static == pytest.approx((mass + 150.0) / mass, rel=0.01)  # the legs carry it
+    capsys.readouterr()
+    assert main(["simulate", str(path), "--signal", "rest-1", "--model", "reduced",
+                 "--out", str(tmp_path / "r")]) == 2  # fmt: skip
+    assert "needs the full model" in capsys.readouterr().err
+
+
+def test_a_configurations_physics_is_strict():
+    from twin.chain.config import MotionSystem
+
+    base = motion_system("mpi").to_meta()
+    for physics, message in (
+        ({"leg": {}}, "unknown key 'leg'"),
+        ({"legs": {"coulomb": 1}}, "unknown key 'coulomb'"),
+        ({"legs": {"play_m": 1.0}}, r"play_m\[0\] must be a number in \[0, 0.1\]"),
+        ({"payload": {"position_m": [0, 0, 0]}}, "lacks 'mass_kg'"),
+        ({"payload": {"mass_kg": 1e9}}, "more than 10 times"),
+        ([1, 2], "must be an object"),
+    ):
+        with pytest.raises(ConfigError, match=message):
+            MotionSystem.from_meta("mpi", base | {"physics": physics})

@@ -32,7 +32,7 @@ from typing import TextIO
 import numpy as np
 from numpy.typing import NDArray
 
-from twin.checks import ENCODING, not_utf8, number, numbers, read_text
+from twin.checks import ENCODING, not_utf8, number, numbers, read_json
 from twin.errors import ConfigError, OutputError, RunFormatError, SignalError, UsageError
 from twin.lifecycle import (
     CloseOrAbort,
@@ -338,11 +338,7 @@ def read_run(folder: str | Path | RecordedRun) -> RecordedRun:
     meta_path = path / "meta.json"
     if not meta_path.is_file():
         raise RunFormatError(f"{path}: missing meta.json")
-    text = read_text(meta_path, "a twin-run/1 meta.json", RunFormatError)
-    try:
-        meta = _check_meta(json.loads(text), path)
-    except json.JSONDecodeError as e:
-        raise RunFormatError(f"{meta_path}: not valid JSON ({e})") from None
+    meta = _check_meta(read_json(meta_path, "a twin-run/1 meta.json", RunFormatError), path)
     cmd = _read_csv(path / "commands.csv")
     _check_rate(path / "commands.csv", cmd[:, 0], float(meta["command_rate_hz"]))
     imu = _read_csv(path / "imu.csv")

@@ -47,6 +47,7 @@ from twin.checks import check_keys, did_you_mean, flag, number, read_json
 from twin.errors import ConfigError, SignalError, UnknownPlatformError
 from twin.lifecycle import replacing_file
 from twin.platform.facts import PLATFORMS, load_facts
+from twin.platform.platform_physics import PlatformPhysics
 from twin.thesis import TABLE_6_3
 
 #: Format tag of a configuration file (``twin diagnose --save-config``).
@@ -55,7 +56,7 @@ CONFIG_FORMAT = "twin-config/1"
 FILE_KEYS = ("format", "platform", "description", "platform_config")
 #: The keys of a ``platform_config`` (of a configuration file or a run's ``meta.json``).
 CONFIG_KEYS = ("name", "filter_break_hz", "delay_s", "noise", "noise_highpass_hz", "resonance",
-               "extensions")  # fmt: skip
+               "extensions", "physics")  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -82,6 +83,9 @@ class MotionSystem:
         Where the configuration comes from.
     extensions : tuple of Extension
         Model extensions (:mod:`twin.chain.extensions`), e.g. found by ``twin diagnose``.
+    physics : PlatformPhysics or None
+        The full model's actuators and payload where they differ from its MJCF
+        (:mod:`twin.platform.platform_physics`); None: the MJCF's own.
 
     """
 
@@ -94,6 +98,7 @@ class MotionSystem:
     resonance: bool = False
     description: str = ""
     extensions: tuple[Extension, ...] = ()
+    physics: PlatformPhysics | None = None
 
     def __post_init__(self) -> None:
         """Check the values."""
@@ -109,6 +114,8 @@ class MotionSystem:
         for ext in self.extensions:
             if not isinstance(ext, Extension):
                 raise SignalError(f"extensions must be Extension objects; got {ext!r}")
+        if self.physics is not None and self.physics.payload is not None:
+            self.physics.payload.check_for(self.platform)
 
     def of(self, effect: str) -> list[Extension]:
         """Return the extensions of one effect type."""
@@ -279,7 +286,7 @@ class MotionSystem:
             "noise_highpass_hz": self.noise_highpass_hz,
             "resonance": self.resonance,
             "extensions": [e.to_json() for e in self.extensions],
-        }
+        } | ({"physics": self.physics.to_dict()} if self.physics is not None else {})
 
     @classmethod
     def from_meta(cls, platform: str, cfg: object, description: str = "") -> MotionSystem:
@@ -326,6 +333,7 @@ class MotionSystem:
             resonance=flag(cfg.get("resonance", False), "platform_config resonance", ConfigError),
             description=description,
             extensions=tuple(_extension(e, k) for k, e in enumerate(exts)),
+            physics=_physics(cfg.get("physics")),
         )
 
     def save(self, path: str | Path) -> Path:
@@ -340,6 +348,11 @@ class MotionSystem:
         with replacing_file(path) as tmp:
             tmp.write_text(json.dumps(data, indent=2) + "\n", encoding="utf-8")
         return path
+
+
+def _physics(data: object) -> PlatformPhysics | None:
+    """Parse the ``physics`` entry of a ``platform_config`` (None where it has none)."""
+    return None if data is None else PlatformPhysics.from_dict(data, "platform_config physics")
 
 
 def _extension(data: object, k: int) -> Extension:

@@ -29,7 +29,8 @@ from twin.chain.reduced import ReducedPlatform
 from twin.chain.response import PlatformResponse
 from twin.chain.stepping import CHUNK_S, Platform, overlapped
 from twin.chain.stream import ChainStream, noise_streams
-from twin.errors import SignalError
+from twin.errors import ConfigError, SignalError
+from twin.platform.platform_physics import PlatformPhysics
 from twin.signals import check_physical
 from twin.trajectory import Trajectory
 
@@ -38,11 +39,29 @@ FloatArray = NDArray[np.float64]
 MODELS = ("full", "reduced")
 
 
-def make_platform(platform: str, model: str = "full", limit_mode: str = "limit") -> Platform:
-    """Return the full (MuJoCo) or reduced platform of ``platform``."""
+def make_platform(
+    platform: str,
+    model: str = "full",
+    limit_mode: str = "limit",
+    physics: PlatformPhysics | None = None,
+) -> Platform:
+    """Return the full (MuJoCo) or reduced platform of ``platform``.
+
+    Raises
+    ------
+    ConfigError
+        For ``physics`` (actuators, payload) with the reduced model, which has neither.
+
+    """
     if model == "full":
-        return FullPlatform(platform, limit_mode)
+        if physics is None:
+            return FullPlatform(platform, limit_mode)
+        return FullPlatform(platform, limit_mode, physics=physics.legs, payload=physics.payload)
     if model == "reduced":
+        if physics is not None:
+            raise ConfigError(f"the configuration's physics ({physics.describe()}) needs the "
+                              "full model: the reduced one (Eq 5.11) has no legs or cabin to "
+                              "load; give --model full")  # fmt: skip
         return ReducedPlatform(platform, limit_mode=limit_mode)
     raise SignalError(f"unknown model {model!r}; expected one of {', '.join(MODELS)}")
 
@@ -256,7 +275,8 @@ def prepare(
     if not isinstance(seed, int | np.integer) or seed < 0:
         raise SignalError(f"seed must be an integer >= 0; got {seed!r}")
     check_physical(commands)
-    plat = platform if platform is not None else make_platform(ms.platform, model, limit_mode)
+    plat = (platform if platform is not None
+            else make_platform(ms.platform, model, limit_mode, ms.physics))  # fmt: skip
     notes = []
     short = ms.delays_s < plat.own_lag_s
     if short.any():
