@@ -356,6 +356,8 @@ SLOTS = [
     ["pilot", "lead", "srs", "--delay-ms", "X"],
     ["agard", "omct", "srs", "--dof", "pitch", "--model", "reduced", "--fraction", "X"],
     ["agard", "threshold", "RUN", "--amplitude", "X"],
+    ["agard", "threshold", "RUN", "--fix-delay-ms", "X"],
+    ["agard", "df", "RUN", "--delay-ms", "X"],
     ["import", "RUN/commands.csv", "RUN/imu.csv", "--platform", "srs", "--clock-offset", "X"],
     ["import", "RUN/commands.csv", "RUN/imu.csv", "--platform", "srs", "--imu-position", "X", "0",
      "0"],
@@ -369,12 +371,15 @@ SLOW_SLOTS = [
     ["pilot", "adapt", "srs", "--weight", "X"],
     ["agard", "threshold", "srs", "--dof", "pitch", "--model", "reduced", "--amplitude", "X"],
     ["agard", "threshold", "srs", "--dof", "pitch", "--model", "reduced", "--step-s", "X"],
+    ["agard", "threshold", "srs", "--dof", "pitch", "--model", "reduced", "--repeats", "X"],
+    ["agard", "threshold", "srs", "--dof", "pitch", "--model", "reduced", "--fix-delay-ms", "X"],
     ["diagnose", "RUN", "--max-hz", "X", "--no-figures", "--scheduler", "inline"],
     ["diagnose", "RUN", "--imu-noise", "X", "--no-figures", "--scheduler", "inline"],
 ]  # fmt: skip
 #: Odd values tried in every slot.
 NUMBERS = ["nan", "inf", "-inf", "1e300", "-1e300", "1e-300", "-1", "-0", "1e9",
-           "99999999999999999999999", "0x10", "", "abc", "1e", "\uff11\uff12", "1,5"]  # fmt: skip
+           "99999999999999999999999", "9" * 5000, "0x10", "", "abc", "1e", "\uff11\uff12",
+           "1,5"]  # fmt: skip
 
 
 def _slot_argv(slot: list[str], value: str, run: Path, out: Path) -> list[str]:
@@ -407,3 +412,136 @@ def test_odd_numbers_in_long_commands_get_one_line_or_run(
     slot: list[str], valid: dict[str, Path]
 ) -> None:
     _odd_numbers(slot, valid)
+
+
+# --- misspelt keys and huge integers (issue item 5) ---------------------------------------------
+
+#: An integer beyond Python's int-from-string limit (4300 digits): json and tomllib refuse it.
+HUGE = "9" * 5000
+
+
+def _huge_integers(data: bytes) -> st.SearchStrategy[bytes]:
+    """A number of a JSON or TOML document replaced by :data:`HUGE` (or nested arrays)."""
+    text = data.decode()
+    spots = [m.span() for m in re.finditer(r"(?<![\w.\"])-?\d+(\.\d+)?(?![\w\"])", text)]
+
+    def put(a: tuple[int, str]) -> bytes:
+        lo, hi = spots[a[0] % len(spots)]
+        return (text[:lo] + a[1] + text[hi:]).encode()
+
+    odd = st.sampled_from([HUGE, "-" + HUGE, HUGE + ".5", "[" * 5000 + "1" + "]" * 5000])
+    return st.tuples(st.integers(0, 10_000), odd).map(put)
+
+
+#: The formats a user writes by hand, damaged with huge integers too.
+HUGE_FORMATS = ("twin-config/1", "omct-bounds", "sweep")
+
+
+@pytest.mark.parametrize("fmt", HUGE_FORMATS)
+def test_huge_integers_in_files_get_one_line(fmt: str, valid: dict[str, Path]) -> None:
+    """A 5000-digit integer was an internal error (exit 70) in a config or sweep file."""
+    damage = _huge_integers(_original(fmt, valid))
+    tried, ok = _run_fuzz(damage, lambda work, data: _format_case(fmt, valid, work, data),
+                          valid["root"], FAST)  # fmt: skip
+    assert tried >= FAST // 2 and ok < tried  # (some numbers, like a title's, are not read)
+
+
+def _typo(key: str, taken: set[str]) -> str:
+    """``key`` misspelt: its last two letters swapped (or an x added), no other key's name."""
+    typo = key[:-2] + key[-1] + key[-2] if len(key) > 2 and key[-1] != key[-2] else key + "x"
+    return typo if typo not in taken else typo + "x"
+
+
+def _json_keys(node: object, path: tuple = ()) -> list[tuple]:
+    """Every key path of a JSON document."""
+    if isinstance(node, dict):
+        return [p for k, v in node.items() for p in [(*path, k), *_json_keys(v, (*path, k))]]
+    if isinstance(node, list):
+        return [p for i, v in enumerate(node) for p in _json_keys(v, (*path, i))]
+    return []
+
+
+def _misspelt_json(data: bytes) -> list[tuple[str, bytes]]:
+    """Each key of a JSON document misspelt in turn: (the misspelt key, the document)."""
+    doc = json.loads(data)
+    taken = {p[-1] for p in _json_keys(doc) if isinstance(p[-1], str)}
+    out = []
+    for path in _json_keys(doc):
+        if not isinstance(path[-1], str):
+            continue
+        new = json.loads(data)
+        node = new
+        for k in path[:-1]:
+            node = node[k]
+        typo = _typo(path[-1], taken)
+        node[typo] = node.pop(path[-1])
+        out.append((typo, json.dumps(new).encode()))
+    return out
+
+
+def _misspelt_toml(data: bytes) -> list[tuple[str, bytes]]:
+    """Each key (``key = ...``) and table (``[name]``) of a TOML document misspelt in turn."""
+    text = data.decode()
+    spans = [m.span(1) for m in re.finditer(r"^\[?([A-Za-z_]+)\]?\s*(?:=|$)", text, flags=re.M)]
+    taken = {text[lo:hi] for lo, hi in spans}
+    out = []
+    for lo, hi in spans:
+        typo = _typo(text[lo:hi], taken)
+        out.append((typo, (text[:lo] + typo + text[hi:]).encode()))
+    return out
+
+
+@pytest.fixture(scope="module")
+def config_with_extension(valid: dict[str, Path]) -> Path:
+    """A twin-config/1 file whose every kind of key is present (an extension on one DOF)."""
+    from twin.chain.config import motion_system
+    from twin.chain.extensions import Extension
+
+    ms = motion_system("srs").replace(extensions=(Extension("gain", {"gain": 2.0}, ("heave",)),))
+    return ms.save(valid["root"] / "extended.json")
+
+
+@pytest.mark.parametrize("fmt", ["twin-config/1", "omct-bounds", "sweep"])
+def test_every_misspelt_key_is_refused_naming_it(
+    fmt: str, valid: dict[str, Path], config_with_extension: Path
+) -> None:
+    """A misspelt key was ignored (``dof`` for ``dofs``, ``dealy_s``): each key of each file a
+    user writes, misspelt, is refused with the nearest allowed key."""
+    if fmt == "twin-config/1":
+        cases = _misspelt_json(config_with_extension.read_bytes())
+    else:
+        cases = _misspelt_toml(_original(fmt, valid))
+    assert len(cases) >= 6
+    for typo, data in cases:
+        with tempfile.TemporaryDirectory(dir=valid["root"]) as tmp:
+            argv, out = _format_case(fmt, valid, Path(tmp), data)
+            assert check_clean(argv, Path(tmp), out) == 2, (fmt, typo)
+            err = _cli(argv)[1]
+        assert f"'{typo}' (did you mean '" in err, err
+
+
+@pytest.mark.parametrize("name", ["platform.toml", "build.toml"])
+def test_every_misspelt_key_of_a_model_file_is_refused_naming_it(
+    name: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The model folder's files (``TWIN_MODELS_DIR``): a misspelt key was ignored."""
+    from twin.errors import ModelFileError
+    from twin.platform.build import read_build_parameters
+    from twin.platform.facts import load_facts, model_dir
+
+    original = (model_dir("srs") / name).read_bytes()
+    folder = tmp_path / "models" / "simona_srs"
+    folder.mkdir(parents=True)
+    monkeypatch.setenv("TWIN_MODELS_DIR", str(tmp_path / "models"))
+    cases = _misspelt_toml(original)
+    assert len(cases) >= 15
+    read = (lambda: load_facts("srs")) if name == "platform.toml" else \
+        (lambda: read_build_parameters(folder / name))  # fmt: skip
+    try:
+        for typo, data in cases:
+            (folder / name).write_bytes(data)
+            load_facts.cache_clear()
+            with pytest.raises(ModelFileError, match=rf"'{typo}' \(did you mean '"):
+                read()
+    finally:
+        load_facts.cache_clear()
