@@ -434,12 +434,12 @@ def _huge_integers(data: bytes) -> st.SearchStrategy[bytes]:
 
 
 #: The formats a user writes by hand, damaged with huge integers too.
-HUGE_FORMATS = ("twin-config/1", "omct-bounds", "sweep")
+HUGE_FORMATS = ("twin-config/1", "omct-bounds", "sweep", "run/meta.json")
 
 
 @pytest.mark.parametrize("fmt", HUGE_FORMATS)
 def test_huge_integers_in_files_get_one_line(fmt: str, valid: dict[str, Path]) -> None:
-    """A 5000-digit integer was an internal error (exit 70) in a config or sweep file."""
+    """A 5000-digit integer was an internal error (exit 70) in a config, sweep or run file."""
     damage = _huge_integers(_original(fmt, valid))
     tried, ok = _run_fuzz(damage, lambda work, data: _format_case(fmt, valid, work, data),
                           valid["root"], FAST)  # fmt: skip
