@@ -227,7 +227,7 @@ class MotionSystem:
             out.append(Delay(tuple(float(d) for d in delay)))
         if self.resonance:
             out.append(Resonance())
-        for effect in ("gain", "resonance", "lead", "backlash"):
+        for effect in ("gain", "resonance", "lead", "backlash", "platform_lag"):
             out.extend(e.block() for e in self.of(effect))
         return out
 

@@ -16,6 +16,9 @@ effect              parameters                      block
                                                     named channels (ax ay az p q r), noise included
 ``backlash``        ``play``                        dead band of width ``play`` [m or rad] on the
                                                     platform input (after filter and delay)
+``platform_lag``    ``lag_s``                       1 / (1 + t_m s): the platform's own first-order
+                                                    lag (Eq 5.11, Table 5.5's t_m), e.g. a heavier
+                                                    cabin behind the same PD
 ``noise``           ``scale``                       the motion noise (Eq 5.10) times ``scale``
                                                     (the IMU's own noise belongs to the IMU:
                                                     :class:`~twin.chain.imu.ImuSpec`)
@@ -53,6 +56,7 @@ EFFECTS: Mapping[str, tuple[str, ...]] = {
     "lead": ("time_constant_s",),
     "sensor_filter": ("cutoff_hz", "channels"),
     "backlash": ("play",),
+    "platform_lag": ("lag_s",),
     "noise": ("scale",),
 }
 #: Allowed range of each numeric parameter: (low, high, low excluded). The bounds keep a
@@ -67,6 +71,7 @@ RANGES: Mapping[str, tuple[float, float, bool]] = {
     "cutoff_hz": (0.01, 1e3, False),
     "play": (0.0, 10.0, False),
     "scale": (0.0, 1e3, False),
+    "lag_s": (0.0, 1.0, False),
 }
 #: The keys of an extension's JSON form.
 JSON_KEYS = ("effect", "parameters", "dofs")
@@ -74,7 +79,8 @@ IMU_CHANNELS = ("ax", "ay", "az", "p", "q", "r")
 #: The IMU channel that measures each DOF's acceleration (after App. C.2.3 processing).
 DOF_CHANNEL = dict(zip(DOF_NAMES, IMU_CHANNELS, strict=True))
 #: Effects that are linear, time-invariant responses of the commanded DOF.
-LINEAR = ("delay", "gain", "platform_filter", "resonance", "lead", "sensor_filter")
+LINEAR = ("delay", "gain", "platform_filter", "resonance", "lead", "sensor_filter",
+          "platform_lag")  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -210,6 +216,8 @@ class Extension:
             return 1.0 + s * p("time_constant_s")
         if self.effect == "sensor_filter":
             return 1.0 / (1.0 + s / (2 * np.pi * p("cutoff_hz")))
+        if self.effect == "platform_lag":
+            return 1.0 / (1.0 + s * p("lag_s"))
         raise SignalError(f"{self.effect} is not a linear effect; it has no frequency response")
 
     # --- blocks --------------------------------------------------------------------------------
@@ -232,6 +240,10 @@ class Extension:
             return Lead(tuple(p("time_constant_s") if m else 0.0 for m in mask))
         if self.effect == "backlash":
             return Backlash(p("play"), mask)
+        if self.effect == "platform_lag":
+            lag = p("lag_s")
+            sys = ((1.0,), (lag, 1.0)) if lag > 0 else None
+            return LtiBlock(tuple(sys if m else None for m in mask), f"platform lag {lag:g} s")
         raise SignalError(f"{self.effect} is not applied to the commands")
 
 

@@ -37,8 +37,11 @@ from twin.run_checks import MAX_EXTRA_DELAY_S
 
 FloatArray = NDArray[np.float64]
 ComplexArray = NDArray[np.complex128]
-#: The effects that change the deterministic response (everything but ``noise``).
-DYNAMIC = tuple(e for e in EFFECTS if e != "noise")
+#: The effects fitted to the lines: every one that changes the deterministic response but
+#: ``platform_lag``, whose line response is a ``sensor_filter``'s on the DOF's own channel: the
+#: two are told apart by the noise (a sensor filter filters the sensor's noise too), after the
+#: lines have named one of them (:mod:`twin.diagnose.sensor_side`).
+DYNAMIC = tuple(e for e in EFFECTS if e not in ("noise", "platform_lag"))
 #: Parameters searched in log space (positive, scale-like).
 _LOG = {"gain", "break_hz", "frequency_hz", "damping", "cutoff_hz", "play"}
 

@@ -39,6 +39,7 @@ from twin.diagnose.residuals import (
     segment,
 )
 from twin.diagnose.select import BIC_MARGIN, Finding, Selection, name_causes
+from twin.diagnose.sensor_side import decide_side
 from twin.errors import SignalError, UsageError
 from twin.jsonable import plain
 from twin.plotting import finish, pyplot
@@ -354,6 +355,7 @@ def diagnose(
         base = Model(case, dof)
         effects = tuple(e for e in DYNAMIC if e not in case.unidentifiable)
         findings, fitted, sel = name_causes(case, dof, base, val, effects, progress, max_hz)
+        fitted, findings = decide_side(fitted, findings, imu_noise)  # sensor or platform
         if progress:
             progress(f"{dof}: noise")
         noise = judge_noise(fitted, BIC_MARGIN, max_hz, imu_noise)

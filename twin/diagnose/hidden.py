@@ -45,6 +45,11 @@ from twin.measurement.measure import from_imu
 from twin.run_folder import execute, run_meta, signal_meta
 from twin.signals import describing_signal
 
+#: The effects the generator hides: the chain's vocabulary as the diagnosis fits it to the
+#: lines (``platform_lag``, the platform-side reading of a ``sensor_filter``, is drawn by the
+#: tests of the sensor-or-platform judgement instead, tests/test_diagnose_sensor_side.py).
+DRAWN = tuple(e for e in EFFECTS if e != "platform_lag")
+
 #: Expected evidence of a drawn effect, in multiples of the naming threshold.
 DETECTABLE_FACTOR = 3.0
 #: Tolerances of the hidden-effect tests: absolute for delay [s], relative otherwise.
@@ -198,7 +203,7 @@ def draw(
         if kinds and "noise" in kinds:  # motion noise exists in the MPI's heave only
             platform, dof = "mpi", "heave"
         config = motion_system(platform)
-        pool = [e for e in EFFECTS if e != "noise" or _motion_noise(config, dof)]
+        pool = [e for e in DRAWN if e != "noise" or _motion_noise(config, dof)]
         chosen = kinds or tuple(str(k) for k in rng.choice(pool, size=count, replace=False))
         exts = tuple(Extension(k, _parameters(k, rng, config, dof), (dof,)) for k in chosen)
         noise = _imu_noise(rng, imu_noise)

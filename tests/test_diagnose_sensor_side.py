@@ -1,0 +1,73 @@
+"""A sensor filter or a platform lag: the same lines, told apart by the sensor's own noise.
+
+A first-order filter inside the IMU and a first-order lag of the platform (Eq 5.11's t_m: a
+heavier cabin behind the same PD) give the same describing function; only a filter in the
+sensor filters the sensor's noise. Runs are drawn with either truth (and, from the full
+MuJoCo model, with a heavier cabin); the diagnosis must name the right side.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from twin.chain.config import motion_system
+from twin.chain.extensions import Extension
+from twin.diagnose.diagnosis import diagnose
+from twin.diagnose.hidden import record_runs
+from twin.diagnose.sensor_side import platform_reading
+from twin.platform.payload import Payload
+from twin.platform.platform_physics import PlatformPhysics
+
+CHANNEL = {"pitch": "q", "roll": "p", "heave": "az"}
+
+
+def _named(d) -> list[tuple[str, str | None]]:
+    return [(f.extension.effect, f.evidence.get("side", {}).get("verdict")) for f in d.findings]
+
+
+@pytest.mark.parametrize(("dof", "cutoff_hz"), [("pitch", 3.0), ("roll", 8.0)])
+def test_a_platform_lag_is_named_as_the_platforms_not_as_a_sensor_filter(dof, cutoff_hz,
+                                                                        tmp_path):  # fmt: skip
+    srs = motion_system("srs")
+    lag = 1 / (2 * np.pi * cutoff_hz)
+    truth = srs.replace(extensions=(Extension("platform_lag", {"lag_s": lag}, (dof,)),))
+    d = diagnose(record_runs(truth, srs, dof, tmp_path, 3))
+    assert _named(d) == [("platform_lag", "platform")]
+    f = d.findings[0]
+    assert f.extension.value("lag_s") == pytest.approx(lag, rel=0.1)
+    assert f.extension.dofs == (dof,)
+    assert f.evidence["side"]["noise_evidence_platform_over_sensor"] > 10  # BIC margin
+    assert d.extended_config.of("platform_lag")  # the extended model carries it
+
+
+@pytest.mark.parametrize(("dof", "cutoff_hz"), [("pitch", 3.0), ("roll", 8.0)])
+def test_a_sensor_filter_stays_the_sensors(dof, cutoff_hz, tmp_path):
+    srs = motion_system("srs")
+    filt = Extension("sensor_filter", {"cutoff_hz": cutoff_hz, "channels": (CHANNEL[dof],)}, ())
+    d = diagnose(record_runs(srs.replace(extensions=(filt,)), srs, dof, tmp_path, 4))
+    assert _named(d) == [("sensor_filter", "sensor")]
+    assert d.findings[0].evidence["side"]["noise_evidence_platform_over_sensor"] < -10
+
+
+def test_a_heavier_cabin_in_full_physics_is_a_platform_lag_never_a_sensor_filter(tmp_path):
+    """The MPI's cabin 60 % heavier, simulated with the full MuJoCo model, diagnosed against
+    the nominal reduced model: pitch lags more (Table 5.5's t_m = 12.4 ms grows with the
+    inertia to about 20 ms), which the lines alone read as a 20 Hz filter on the gyro."""
+    mpi = motion_system("mpi")
+    heavy = mpi.replace(physics=PlatformPhysics(payload=Payload.scaling("mpi", 1.6)))
+    d = diagnose(record_runs(heavy, mpi, "pitch", tmp_path, 5, model="full"))
+    effects = [e for e, _ in _named(d)]
+    assert "platform_lag" in effects and "sensor_filter" not in effects
+    lag = d.findings[effects.index("platform_lag")].extension
+    assert lag.dofs == ("pitch",) and 0.010 < lag.value("lag_s") < 0.030
+
+
+def test_the_platform_reading_has_the_sensor_filters_line_response():
+    sensor = Extension("sensor_filter", {"cutoff_hz": 5.0, "channels": ("q",)}, ())
+    platform = platform_reading(sensor, "pitch")
+    f = np.array([0.1, 1.0, 5.0, 12.0])
+    assert np.allclose(platform.response(f), sensor.response(f), rtol=1e-12)
+    cfg = motion_system("srs").replace(extensions=(platform,))
+    h = cfg.frequency_response(f)[:, 4] / motion_system("srs").frequency_response(f)[:, 4]
+    assert np.allclose(h, sensor.response(f), rtol=1e-9)  # the chain's block is the same lag

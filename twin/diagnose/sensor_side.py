@@ -1,0 +1,137 @@
+"""Sensor or platform: a sensor filter's lines are a platform lag's; the noise tells them apart.
+
+A first-order low-pass at f_c inside the IMU, on the DOF's own channel (``sensor_filter``),
+and a first-order lag t_m = 1 / (2 pi f_c) of the platform in that DOF (``platform_lag``,
+Eq 5.11's t_m: a heavier cabin behind the same PD) multiply every excited line by the same
+factor: the lines cannot tell them apart. The noise can. A filter inside the sensor filters
+the sensor's own noise too (its spectrum falls above f_c); a platform lag leaves the sensor's
+noise as it is. So after the lines have named a ``sensor_filter``, both readings are scored
+on the measurement's noise up to :data:`SIDE_BAND_HZ`, above the lines' band (``--max-hz``)
+where a filter shows most (the off-line bins of :mod:`twin.diagnose.nuisance`, the IMU's
+noise level fitted as a nuisance for each, or held at ``--imu-noise``)::
+
+    evidence = 2 (log L_platform - log L_sensor)
+
+- above ``BIC_MARGIN``: the platform lag is named instead (the same line response, so the
+  same held-out gains; the sensor's noise above f_c is unfiltered);
+- below ``-BIC_MARGIN``: the sensor filter stays (the noise is filtered as it is);
+- in between, the noise cannot tell: the sensor filter stays named, and the judgement says
+  that the platform lag explains the lines as well, with the evidence.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from twin.chain.extensions import Extension
+from twin.diagnose.candidates import Model
+from twin.diagnose.nuisance import fit_noise
+from twin.diagnose.residuals import segment
+from twin.diagnose.select import BIC_MARGIN, Finding
+
+#: Top of the band the two readings' noise is scored on [Hz]. The nominal noise model follows
+#: the measured noise up to about 30 Hz of the 100 Hz analysis grid; above it the IMU
+#: processing's roll-off (App. C.2.3) is not matched: on SRS pitch and roll runs with either
+#: truth, the right reading's IMU-noise factor rises from about 0.8 at 30 Hz to 7-16 at 50 Hz
+#: and the evidence turns to the platform for a true sensor filter. Up to 30 Hz the evidence
+#: was -480 to -960 for sensor filters at 3 and 8 Hz, +34 to +415 for platform lags.
+SIDE_BAND_HZ = 30.0
+
+
+def platform_reading(sensor: Extension, dof: str) -> Extension:
+    """Return the ``platform_lag`` of ``dof`` with a ``sensor_filter``'s line response."""
+    return Extension("platform_lag", {"lag_s": 1.0 / (2 * np.pi * sensor.value("cutoff_hz"))},
+                     (dof,))  # fmt: skip
+
+
+@dataclass(frozen=True)
+class SideJudgement:
+    """Whether a ``sensor_filter`` the lines named is in the sensor or the platform.
+
+    Attributes
+    ----------
+    sensor, platform : Extension
+        The two readings (the same line response).
+    evidence : float
+        2 (log L_platform - log L_sensor) of the measurement's noise.
+    verdict : str
+        ``"platform"``, ``"sensor"`` or ``"undecided"`` (see the module docstring).
+
+    """
+
+    sensor: Extension
+    platform: Extension
+    evidence: float
+    verdict: str
+
+    def to_json(self) -> dict[str, object]:
+        """JSON-ready, with what it means."""
+        meaning = {
+            "platform": "the sensor's noise above the cutoff is not filtered: the lag is the "
+            "platform's",
+            "sensor": "the sensor's noise is filtered as the lines' cutoff says: the filter "
+            "is in the sensor",
+            "undecided": "the noise cannot tell a filter in the sensor from a lag of the "
+            "platform: both explain the lines; a measurement with more noise above the "
+            "cutoff (a rest run at the IMU's full rate) decides",
+        }[self.verdict]
+        return {"sensor": self.sensor.to_json(), "platform": self.platform.to_json(),
+                "noise_evidence_platform_over_sensor": self.evidence,
+                "verdict": self.verdict, "meaning": meaning}  # fmt: skip
+
+
+def judge_side(model: Model, imu_noise: float | None = None) -> SideJudgement | None:
+    """Weigh the ``sensor_filter`` of a fitted model against its platform lag, on the noise.
+
+    Parameters
+    ----------
+    model : Model
+        The DOF's fitted model (the named extensions).
+    imu_noise : float, optional
+        The IMU's noise over its data sheet's (amplitude) when known; otherwise fitted for each
+        reading as a nuisance.
+
+    Returns
+    -------
+    SideJudgement or None
+        None where the model has no ``sensor_filter``.
+
+    """
+    sensor = next((e for e in model.extensions if e.effect == "sensor_filter"), None)
+    if sensor is None:
+        return None
+    platform = platform_reading(sensor, model.dof)
+    others = [e for e in model.extensions if e is not sensor]
+    alternative = Model(model.case, model.dof, [*others, platform], model.anchor, model._cache)
+    segments = [segment(c, max_hz=SIDE_BAND_HZ) for c in model.case.of(model.dof)]
+    known = None if imu_noise is None else float(imu_noise) ** 2
+    l_sensor = fit_noise(model, segments, imu_fixed=known).loglik
+    l_platform = fit_noise(alternative, segments, imu_fixed=known).loglik
+    evidence = 2.0 * (l_platform - l_sensor)
+    verdict = ("platform" if evidence > BIC_MARGIN else "sensor" if evidence < -BIC_MARGIN
+               else "undecided")  # fmt: skip
+    return SideJudgement(sensor, platform, float(evidence), verdict)
+
+
+def decide_side(
+    model: Model, findings: list[Finding], imu_noise: float | None = None
+) -> tuple[Model, list[Finding]]:
+    """Apply :func:`judge_side` to a DOF's findings: the platform reading replaces the sensor's.
+
+    Every finding of the named set carries the judgement in its evidence (``side``).
+    """
+    side = judge_side(model, imu_noise)
+    if side is None:
+        return model, findings
+    out = []
+    for f in findings:
+        evidence = {**f.evidence, "side": side.to_json()}
+        ext = side.platform if (f.extension is side.sensor and side.verdict == "platform") \
+            else f.extension  # fmt: skip
+        out.append(replace(f, extension=ext, evidence=evidence))
+    if side.verdict != "platform":
+        return model, out
+    exts = [side.platform if e is side.sensor else e for e in model.extensions]
+    return Model(model.case, model.dof, exts, model.anchor, model._cache), out
