@@ -4,7 +4,9 @@ Each example runs the ``twin`` command line in this process on a damaged copy of
 file of one format: random bytes, a truncation, a splice of odd text (``nan``, ``1e300``, a
 NUL, a quote, a byte-order mark, a non-UTF-8 byte, ...), a CSV cell or a JSON/TOML value
 replaced by an odd value of another type, a JSON key removed. Odd numbers go to every numeric
-option. Each example must:
+option. Well-formed runs that no motion system can have made (:data:`IMPLAUSIBLE`: a valid
+run's IMU in other units, axes or order, off its clock, dead, reversed or resampled) go to
+``twin agard noise``. Each example must:
 
 - exit with 0 or 2 (70 is a bug: an exception the twin did not expect; warnings are errors
   here, so a silent overflow fails too);
@@ -342,6 +344,82 @@ def test_the_valid_files_and_a_byte_order_mark_are_accepted(valid: dict[str, Pat
             with tempfile.TemporaryDirectory(dir=valid["root"]) as tmp:
                 argv, out = _format_case(fmt, valid, Path(tmp), prefix + _original(fmt, valid))
                 assert check_clean(argv, Path(tmp), out) == 0, (fmt, prefix)
+
+
+# --- physically implausible but well-formed runs ---------------------------------------------
+
+#: Transformations of a valid run's IMU that keep the format (issue 4.6): a unit factor on a
+#: channel, channels in another order, the IMU's clock shifted, a channel held constant or
+#: offset, the IMU time-reversed (another run's), resampled (its rate in meta.json follows).
+IMPLAUSIBLE = st.lists(
+    st.tuples(st.just("scale"), st.integers(0, 5),
+              st.sampled_from([0.0, -1.0, 1 / 9.81, 9.81, float(np.degrees(1.0)), 1e-3, 50.0]))
+    | st.tuples(st.just("permute"), st.permutations(range(6)))
+    | st.tuples(st.just("shift"), st.sampled_from([-2.0, -0.5, -0.05, 0.05, 0.3, 0.5, 2.0, 1e3]))
+    | st.tuples(st.just("constant"), st.integers(0, 5), st.sampled_from([0.0, -9.81, 1.0]))
+    | st.tuples(st.just("offset"), st.integers(0, 5), st.sampled_from([-9.81, 9.81, 0.5]))
+    | st.tuples(st.just("reverse"))
+    | st.tuples(st.just("rate"), st.sampled_from([1 / 16, 1 / 8, 1 / 2, 2, 5, 25])),
+    min_size=1,
+    max_size=3,
+).map(lambda ops: json.dumps(ops).encode())  # fmt: skip
+
+
+def _implausible(run: Path, ops: list[list]) -> None:
+    """Apply transformations of :data:`IMPLAUSIBLE` to the IMU of the run folder ``run``."""
+    data = np.loadtxt(run / "imu.csv", delimiter=",", skiprows=1)
+    t, v = data[:, 0], data[:, 1:].copy()
+    meta = json.loads((run / "meta.json").read_text())
+    rate = meta["imu"]["rate_hz"]
+    for op, *a in ops:
+        if op in ("scale", "constant", "offset"):
+            k, x = a
+            v[:, k] = v[:, k] * x if op == "scale" else (x if op == "constant" else v[:, k] + x)
+        elif op == "permute":
+            v = v[:, a[0]]
+        elif op == "shift":
+            t = t + a[0]
+        elif op == "reverse":
+            v = v[::-1].copy()
+        elif a[0] < 1:  # rate: every k-th sample
+            k = round(1 / a[0])
+            t, v, rate = t[::k], v[::k], rate / k
+        else:  # rate: linear interpolation a[0] times as fast
+            tn = t[0] + np.arange(int((len(t) - 1) * a[0]) + 1) / (rate * a[0])
+            v = np.column_stack([np.interp(tn, t, v[:, j]) for j in range(6)])
+            t, rate = tn, rate * a[0]
+    np.savetxt(run / "imu.csv", np.column_stack([t, v]), delimiter=",", fmt="%.10g",
+               header="t,ax,ay,az,p,q,r", comments="")  # fmt: skip
+    meta["imu"]["rate_hz"] = rate
+    (run / "meta.json").write_text(json.dumps(meta))
+
+
+def _implausible_case(valid: dict[str, Path], work: Path, data: bytes) -> tuple[list[str], None]:
+    run = work / "run"
+    shutil.copytree(valid["run"], run)
+    _implausible(run, json.loads(data))
+    return ["agard", "noise", str(run), "--quiet", "--json"], None
+
+
+def _fuzz_implausible(valid: dict[str, Path], examples: int) -> tuple[int, int]:
+    return _run_fuzz(IMPLAUSIBLE, lambda work, data: _implausible_case(valid, work, data),
+                     valid["root"], examples)  # fmt: skip
+
+
+def test_implausible_runs_get_one_line_or_run(valid: dict[str, Path]) -> None:
+    """Well-formed runs a motion system cannot have made: read (exit 0) or one clear line,
+    and most are refused: at most a third read (some transformations touch only channels
+    nothing drives; before the plausibility checks, 15 of these 20 were read)."""
+    tried, ok = _fuzz_implausible(valid, FAST)
+    assert tried >= FAST // 2 and ok <= tried // 3
+
+
+@pytest.mark.slow
+def test_many_implausible_runs_get_one_line_or_run(valid: dict[str, Path]) -> None:
+    tried, ok = _fuzz_implausible(valid, SLOW)
+    assert ok <= tried // 3
+    print(f"\nfuzz implausible runs: {tried} tried, {tried} clean ({ok} accepted, "
+          f"{tried - ok} refused)")  # fmt: skip
 
 
 # --- odd numbers on the command line ----------------------------------------------------------
