@@ -115,6 +115,7 @@ def _cmd_diagnose(args: argparse.Namespace) -> int:
     from twin.diagnose.candidates import describe_bound
     from twin.diagnose.diagnosis import check_options, diagnose
     from twin.diagnose.report import write_report
+    from twin.diagnose.sensor_side import side_text
 
     with common.options_named({"max_hz": "--max-hz", "imu_noise": "--imu-noise"}):
         check_options(args.max_hz, args.imu_noise)  # before any work, also of a batch
@@ -158,6 +159,9 @@ def _cmd_diagnose(args: argparse.Namespace) -> int:
             held = (f"log-likelihood per bin {g['loglik_per_bin_before']:.3f} -> "
                     f"{g['loglik_per_bin_after']:.3f}")  # fmt: skip
         print(f"{i}. {f.extension.describe()}  (BIC +{f.delta_bic:.0f}; held out: {held})")
+        side = f.evidence.get("side")
+        if side is not None and side["verdict"] == "undecided":
+            print(f"   {side_text(side)}")
     for dof, r in d.dofs.items():
         print(f"{dof}: IMU noise x{r.noise.fit.to_json()['imu_noise_scale']:.2f} of the data "
               "sheet (a nuisance, not a cause)")  # fmt: skip

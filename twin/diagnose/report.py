@@ -13,6 +13,7 @@ import numpy as np
 from twin.diagnose.candidates import describe_bound
 from twin.diagnose.diagnosis import Diagnosis, DofReport
 from twin.diagnose.residual_figure import plot_residual
+from twin.diagnose.sensor_side import side_text
 from twin.lifecycle import replacing_dir
 from twin.plotting import pyplot
 
@@ -84,6 +85,8 @@ def summary(d: Diagnosis) -> str:
             )
         elif "loglik_per_bin_before" in g:
             out.append(f"   - held out: log-likelihood per bin {pair('loglik_per_bin', '.3f')}")
+        if "side" in f.evidence:
+            out.append(f"   - {side_text(f.evidence['side'])}")
         alts = f.evidence.get("alternatives") or []
         if alts:
             out.append("   - within the margin: " + "; ".join(

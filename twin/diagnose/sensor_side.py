@@ -82,6 +82,15 @@ class SideJudgement:
                 "verdict": self.verdict, "meaning": meaning}  # fmt: skip
 
 
+def side_text(side: dict) -> str:
+    """One line for a report or a terminal: the judgement of a finding's ``evidence["side"]``."""
+    other = side["platform"] if side["verdict"] != "platform" else side["sensor"]
+    reading = Extension.from_json(other).describe()
+    evidence = side["noise_evidence_platform_over_sensor"]
+    return (f"sensor or platform: {side['meaning']} (noise evidence for the platform "
+            f"{evidence:+.0f}; the other reading: {reading})")  # fmt: skip
+
+
 def judge_side(model: Model, imu_noise: float | None = None) -> SideJudgement | None:
     """Weigh the ``sensor_filter`` of a fitted model against its platform lag, on the noise.
 
