@@ -12,6 +12,7 @@ import json
 import operator
 import os
 import signal
+import time
 
 import numpy as np
 import pytest
@@ -80,6 +81,26 @@ def test_unreachable_scheduler_is_one_line_on_the_cli(capsys, monkeypatch):
     err = capsys.readouterr().err.strip()
     assert code == 2 and "no Dask scheduler answered at tcp://127.0.0.1:9" in err
     assert len(err.splitlines()) == 1
+
+
+def _ignores_ctrl_c() -> bool:
+    return signal.getsignal(signal.SIGINT) is signal.SIG_IGN
+
+
+def test_local_workers_ignore_ctrl_c_also_when_started_again(cluster):
+    """Ctrl-C reaches a local cluster's workers too (one process group): they leave it to the
+    ``twin`` process, which shuts them down, instead of dying with a traceback each."""
+    client = cluster.client()
+    assert set(client.run(_ignores_ctrl_c).values()) == {True}
+    killed = min(client.run(os.getpid).values())
+    os.kill(killed, signal.SIGKILL)  # the nanny starts another (the preload sets it up)
+    deadline = time.monotonic() + 120
+    while killed in (pids := set(client.run(os.getpid, on_error="ignore").values())) or (
+        len(pids) < 2
+    ):
+        assert time.monotonic() < deadline, "the killed worker was not started again"
+        time.sleep(0.1)
+    assert set(client.run(_ignores_ctrl_c).values()) == {True}
 
 
 @pytest.mark.parametrize("where", ["inline", "cluster"])
