@@ -23,7 +23,9 @@ variable, else ``local``) says where:
 
 A local cluster is started only when a batch has more than one task, so a one-task command
 pays nothing for it. Its workers ignore Ctrl-C: this process shuts them down
-(:mod:`twin.interrupts`).
+(:mod:`twin.interrupts`). A scheduler address must answer within seconds: what answers
+instead (nothing, an HTTP server, a silent port) is named at once
+(:mod:`.scheduler_probe`).
 
 Examples
 --------
@@ -51,6 +53,7 @@ from twin.errors import TwinError, UsageError
 from twin.interrupts import deferred
 from twin.progress import ProgressFn
 from twin.tasks.outcome import Failure, Outcome
+from twin.tasks.scheduler_probe import HANDSHAKE_TIMEOUT_S, what_answers
 
 #: Environment variable holding the default ``--scheduler``.
 SCHEDULER_ENV = "TWIN_SCHEDULER"
@@ -58,7 +61,8 @@ SCHEDULER_ENV = "TWIN_SCHEDULER"
 DEFAULT_SCHEDULER = "local"
 #: Most worker processes ``local:N`` starts.
 MAX_LOCAL_WORKERS = 256
-#: How long to wait for a remote scheduler to answer and to have a worker [s].
+#: How long to wait for a remote scheduler to have a worker, once it answered [s] (it must
+#: answer within :data:`~twin.tasks.scheduler_probe.HANDSHAKE_TIMEOUT_S`).
 CONNECT_TIMEOUT_S = 20.0
 #: The preload of a local cluster's worker processes (Ctrl-C ignored).
 WORKER_SETUP = "twin.tasks.worker_setup"
@@ -257,13 +261,19 @@ class Engine:
             return self._client
         if self.spec.kind != "remote":
             raise UsageError("an inline engine has no Dask client")
+        problem = what_answers(self.spec.address, HANDSHAKE_TIMEOUT_S)
+        if problem is not None:
+            raise SchedulerError(
+                f"no Dask scheduler at {self.spec.address}: {problem}; start one with `dask "
+                "scheduler` and workers with `dask worker ADDRESS`"
+            )
         try:
-            client = Client(self.spec.address, timeout=f"{CONNECT_TIMEOUT_S}s")
-        except OSError as e:
+            client = Client(self.spec.address, timeout=f"{HANDSHAKE_TIMEOUT_S}s")
+        except OSError as e:  # it greeted as Dask does, but did not go on as a scheduler
             raise SchedulerError(
                 f"no Dask scheduler answered at {self.spec.address} within "
-                f"{CONNECT_TIMEOUT_S:g} s ({e}); start one with `dask scheduler` and workers "
-                "with `dask worker ADDRESS`"
+                f"{HANDSHAKE_TIMEOUT_S:g} s ({str(e) or type(e).__name__}); start one with `dask "
+                "scheduler` and workers with `dask worker ADDRESS`"
             ) from None
         try:
             client.wait_for_workers(1, timeout=CONNECT_TIMEOUT_S)
