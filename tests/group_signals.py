@@ -2,9 +2,10 @@
 
 A terminal's Ctrl-C is one SIGINT to every process of the foreground process group: the
 ``twin`` process and the worker processes of its local Dask cluster. :func:`start` runs the
-command as a program (``python -m twin.cli``) in a new session, with ``TMPDIR`` its own
-``tmp`` folder and its ``work`` folder as the current one; :func:`ctrl_c` sends SIGINT to
-the group; :func:`left_behind` lists what a command left in those folders.
+command as a program (``python -m twin.cli``, :data:`AS_IN_A_TERMINAL`) in a new session,
+with ``TMPDIR`` its own ``tmp`` folder and its ``work`` folder as the current one;
+:func:`ctrl_c` sends SIGINT to the group; :func:`left_behind` lists what a command left in
+those folders.
 """
 
 from __future__ import annotations
@@ -20,6 +21,12 @@ from pathlib import Path
 
 #: Longest wait for a command to get to work, or to end [s] (a loaded 2-core machine).
 PATIENCE_S = 180.0
+#: ``python -m twin.cli`` as a terminal's foreground job runs it, with SIGINT not ignored even
+#: where the tests run with it ignored (in the background of a script: a process inherits it).
+AS_IN_A_TERMINAL = (
+    "import runpy, signal; signal.signal(signal.SIGINT, signal.default_int_handler); "
+    "runpy.run_module('twin.cli', run_name='__main__', alter_sys=True)"
+)
 #: Dask's own scratch folder in ``TMPDIR``: lock files, shared and reused by every run.
 DASK_SCRATCH = "dask-scratch-space"
 
@@ -32,7 +39,7 @@ def start(argv: list[str], root: Path) -> subprocess.Popen:
     env.pop("TWIN_DEBUG", None)
     with (root / "stdout").open("w") as out, (root / "stderr").open("w") as err:
         return subprocess.Popen(
-            [sys.executable, "-m", "twin.cli", *argv],
+            [sys.executable, "-c", AS_IN_A_TERMINAL, *argv],
             cwd=root / "work",
             env=env,
             stdin=subprocess.DEVNULL,

@@ -17,6 +17,7 @@ import sys
 import textwrap
 import time
 
+import pytest
 from group_signals import ctrl_c, finish, left_behind, start, wait_until, writing_a_run
 
 from twin.cli.main import main
@@ -48,8 +49,16 @@ def test_a_second_ctrl_c_during_a_full_model_run_does_not_crash(tmp_path):
     assert left_behind(tmp_path) == []
 
 
+@pytest.fixture
+def ctrl_c_as_in_a_terminal():
+    """SIGINT with Python's default handler, also where the tests run with it ignored."""
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    signal.signal(signal.SIGINT, previous)
+
+
 def test_a_ctrl_c_that_an_import_turns_into_another_error_still_ends_as_interrupted(
-    monkeypatch, capsys
+    monkeypatch, capsys, ctrl_c_as_in_a_terminal
 ):
     """A Ctrl-C inside a compiled module's import can surface as ``ImportError:
     initialization failed`` without the interrupt attached; it was reported as a bug (exit
@@ -70,9 +79,12 @@ def test_a_ctrl_c_that_an_import_turns_into_another_error_still_ends_as_interrup
 
 
 def _python(code: str) -> str:
-    """Run ``code`` in a fresh interpreter; return its stdout."""
-    done = subprocess.run([sys.executable, "-c", textwrap.dedent(code)], capture_output=True,
-                          text=True, timeout=120, check=True)  # fmt: skip
+    """Run ``code`` in a fresh interpreter, SIGINT as in a terminal; return its stdout."""
+    code = "import signal; signal.signal(signal.SIGINT, signal.default_int_handler)\n" + (
+        textwrap.dedent(code)
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          timeout=120, check=True)  # fmt: skip
     return done.stdout
 
 
