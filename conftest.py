@@ -28,6 +28,7 @@ LONGEST_FIRST = (
     "test_diagnose.py",  # 30
     "test_diagnose_hidden.py",  # 25
     "test_fuzz_inputs.py",  # 15
+    "test_interrupts.py",  # 15: Ctrl-C to commands at work (a local cluster, MuJoCo threads)
     "test_pilot_chapter6.py",  # 20
     "test_agard_reproductions.py",  # 15
     "test_pilot_chapter2.py",  # 15

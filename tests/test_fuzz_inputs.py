@@ -1,4 +1,4 @@
-"""Fuzzed bad input: every command answers with exit 0, or one clear line and exit 2 (issue 17).
+"""Fuzzed bad input: every command answers with exit 0, or one clear line and exit 2.
 
 Each example runs the ``twin`` command line in this process on a damaged copy of a valid
 file of one format: random bytes, a truncation, a splice of odd text (``nan``, ``1e300``, a
@@ -16,6 +16,11 @@ run's IMU in other units, axes or order, off its clock, dead, reversed or resamp
 The fast suite tries :data:`FAST` examples per format (derandomised: the same examples every
 run); ``make test-all`` tries :data:`SLOW` per format and a full-length pilot run, and prints
 the counts (README, Reliability).
+
+``make fuzz`` also sends Ctrl-C to the process group of commands at work, at moments drawn
+from a generator seeded by the command's name (exit 130 and one line, nothing left), and
+points ``--scheduler`` at servers that are not Dask schedulers (exit 2 and one line within
+seconds); tests/test_interrupts.py and tests/test_scheduler_probe.py hold one of each.
 """
 
 from __future__ import annotations
@@ -23,14 +28,30 @@ from __future__ import annotations
 import contextlib
 import io
 import json
+import os
+import random
 import re
 import shutil
+import struct
+import subprocess
+import sys
 import tempfile
-from collections.abc import Callable
+import time
+from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import numpy as np
 import pytest
+from fake_servers import closed_port, echoes, http_server, says, silent_listener, tcp_server
+from group_signals import (
+    ctrl_c,
+    finish,
+    left_behind,
+    start,
+    starting_processes,
+    wait_until,
+    writing_a_run,
+)
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -348,7 +369,7 @@ def test_the_valid_files_and_a_byte_order_mark_are_accepted(valid: dict[str, Pat
 
 # --- physically implausible but well-formed runs ---------------------------------------------
 
-#: Transformations of a valid run's IMU that keep the format (issue 4.6): a unit factor on a
+#: Transformations of a valid run's IMU that keep the format: a unit factor on a
 #: channel, channels in another order, the IMU's clock shifted, a channel held constant or
 #: offset, the IMU time-reversed (another run's), resampled (its rate in meta.json follows).
 IMPLAUSIBLE = st.lists(
@@ -492,7 +513,7 @@ def test_odd_numbers_in_long_commands_get_one_line_or_run(
     _odd_numbers(slot, valid)
 
 
-# --- misspelt keys and huge integers (issue item 5) ---------------------------------------------
+# --- misspelt keys and huge integers -------------------------------------------------------------
 
 #: An integer beyond Python's int-from-string limit (4300 digits): json and tomllib refuse it.
 HUGE = "9" * 5000
@@ -623,3 +644,131 @@ def test_every_misspelt_key_of_a_model_file_is_refused_naming_it(
                 read()
     finally:
         load_facts.cache_clear()
+
+
+# --- Ctrl-C to the process group, and servers that are not Dask schedulers -------------------
+
+#: Rounds of Ctrl-C per command, at moments drawn from a generator seeded by its name.
+CTRL_C_ROUNDS = 6
+_SWEEP_GRID = (
+    'task = "df"\nconfig = "mpi"\nmodel = "full"\n'
+    '[grid]\nbreak_hz = [0.5, 2.0]\ndelay_ms = [35.0, 100.0]\ndof = ["pitch"]\n'
+)
+
+
+def _run_written(proc: subprocess.Popen, root: Path) -> bool:
+    return writing_a_run(root)
+
+
+def _processes_started(proc: subprocess.Popen, root: Path) -> bool:
+    return starting_processes(proc)
+
+
+#: Commands interrupted: the command line, when it is at work, and the longest wait after that
+#: for the Ctrl-C (s): from the cluster's start to the end of the tasks or outputs written.
+INTERRUPTIBLE = {
+    "agard report, local cluster starting": (
+        ["agard", "report", "srs", "--model", "reduced", "--dof", "pitch", "heave",
+         "--scheduler", "local:2", "--out", "out"], _processes_started, 4.0),
+    "agard report, local cluster at work": (
+        ["agard", "report", "srs", "--dof", "pitch", "heave", "--scheduler", "local:2", "--out",
+         "out"], _run_written, 6.0),
+    "agard df, threads": (
+        ["agard", "df", "srs", "--dof", "pitch", "--out", "out", "--quiet"], _run_written, 3.0),
+    "simulate, full model": (
+        ["simulate", "mpi", "--signal", "rest-60", "--out", "out", "--quiet"], _run_written, 3.0),
+    "sweep, local cluster": (
+        ["sweep", "GRID", "--scheduler", "local:2", "--out", "out"], _processes_started, 8.0),
+    "pilot montecarlo, local cluster": (
+        ["pilot", "montecarlo", "--runs", "2000", "--scheduler", "local:2"], _processes_started,
+        8.0),
+}  # fmt: skip
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", list(INTERRUPTIBLE))
+def test_ctrl_c_to_the_process_group_at_random_moments(name: str, tmp_path: Path) -> None:
+    """One or two Ctrl-C (SIGINT to the whole process group, workers included): exit 130 and
+    the one line ``twin: interrupted``, nothing left in TMPDIR or beside the output; or, when
+    the command finished first, exit 0 and nothing on stderr. Never a traceback, a crash
+    (exit -11), a bug (70), a hang."""
+    argv, at_work, longest_s = INTERRUPTIBLE[name]
+    grid = tmp_path / "grid.toml"
+    grid.write_text(_SWEEP_GRID)
+    argv = [str(grid) if a == "GRID" else a for a in argv]
+    rng = random.Random(name)
+    outcomes = []
+    for k in range(CTRL_C_ROUNDS):
+        root = tmp_path / f"round-{k}"
+        root.mkdir()
+        proc = start(argv, root)
+        wait_until(lambda p=proc, r=root: at_work(p, r), proc, root)
+        time.sleep(rng.uniform(0, longest_s))
+        times, gap_s = rng.choice((1, 2)), rng.uniform(0.05, 1.0)
+        ctrl_c(proc, times, gap_s)
+        code, err = finish(proc, root)
+        if code == 0:  # done before the Ctrl-C came
+            assert err == "", (name, k)
+        else:
+            assert (code, err) == (130, "twin: interrupted\n"), (name, k, times, gap_s)
+            assert left_behind(root) == [], (name, k, times, gap_s)
+        outcomes.append(code)
+    print(f"\nCtrl-C {name}: {outcomes.count(130)} interrupted cleanly, "
+          f"{outcomes.count(0)} finished first")  # fmt: skip
+
+
+@contextlib.contextmanager
+def _nothing_listens() -> Iterator[str]:
+    yield closed_port()
+
+
+@contextlib.contextmanager
+def _unknown_host() -> Iterator[str]:
+    yield "tcp://no-such-host.invalid:8786"
+
+
+def _drips(conn) -> None:
+    """Say a few bytes at a time, slowly (never a full greeting)."""
+    for _ in range(40):
+        conn.sendall(b"\x00")
+        time.sleep(0.25)
+
+
+#: Servers that are not Dask schedulers, and what the error line must say of each.
+NOT_SCHEDULERS = {
+    "http": (http_server, "it speaks HTTP"),
+    "silent": (silent_listener, "said nothing within 5 s"),
+    "nothing": (_nothing_listens, "nothing listens there"),
+    "unknown host": (_unknown_host, "unknown host 'no-such-host.invalid'"),
+    "ssh banner": (lambda: tcp_server(says(b"SSH-2.0-OpenSSH_9.2\r\n")), "'SSH-2.0-OpenSSH_9.2'"),
+    "smtp banner": (lambda: tcp_server(says(b"220 mail ESMTP\r\n")), "'220 mail ESMTP'"),
+    "closes": (lambda: tcp_server(says(b"", then_wait=False)), "without Dask's greeting"),
+    "echo": (lambda: tcp_server(echoes), "'HEAD / HTTP/1.0'"),
+    "random bytes": (lambda: tcp_server(says(random.Random(3).randbytes(300))),
+                     "is not a Dask scheduler"),
+    "huge frame": (lambda: tcp_server(says(struct.pack("<QQQ", 2**62, 1, 2**62 - 16))),
+                   "is not a Dask scheduler"),
+    "drips": (lambda: tcp_server(_drips), "is not a Dask scheduler"),
+}  # fmt: skip
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("kind", list(NOT_SCHEDULERS))
+@pytest.mark.parametrize("via", ["option", "environment"])
+def test_a_scheduler_address_that_is_no_scheduler_gets_one_line_within_seconds(
+    kind: str, via: str, tmp_path: Path
+) -> None:
+    server, said = NOT_SCHEDULERS[kind]
+    with server() as address:
+        where = ["--scheduler", address] if via == "option" else []
+        env = {**os.environ, "TWIN_SCHEDULER": address}
+        start_s = time.monotonic()
+        done = subprocess.run(
+            [sys.executable, "-m", "twin.cli", "pilot", "montecarlo", "--runs", "4", *where],
+            cwd=tmp_path, env=env, capture_output=True, text=True, timeout=120,
+        )  # fmt: skip
+        took = time.monotonic() - start_s
+    assert done.returncode == 2, done.stderr
+    assert done.stderr.startswith(f"twin: error: no Dask scheduler at {address}: ")
+    assert said in done.stderr and done.stderr.count("\n") == 1
+    print(f"\n{kind} ({via}): {took:.1f} s")

@@ -1,4 +1,4 @@
-"""Strict inputs (issue item 5): files, numbers, recorded runs and the locale.
+"""Strict inputs: files, numbers, recorded runs and the locale.
 
 - every file the twin reads refuses a key it does not know, naming the file, the allowed keys
   and the nearest one (a ``dof`` for ``dofs``, a ``dealy_s``), instead of ignoring it;

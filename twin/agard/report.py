@@ -59,9 +59,10 @@ def write_report(
             parts = _in_session(bench, dofs, tmp, rrd, progress, bounds)
         else:
             with using(scheduler) as engine:
+                scratch = tmp if engine.spec.on_this_machine else None
                 parts = engine.map(
                     dof_suite,
-                    [(bench, dof, i, bounds) for i, dof in enumerate(dofs)],
+                    [(bench, dof, i, bounds, scratch) for i, dof in enumerate(dofs)],
                     [{"dof": dof, "first_run": i * RUNS_PER_DOF} for i, dof in enumerate(dofs)],
                     f"AGARD suites on {bench.name} [DOFs]",
                     progress,
@@ -90,12 +91,18 @@ class DofPart:
     files: dict[str, bytes] = field(default_factory=dict)
 
 
-def dof_suite(bench: Bench, dof: str, i: int, bounds: omct.OmctBounds) -> DofPart:
+def dof_suite(
+    bench: Bench, dof: str, i: int, bounds: omct.OmctBounds, scratch: Path | None = None
+) -> DofPart:
     """Run the five tests in ``dof`` (the ``i``-th DOF of the report) in a folder of its own.
 
-    A task: returns the run folders and figures as files (relative path -> bytes).
+    A task: returns the run folders and figures as files (relative path -> bytes). The
+    folder is a hidden one in ``scratch`` (the report's own staging folder, when the task
+    runs on this machine: whatever ends the report, even a Ctrl-C that stops the worker
+    mid-task, removes it with the report), else in the worker's temporary folder.
     """
-    with tempfile.TemporaryDirectory(prefix="twin-agard-") as folder:
+    prefix = f".{dof}." if scratch is not None else "twin-agard-"
+    with tempfile.TemporaryDirectory(prefix=prefix, dir=scratch) as folder:
         root = Path(folder)
         with Session(bench, root) as s:
             s.count = i * RUNS_PER_DOF

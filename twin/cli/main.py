@@ -22,6 +22,7 @@ from twin.cli import common, terminal
 from twin.cli.simulate import add_parser as add_simulate
 from twin.errors import TwinError, UsageError
 from twin.frames import DOF_NAMES
+from twin.interrupts import handling_ctrl_c
 from twin.ownership import output_policy
 
 EXIT_USAGE = 2
@@ -205,26 +206,31 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Run the ``twin`` command; return its exit code (see :func:`error_line`).
 
     Whatever the locale: files are read and written as UTF-8, and a terminal that cannot
-    encode the twin's text gets ASCII spellings (:mod:`twin.cli.terminal`).
+    encode the twin's text gets ASCII spellings (:mod:`twin.cli.terminal`). Ctrl-C ends the
+    command once, cleanly (:mod:`twin.interrupts`). Without ``argv`` the command is this
+    process's own (``sys.argv``): after a Ctrl-C, SIGINT then stays ignored while Python waits
+    for the threads still running (MuJoCo's) and exits.
     """
     terminal.fit_streams(sys.stdout, sys.stderr)
-    try:
-        args = _parser().parse_args(argv)
-        policy = output_policy(overwrite=getattr(args, "overwrite", False),
-                               inputs=common.inputs_of(args))  # fmt: skip
-        with policy:  # no output replaces an input, nor a file twin did not write
-            common.outputs_checked(args)
-            return int(args.func(args))
-    except BrokenPipeError:
-        # the reader of stdout went away (``twin ... | head``): nothing to report
-        _quiet_stdout()
-        return EXIT_BROKEN_PIPE
-    except (Exception, KeyboardInterrupt) as e:
-        if os.environ.get("TWIN_DEBUG") and not isinstance(e, TwinError):
-            raise
-        line, code = error_line(e)
-        print(line, file=sys.stderr)
-        return code
+    with handling_ctrl_c(process=argv is None) as ctrl_c:
+        try:
+            args = _parser().parse_args(argv)
+            policy = output_policy(overwrite=getattr(args, "overwrite", False),
+                                   inputs=common.inputs_of(args))  # fmt: skip
+            with policy:  # no output replaces an input, nor a file twin did not write
+                common.outputs_checked(args)
+                return int(args.func(args))
+        except BrokenPipeError:
+            # the reader of stdout went away (``twin ... | head``): nothing to report
+            _quiet_stdout()
+            return EXIT_BROKEN_PIPE
+        except (Exception, KeyboardInterrupt) as e:
+            if os.environ.get("TWIN_DEBUG") and not isinstance(e, TwinError):
+                raise
+            # whatever a Ctrl-C cut short (an import raises ImportError then), it ended the command
+            line, code = error_line(KeyboardInterrupt() if ctrl_c.interrupted else e)
+            print(line, file=sys.stderr)
+            return code
 
 
 if __name__ == "__main__":

@@ -22,7 +22,10 @@ variable, else ``local``) says where:
                      workers need the same twin version installed (checked on connect)
 
 A local cluster is started only when a batch has more than one task, so a one-task command
-pays nothing for it.
+pays nothing for it. Its workers ignore Ctrl-C: this process shuts them down
+(:mod:`twin.interrupts`). A scheduler address must answer within seconds: what answers
+instead (nothing, an HTTP server, a silent port) is named at once
+(:mod:`.scheduler_probe`).
 
 Examples
 --------
@@ -34,19 +37,23 @@ Examples
 
 from __future__ import annotations
 
+import asyncio
 import difflib
 import logging
 import os
 import re
 import traceback
 from collections.abc import Callable, Iterator, Mapping, Sequence
-from contextlib import contextmanager
+from contextlib import contextmanager, suppress
 from dataclasses import dataclass
+from multiprocessing import resource_tracker
 from typing import Any, Self
 
 from twin.errors import TwinError, UsageError
+from twin.interrupts import deferred
 from twin.progress import ProgressFn
 from twin.tasks.outcome import Failure, Outcome
+from twin.tasks.scheduler_probe import HANDSHAKE_TIMEOUT_S, what_answers
 
 #: Environment variable holding the default ``--scheduler``.
 SCHEDULER_ENV = "TWIN_SCHEDULER"
@@ -54,8 +61,13 @@ SCHEDULER_ENV = "TWIN_SCHEDULER"
 DEFAULT_SCHEDULER = "local"
 #: Most worker processes ``local:N`` starts.
 MAX_LOCAL_WORKERS = 256
-#: How long to wait for a remote scheduler to answer and to have a worker [s].
+#: How long to wait for a remote scheduler to have a worker, once it answered [s] (it must
+#: answer within :data:`~twin.tasks.scheduler_probe.HANDSHAKE_TIMEOUT_S`).
 CONNECT_TIMEOUT_S = 20.0
+#: The preload of a local cluster's worker processes (Ctrl-C ignored).
+WORKER_SETUP = "twin.tasks.worker_setup"
+#: How long the workers of an abandoned batch get to stop before they are killed [s].
+STOP_S = 0.5
 SCHEDULER_HELP = (
     "where tasks run: 'local' (a Dask cluster of one worker process per core, the default), "
     "'local:N' (N workers), 'inline' (this process) or a running scheduler's address "
@@ -85,6 +97,11 @@ class SchedulerSpec:
     kind: str
     workers: int | None = None
     address: str | None = None
+
+    @property
+    def on_this_machine(self) -> bool:
+        """Whether tasks run on this machine (inline or a local cluster): they see its files."""
+        return self.kind != "remote"
 
     def describe(self) -> str:
         """Say where tasks run, e.g. ``local cluster (2 worker processes)``."""
@@ -194,13 +211,29 @@ class Engine:
         self.close()
 
     def close(self) -> None:
-        """Close the client and any cluster this engine started."""
-        if self._client is not None:
-            self._client.close()
-            self._client = None
-        if self._cluster is not None:
-            self._cluster.close()
-            self._cluster = None
+        """Close the client and any cluster this engine started.
+
+        A Ctrl-C meanwhile waits until they are closed (:func:`twin.interrupts.deferred`):
+        a cluster closed halfway is closed again at exit, with a traceback.
+        """
+        with deferred():
+            if self._client is not None:
+                self._client.close()
+                self._client = None
+            if self._cluster is not None:
+                self._cluster.close()
+                self._cluster = None
+
+    def _stop_workers(self) -> None:
+        """Stop the local cluster's workers within :data:`STOP_S` (killed mid-task), close it.
+
+        Closing the cluster alone gives a busy worker 4 s to finish its task before it is
+        killed; an abandoned task has nothing to finish.
+        """
+        with deferred(), suppress(Exception):  # closed below in any case
+            nannies = list(self._cluster.workers.values())
+            self._cluster.sync(_close_nannies, nannies, STOP_S)
+        self.close()
 
     def client(self) -> Any:
         """Return the Dask client, starting the local cluster or connecting first if needed."""
@@ -209,24 +242,38 @@ class Engine:
         from distributed import Client, LocalCluster
 
         if self.spec.kind == "local":
-            self._cluster = LocalCluster(
-                n_workers=self.spec.workers or cpu_count(),
-                threads_per_worker=1,
-                processes=True,
-                dashboard_address=":0",  # a free port: two clusters at once do not clash
-                silence_logs=logging.CRITICAL,
-            )
-            self._client = Client(self._cluster)
+            # the workers ignore Ctrl-C (this process shuts them down, see twin.interrupts):
+            # started with SIGINT ignored, restarted ones by the preload; a Ctrl-C while the
+            # cluster starts is raised once it has started, so that it is closed as a whole.
+            # The thread that starts the stdlib's resource tracker unblocks SIGINT in itself
+            # (bpo-33613), where it would be ignored: it is started from this thread first.
+            resource_tracker.ensure_running()
+            with deferred():
+                self._cluster = LocalCluster(
+                    n_workers=self.spec.workers or cpu_count(),
+                    threads_per_worker=1,
+                    processes=True,
+                    dashboard_address=":0",  # a free port: two clusters at once do not clash
+                    silence_logs=logging.CRITICAL,
+                    preload=[WORKER_SETUP],
+                )
+                self._client = Client(self._cluster)
             return self._client
         if self.spec.kind != "remote":
             raise UsageError("an inline engine has no Dask client")
+        problem = what_answers(self.spec.address, HANDSHAKE_TIMEOUT_S)
+        if problem is not None:
+            raise SchedulerError(
+                f"no Dask scheduler at {self.spec.address}: {problem}; start one with `dask "
+                "scheduler` and workers with `dask worker ADDRESS`"
+            )
         try:
-            client = Client(self.spec.address, timeout=f"{CONNECT_TIMEOUT_S}s")
-        except OSError as e:
+            client = Client(self.spec.address, timeout=f"{HANDSHAKE_TIMEOUT_S}s")
+        except OSError as e:  # it greeted as Dask does, but did not go on as a scheduler
             raise SchedulerError(
                 f"no Dask scheduler answered at {self.spec.address} within "
-                f"{CONNECT_TIMEOUT_S:g} s ({e}); start one with `dask scheduler` and workers "
-                "with `dask worker ADDRESS`"
+                f"{HANDSHAKE_TIMEOUT_S:g} s ({str(e) or type(e).__name__}); start one with `dask "
+                "scheduler` and workers with `dask worker ADDRESS`"
             ) from None
         try:
             client.wait_for_workers(1, timeout=CONNECT_TIMEOUT_S)
@@ -282,6 +329,12 @@ class Engine:
         Outcome
             Every result that came back, and the failures with their inputs.
 
+        Notes
+        -----
+        A batch left by an exception (Ctrl-C) cancels its tasks; a local cluster is shut down
+        too, as Dask does not stop a task that is running: so no worker writes on into a
+        folder the caller then removes. The next batch starts another cluster.
+
         """
         if len(inputs) != len(args):
             raise ValueError(f"{len(args)} tasks but {len(inputs)} input descriptions")
@@ -322,11 +375,18 @@ class Engine:
                 fut.release()
                 if progress:
                     progress(what, done, len(args))
-        except BaseException:
+        except BaseException:  # the batch is abandoned (Ctrl-C): its tasks must not run on
             client.cancel(futures)
+            if self._cluster is not None:  # a running task is not cancelled: its worker is
+                self._stop_workers()  # stopped before the caller removes what it was writing
             raise
         out.failures.sort(key=lambda f: f.index)
         return out
+
+
+async def _close_nannies(nannies: list[Any], timeout_s: float) -> None:
+    """Close Dask nannies (their workers killed after ``timeout_s``), all at once."""
+    await asyncio.gather(*(n.close(timeout=timeout_s) for n in nannies))
 
 
 @contextmanager
