@@ -22,6 +22,7 @@ LINEAR_CASES = [
     Extension("resonance", {"frequency_hz": 6.0, "damping": 0.3}, ("heave",)),
     Extension("lead", {"time_constant_s": 0.023}, ("heave",)),
     Extension("sensor_filter", {"cutoff_hz": 4.0, "channels": ("az",)}, ()),
+    Extension("platform_lag", {"lag_s": 0.02}, ("heave",)),
 ]
 
 
@@ -29,7 +30,8 @@ def test_vocabulary_is_the_fixed_set_of_effects():
     assert dict(EFFECTS) == {
         "delay": ("extra_delay_s",), "gain": ("gain",), "platform_filter": ("break_hz",),
         "resonance": ("frequency_hz", "damping"), "lead": ("time_constant_s",),
-        "sensor_filter": ("cutoff_hz", "channels"), "backlash": ("play",), "noise": ("scale",),
+        "sensor_filter": ("cutoff_hz", "channels"), "backlash": ("play",),
+        "platform_lag": ("lag_s",), "noise": ("scale",),
     }  # fmt: skip
 
 

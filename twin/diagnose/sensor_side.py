@@ -15,8 +15,10 @@ noise level fitted as a nuisance for each, or held at ``--imu-noise``)::
 - above ``BIC_MARGIN``: the platform lag is named instead (the same line response, so the
   same held-out gains; the sensor's noise above f_c is unfiltered);
 - below ``-BIC_MARGIN``: the sensor filter stays (the noise is filtered as it is);
-- in between, the noise cannot tell: the sensor filter stays named, and the judgement says
-  that the platform lag explains the lines as well, with the evidence.
+- in between, or where the band reaches less than an octave above f_c (too little of the
+  noise is filtered to tell: a 20 Hz cutoff below the 30 Hz top), the noise cannot tell: the
+  sensor filter stays named, and the judgement says that the platform lag explains the lines
+  as well, with the evidence.
 """
 
 from __future__ import annotations
@@ -74,8 +76,8 @@ class SideJudgement:
             "sensor": "the sensor's noise is filtered as the lines' cutoff says: the filter "
             "is in the sensor",
             "undecided": "the noise cannot tell a filter in the sensor from a lag of the "
-            "platform: both explain the lines; a measurement with more noise above the "
-            "cutoff (a rest run at the IMU's full rate) decides",
+            "platform: both explain the lines; a run whose noise is measured up to at "
+            "least twice the cutoff (a rest run at the IMU's full rate) decides",
         }[self.verdict]
         return {"sensor": self.sensor.to_json(), "platform": self.platform.to_json(),
                 "noise_evidence_platform_over_sensor": self.evidence,
@@ -119,8 +121,11 @@ def judge_side(model: Model, imu_noise: float | None = None) -> SideJudgement | 
     l_sensor = fit_noise(model, segments, imu_fixed=known).loglik
     l_platform = fit_noise(alternative, segments, imu_fixed=known).loglik
     evidence = 2.0 * (l_platform - l_sensor)
-    verdict = ("platform" if evidence > BIC_MARGIN else "sensor" if evidence < -BIC_MARGIN
-               else "undecided")  # fmt: skip
+    if SIDE_BAND_HZ < 2.0 * sensor.value("cutoff_hz"):
+        verdict = "undecided"  # less than an octave of filtered noise in the band
+    else:
+        verdict = ("platform" if evidence > BIC_MARGIN else "sensor" if evidence < -BIC_MARGIN
+                   else "undecided")  # fmt: skip
     return SideJudgement(sensor, platform, float(evidence), verdict)
 
 
