@@ -17,6 +17,7 @@ from twin.chain.config import motion_system
 from twin.chain.physics import FullPlatform
 from twin.chain.simulate import simulate
 from twin.errors import ConfigError, ModelFileError, PhysicsDivergedError
+from twin.frames import rotation_matrix
 from twin.platform.actuators import TOML_KEYS, LegPhysics
 from twin.platform.build import read_build_parameters
 from twin.platform.facts import PLATFORMS, model_dir
@@ -68,6 +69,14 @@ def test_leg_forces_at_rest_carry_the_cabins_weight():
         mass = float(cabin.mass[0])
         assert total[2] == pytest.approx(-mass * G, rel=2e-3)  # z down: the legs push up
         assert np.abs(total[:2]).max() < 1e-3 * mass * G
+        # moments about the UGP: the legs' at their cabin gimbals balance the weight's at the
+        # centre of gravity (the cabin frame's com turned into base axes)
+        pose = sim.response.pose[-1]
+        ugp = plat.geometry.neutral_ugp + pose[:3]
+        gimbals = legs + plat.geometry.base_gimbals - ugp
+        com = rotation_matrix(pose[3:]) @ np.array(cabin.ipos)
+        torque = np.cross(gimbals, f[:, None] * n).sum(axis=0) + np.cross(com, [0, 0, mass * G])
+        assert np.abs(torque).max() < 2e-3 * mass * G * np.abs(gimbals).max()
 
 
 @pytest.mark.parametrize("what", ["coulomb_n", "play_m"])
@@ -112,6 +121,8 @@ def test_a_force_limit_caps_the_force_and_is_counted():
                commands=_heave(amplitude=0.05, hz=1.5))  # fmt: skip
     assert np.abs(sim.response.leg_force).max() < limit * 1.03  # the static share moves a little
     assert sim.limits.force_samples > 0 and "force limit" in sim.limits.first
+    over = np.abs(sim.response.leg_force) >= 1.01 * limit  # beyond the static share's drift
+    assert over.any(axis=-1).sum() <= sim.limits.force_samples
     assert nominal.limits.force_samples == 0
 
 

@@ -368,5 +368,7 @@ def test_outputs_never_replace_a_users_folder(tmp_path, capsys, monkeypatch, run
     assert (mine / "thesis.txt").read_text() == "mine" and (run / "meta.json").is_file()
     (tmp_path / "link").symlink_to(mine)
     _one_line(capsys, [*sim, "--out", "link", "--overwrite"], "is a symbolic link")
-    _one_line(capsys, [*sim, "--out", "r", "--rrd", "r/x.rrd"], "must not lie inside the run")
+    _one_line(
+        capsys, [*sim, "--out", "r", "--rrd", "r/x.rrd"], "must not lie inside the output folder"
+    )
     assert sorted(p.name for p in tmp_path.iterdir()) == ["link", "mydocs"]

@@ -58,8 +58,7 @@ def test_a_rerun_replaces_only_the_files_the_earlier_output_wrote(tmp_path):
     (out / "runs" / "mine.txt").write_text("the user's too")
     with replacing_dir(out, "report.json") as tmp:
         _report(tmp, {"report.json": "2"})
-    assert _tree(out) == _tree(out) and sorted(_tree(out)) == [
-        "notes.md", "report.json", "runs/mine.txt"]  # fmt: skip
+    assert sorted(_tree(out)) == ["notes.md", "report.json", "runs/mine.txt"]
     assert (out / "report.json").read_text() == "2"
     assert json.loads((out / MANIFEST).read_text())["files"].keys() == {"report.json"}
 
@@ -246,7 +245,11 @@ def test_a_diagnosis_into_the_folder_holding_its_run_keeps_the_run(tmp_path, cap
     assert str(measured) in (runs_dir / "summary.md").read_text()  # the new diagnosis
     _fails(capsys, ["diagnose", str(measured), "--no-figures", "--quiet", "--out",
                     str(tmp_path / "d3"), "--save-config", str(measured / "meta.json")],
-           "is an input")  # fmt: skip
+           "lies in an input")  # fmt: skip
+    # not even a new file inside an input
+    _fails(capsys, ["diagnose", str(measured), "--no-figures", "--quiet", "--out",
+                    str(tmp_path / "d3"), "--save-config", str(measured / "new.json")],
+           "lies in an input")  # fmt: skip
     other = record(clean(103), tmp_path / "other")[0]
     _fails(capsys, ["diagnose", str(other), "--no-figures", "--quiet", "--out",
                     str(tmp_path / "d4"), "--save-config", str(measured / "meta.json")],
@@ -276,3 +279,18 @@ def test_agard_df_of_a_run_in_its_own_result_folder_keeps_the_run(tmp_path, caps
     assert main([*df[:2], str(run), "--quiet", "--out", str(out)]) == 0
     assert _tree(run) == before and (out / "result.json").is_file()
     capsys.readouterr()
+
+
+def test_a_file_output_inside_the_output_folder_is_refused_before_the_work(tmp_path, capsys):
+    out = tmp_path / "OUT"
+    _fails(capsys, ["agard", "df", "srs", "--dof", "pitch", "--model", "reduced", "--quiet",
+                    "--out", str(out), "--rrd", str(out / "df.rrd")],
+           "must not lie inside the output folder")  # fmt: skip
+    assert not out.exists()
+
+
+def test_pilot_repetitions_refuse_a_users_file_before_flying(tmp_path, capsys):
+    (tmp_path / "run-2.csv").write_text("the user's")
+    _fails(capsys, ["pilot", "run", "condition-1", "--runs", "2", "--quiet", "--out",
+                    str(tmp_path / "run.csv")], "run-2.csv", "--overwrite")  # fmt: skip
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run-2.csv"]

@@ -26,7 +26,8 @@ def _named(d) -> list[tuple[str, str | None]]:
     return [(f.extension.effect, f.evidence.get("side", {}).get("verdict")) for f in d.findings]
 
 
-@pytest.mark.parametrize(("dof", "cutoff_hz"), [("pitch", 3.0), ("roll", 8.0)])
+@pytest.mark.parametrize(("dof", "cutoff_hz"), [
+    ("pitch", 3.0), pytest.param("roll", 8.0, marks=pytest.mark.slow)])  # fmt: skip
 def test_a_platform_lag_is_named_as_the_platforms_not_as_a_sensor_filter(dof, cutoff_hz,
                                                                         tmp_path):  # fmt: skip
     srs = motion_system("srs")
@@ -41,7 +42,8 @@ def test_a_platform_lag_is_named_as_the_platforms_not_as_a_sensor_filter(dof, cu
     assert d.extended_config.of("platform_lag")  # the extended model carries it
 
 
-@pytest.mark.parametrize(("dof", "cutoff_hz"), [("pitch", 3.0), ("roll", 8.0)])
+@pytest.mark.parametrize(("dof", "cutoff_hz"), [
+    ("pitch", 3.0), pytest.param("roll", 8.0, marks=pytest.mark.slow)])  # fmt: skip
 def test_a_sensor_filter_stays_the_sensors(dof, cutoff_hz, tmp_path):
     srs = motion_system("srs")
     filt = Extension("sensor_filter", {"cutoff_hz": cutoff_hz, "channels": (CHANNEL[dof],)}, ())

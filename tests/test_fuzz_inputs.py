@@ -26,7 +26,6 @@ seconds); tests/test_interrupts.py and tests/test_scheduler_probe.py hold one of
 from __future__ import annotations
 
 import contextlib
-import io
 import json
 import os
 import random
@@ -42,6 +41,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from cli_contract import assert_answered, run_cli
 from fake_servers import closed_port, echoes, http_server, says, silent_listener, tcp_server
 from group_signals import (
     ctrl_c,
@@ -55,7 +55,6 @@ from group_signals import (
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from twin.cli.main import main
 from twin.ownership import MANIFEST
 
 FAST = 20
@@ -85,14 +84,6 @@ TOML_VALUES = ['"a"', "[1]", "[[1], 2]", "{a = 1}", "true", "nan", "inf", "-inf"
 # --- the valid files the examples damage ------------------------------------------------------
 
 
-def _cli(argv: list[str]) -> tuple[int, str]:
-    """Run ``twin argv`` here; return the exit code and stderr."""
-    err = io.StringIO()
-    with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(err):
-        code = main(argv)
-    return code, err.getvalue()
-
-
 @pytest.fixture(scope="module")
 def valid(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
     """Valid files of every format, and a small recorded run (6 s, 1 Hz heave sine)."""
@@ -106,7 +97,7 @@ def valid(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
     run = root / "run"
     argv = ["simulate", "srs", "--model", "reduced", "--signal", str(root / "cmd" / "commands.csv"),
             "--out", str(run), "--quiet"]  # fmt: skip
-    assert _cli(argv)[0] == 0
+    assert run_cli(argv)[0] == 0
     from twin.chain.config import motion_system
 
     motion_system("mpi").save(root / "config.json")
@@ -232,13 +223,10 @@ def _leftovers(where: Path) -> list[str]:
 
 def check_clean(argv: list[str], work: Path, out: Path | None = None) -> int:
     """Run one command and assert the contract of this module; return its exit code."""
-    code, err = _cli(argv)
+    code, err = run_cli(argv)
     shown = " ".join(argv)
-    assert code in (0, 2), f"twin {shown}: exit {code}: {err}"
-    assert "Traceback" not in err, f"twin {shown}: {err}"
+    assert_answered(argv, code, err)
     if code == 2:
-        lines = [ln for ln in err.splitlines() if ln.strip()]
-        assert len(lines) == 1 and lines[0].startswith("twin: error: "), f"twin {shown}: {err}"
         assert out is None or not out.exists(), f"twin {shown} failed but wrote {out}"
     assert not _leftovers(work), f"twin {shown} left {_leftovers(work)}"
     return code
@@ -345,7 +333,7 @@ def test_damaged_full_pilot_runs_get_one_line_or_are_identified(valid: dict[str,
     """A full-length ``twin-pilot/1`` run (the analysis runs: FC, ARX, MLE) with one cell odd."""
     full = valid["root"] / "full" / "pilot.csv"
     argv = ["pilot", "run", "condition-1", "--out", str(full), "--quiet"]
-    assert _cli(argv)[0] == 0
+    assert run_cli(argv)[0] == 0
 
     def case(work: Path, data: bytes) -> tuple[list[str], Path | None]:
         (work / "pilot.csv").write_bytes(data)
@@ -615,7 +603,7 @@ def test_every_misspelt_key_is_refused_naming_it(
         with tempfile.TemporaryDirectory(dir=valid["root"]) as tmp:
             argv, out = _format_case(fmt, valid, Path(tmp), data)
             assert check_clean(argv, Path(tmp), out) == 2, (fmt, typo)
-            err = _cli(argv)[1]
+            err = run_cli(argv)[1]
         assert f"'{typo}' (did you mean '" in err, err
 
 

@@ -25,6 +25,7 @@ from twin.cli.main import main
 INTERRUPTED = "twin: interrupted\n"
 
 
+@pytest.mark.slow  # 8 s: a cluster started and stopped; the fast suite keeps the double Ctrl-C
 def test_ctrl_c_with_a_local_cluster_is_one_line_and_leaves_no_temporary_folder(tmp_path):
     """Before: the DOF suites' ``twin-agard-*`` folders (26-49 MB) stayed in TMPDIR every
     time, as the workers were killed mid-task, and Ctrl-C at other moments printed 34-67

@@ -24,6 +24,7 @@ DASK_GREETING = (
 )
 
 
+@pytest.mark.slow  # 8 s: the probe's own waits; the fast suite names the HTTP server in-process
 def test_an_http_server_is_named_on_the_command_line_within_seconds(tmp_path):
     with http_server() as address:
         start = time.monotonic()

@@ -300,6 +300,7 @@ def _twin_in_c_locale(*argv: str) -> subprocess.CompletedProcess[bytes]:
                           capture_output=True, timeout=120)  # fmt: skip
 
 
+@pytest.mark.slow  # 3 s of subprocesses; the fast suite keeps the UTF-8 files test
 def test_a_terminal_that_cannot_encode_degrees_gets_ascii():
     """``twin workspace`` prints degrees and ``agard df --help`` a §: today exit 70 there."""
     done = _twin_in_c_locale("workspace", "srs")

@@ -97,6 +97,7 @@ def _ignores_ctrl_c() -> bool:
     return signal.getsignal(signal.SIGINT) is signal.SIG_IGN
 
 
+@pytest.mark.slow  # 4 s: a worker killed and restarted
 def test_local_workers_ignore_ctrl_c_also_when_started_again(cluster):
     """Ctrl-C reaches a local cluster's workers too (one process group): they leave it to the
     ``twin`` process, which shuts them down, instead of dying with a traceback each."""

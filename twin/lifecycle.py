@@ -28,6 +28,7 @@ from pathlib import Path
 from typing import Self
 
 from twin.errors import OutputError, UsageError
+from twin.interrupts import deferred
 from twin.ownership import (
     MANIFEST,
     check_replace,
@@ -185,7 +186,7 @@ def check_output_dir(final: str | Path, marker: str) -> None:
     if final.exists() and not final.is_dir():
         raise UsageError(f"output folder {final} is a file; give a folder")
     hit = input_at(final)
-    if hit is not None and final.exists():
+    if hit is not None:
         what = "is" if real(final) == hit else "lies in"
         raise UsageError(f"output folder {final} {what} an input of this command ({hit}); give "
                          "a new folder")  # fmt: skip
@@ -197,15 +198,26 @@ def check_output_dir(final: str | Path, marker: str) -> None:
                          "remove it")  # fmt: skip
 
 
-def _staged_files(folder: Path) -> list[str]:
-    """Return every file below ``folder`` by its relative POSIX path (not its own manifest)."""
+def _staged_files(folder: Path, marker: str) -> list[str]:
+    """Return every file below ``folder`` by its relative POSIX path, the ``marker`` last.
+
+    Manifests (of nested outputs too) are the twin's bookkeeping, not files of the output:
+    they are moved with their folders but not listed.
+    """
     found = []
     for here, _dirs, files in os.walk(folder):
         for name in files:
             rel = (Path(here) / name).relative_to(folder).as_posix()
-            if rel not in (MANIFEST, f"{MANIFEST}.partial"):
+            if rel != f"{MANIFEST}.partial" and name != MANIFEST:
                 found.append(rel)
-    return sorted(found)
+    return sorted(found, key=lambda rel: (rel == marker, rel))
+
+
+def _manifests(folder: Path) -> list[str]:
+    """Return the nested outputs' manifests below ``folder`` (relative POSIX paths)."""
+    return sorted((Path(h) / MANIFEST).relative_to(folder).as_posix()
+                  for h, _d, names in os.walk(folder)
+                  if MANIFEST in names and Path(h) != folder)  # fmt: skip
 
 
 def _inside(folder: Path, rel: str) -> Path | None:
@@ -218,10 +230,15 @@ def _inside(folder: Path, rel: str) -> Path | None:
 
 
 def _remove_empty_parents(path: Path, top: Path) -> None:
-    """Remove the folders from ``path``'s up to (not including) ``top`` while they are empty."""
+    """Remove the folders from ``path``'s up to (not including) ``top`` while they are empty.
+
+    A folder that holds nothing but a nested output's manifest is empty too.
+    """
     for parent in path.parents:
         if parent == top or top not in parent.parents:
             return
+        if [p.name for p in parent.iterdir()] == [MANIFEST]:
+            (parent / MANIFEST).unlink()
         try:
             parent.rmdir()
         except OSError:  # not empty: a user's file, or another output's
@@ -240,6 +257,8 @@ def refuse_replacing(final: Path, names: list[str], listed: dict, kind: str) -> 
     """
     refused = []
     for rel in sorted(set(names)):
+        if Path(rel).name == MANIFEST:  # a nested output's bookkeeping: always the twin's
+            continue
         target = _inside(final, rel)
         if target is None:
             refused.append(f"{final / rel} (outside the folder)")
@@ -268,7 +287,7 @@ def install(tmp: Path, final: Path, kind: str, reserved: tuple[str, ...] = ()) -
         (or an input), or where a ``reserved`` name is a file the twin did not write.
 
     """
-    new_files = _staged_files(tmp)
+    new_files = _staged_files(tmp, kind)
     new = {rel: entry(tmp / rel, kind) for rel in new_files}
     if not final.exists():
         write_manifest(tmp, kind, new)
@@ -277,20 +296,28 @@ def install(tmp: Path, final: Path, kind: str, reserved: tuple[str, ...] = ()) -
     check_output_dir(final, kind)  # it may have changed while the output was made
     listed = read_manifest(final)["files"]
     refuse_replacing(final, [*new_files, *reserved], listed, kind)
-    keep = {}
+    keep, stale = {}, []
     for rel, e in listed.items():
         target = _inside(final, rel)
         if target is None or rel in new or not target.is_file():
             continue
         if e.get("kind") == kind and input_at(target) is None and unchanged(target, e, kind):
-            target.unlink()
-            _remove_empty_parents(target, final)
+            stale.append(target)
         elif unchanged(target, e):
             keep[rel] = e  # another kind of output in this folder, or an input: it stays
-    for rel in new_files:
-        (final / rel).parent.mkdir(parents=True, exist_ok=True)
-        (tmp / rel).replace(final / rel)
-    write_manifest(final, kind, {**keep, **new})
+    # while files move one by one, the manifest lists old and new: a replacement cut short
+    # (a crash; Ctrl-C is held back) leaves every file of it replaceable, the marker last
+    during = {**listed, **{rel: {**e, "previous": listed[rel].get("sha256")} if rel in listed
+                           else e for rel, e in new.items()}}  # fmt: skip
+    with deferred():
+        write_manifest(final, kind, during)
+        for rel in [*new_files, *_manifests(tmp)]:
+            (final / rel).parent.mkdir(parents=True, exist_ok=True)
+            (tmp / rel).replace(final / rel)
+        for target in stale:
+            target.unlink()
+            _remove_empty_parents(target, final)
+        write_manifest(final, kind, {**keep, **new})
     shutil.rmtree(tmp, ignore_errors=True)
 
 

@@ -180,13 +180,17 @@ def entry(path: str | Path, kind: str) -> dict:
 
 
 def unchanged(path: Path, listed: dict | None, kind: str | None = None) -> bool:
-    """Return whether ``path`` is a file the twin wrote as ``listed`` (of ``kind``), unchanged."""
+    """Return whether ``path`` is a file the twin wrote as ``listed`` (of ``kind``), unchanged.
+
+    An entry may also name the ``previous`` content of its path: while an output replaces an
+    earlier one file by file, either is the twin's (a replacement cut short stays replaceable).
+    """
     if listed is None or (kind is not None and listed.get("kind") != kind):
         return False
     if path.is_symlink() or not path.is_file():
         return False
     try:
-        return digest(path) == listed.get("sha256")
+        return digest(path) in (listed.get("sha256"), listed.get("previous"))
     except OSError:
         return False
 
@@ -218,7 +222,8 @@ def check_replace(path: str | Path, kind: str) -> None:
 
     Allowed: a new file; an existing file that is an earlier output of the same ``kind``
     (listed, unchanged); any existing file under ``--overwrite`` (:func:`overwrite`). Never an
-    input of the command.
+    input of the command, nor a file inside an input folder (not even a new one: the input
+    stays as the user gave it).
 
     Raises
     ------
@@ -228,8 +233,10 @@ def check_replace(path: str | Path, kind: str) -> None:
     """
     p = Path(path)
     hit = input_at(p)
-    if hit is not None and (p.exists() or p.is_symlink()):
-        raise UsageError(f"{path}: is an input of this command ({hit}); give another output name")
+    if hit is not None:
+        what = "is" if real(p) == hit else "lies in"
+        raise UsageError(f"{path}: {what} an input of this command ({hit}); give another output "
+                         "name")  # fmt: skip
     if not (p.exists() or p.is_symlink()) or owned(p, kind) or overwrite():
         return
     raise UsageError(f"{path}: exists and is not an earlier {kind} output of twin; give another "

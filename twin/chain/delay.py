@@ -15,14 +15,11 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from twin.chain.block import Block, ComplexArray
+from twin.chain.bounds import MAX_DELAY_S
 from twin.chain.jets import held, hermite_samples
 from twin.errors import SignalError
 
 FloatArray = NDArray[np.float64]
-
-
-#: Longest motion-system delay [s] (a command answered 10 s late is not a motion system).
-MAX_DELAY_S = 10.0
 
 
 @dataclass(frozen=True)

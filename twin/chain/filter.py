@@ -4,12 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from twin.chain.bounds import MAX_BREAK_HZ, MIN_BREAK_HZ
 from twin.chain.lti import LtiBlock, System
 from twin.errors import SignalError
-
-#: Lowest and highest break frequency a platform filter may have [Hz] (a 0.01 Hz filter
-#: passes nothing a motion system moves; 1 kHz is above the 819.2 Hz IMU rate).
-MIN_BREAK_HZ, MAX_BREAK_HZ = 0.01, 1000.0
 
 
 def check_break_hz(value: float, where: str, error: type[Exception] = SignalError) -> float:

@@ -82,11 +82,13 @@ class FullPlatform(Platform):
         self.platform = platform
         self.payload = payload
         self.model = payload.model(platform) if payload else load_model(platform).__copy__()
-        if physics is not None:
-            physics.apply(self.model)
+        if physics is not None or payload is not None:  # a payload moves the static share
+            (physics or LegPhysics.of_model(self.model)).apply(self.model)
         self.physics = LegPhysics.of_model(self.model)
         self._shaped = self.physics.shapes_reference()  # a lag or play on the references
         self._cabin = cabin_static(self.model)  # mass, centre of gravity, K_s
+        tendons = [self.model.tendon(f"leg{j + 1}_axis").id for j in range(6)]
+        self._pd_range = self.model.tendon_actfrcrange[tendons].copy()
         if timestep_s is not None:
             if not np.isfinite(timestep_s) or not 1e-5 <= timestep_s <= 2e-3:
                 raise SignalError(f"timestep must be between 1e-5 and 2e-3 s; got {timestep_s}")
@@ -140,7 +142,7 @@ class FullPlatform(Platform):
         if state.inner.rolled is not None:  # a submitted step's physics comes first
             state.inner.rolled.wait()
         rows = self._roll(self._controls(ref, state), state.inner)
-        return self._counted(self._response(ref, rows), state)
+        return self._counted(self._response(ref, rows), rows, state)
 
     def _start(self, ref: Reference, state: PlatformState) -> Callable[[], PlatformResponse]:
         """Limit the legs now; roll the physics in a thread after the previous step's.
@@ -172,7 +174,7 @@ class FullPlatform(Platform):
             done.wait()
             if "error" in box:
                 raise box["error"]
-            return self._counted(self._response(ref, box["rows"]), state)
+            return self._counted(self._response(ref, box["rows"]), box["rows"], state)
 
         return finish
 
@@ -194,11 +196,20 @@ class FullPlatform(Platform):
             out.append(np.hstack([legs, legs_dot])[None])
         return out
 
-    def _counted(self, response: PlatformResponse, state: PlatformState) -> PlatformResponse:
-        """Count the physics samples at an actuator's force limit (legs with one)."""
+    def _counted(
+        self, response: PlatformResponse, rows: FloatArray, state: PlatformState
+    ) -> PlatformResponse:
+        """Count the physics samples at an actuator's force limit (legs with one).
+
+        A leg is at its limit where MuJoCo clamped its PD force (the sensor rows ``rows``) to
+        the tendon's range (:func:`twin.platform.actuators.pd_force_ranges`).
+        """
         limit = self.physics.force_limit_n
-        if np.any(limit > 0) and response.leg_force is not None:
-            at = np.abs(response.leg_force) >= np.where(limit > 0, limit, np.inf) * (1 - 1e-9)
+        if np.any(limit > 0):
+            lo, hi = self._pd_range[:, 0], self._pd_range[:, 1]
+            pd = rows[:, :-1][..., self._forces]
+            span = np.maximum(hi - lo, 1.0) * 1e-9
+            at = (limit > 0) & ((pd <= lo + span) | (pd >= hi - span))
             hits = at.any(axis=-1)
             if hits.any() and state.report.first is None:
                 k = np.argwhere(hits)[0]

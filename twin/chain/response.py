@@ -41,8 +41,9 @@ class PlatformResponse:
         ``implicitfast`` it misses the implicit damping correction; the IMU's specific force
         is :func:`twin.chain.imu.specific_force` of the motion.)
     leg_force, leg_velocity : ndarray, shape (n, 6), or None
-        Each actuator's force along its leg [N] (the PD of Eq 5.9 after its force limit;
-        positive extends) and the leg's extension rate [m/s] (full model only).
+        Each actuator's force along its leg [N]: the PD of Eq 5.9 (after its force limit)
+        plus the share of the cabin's weight the static-force feedback K_s carries; positive
+        extends. And the leg's extension rate [m/s] (full model only).
     rotation : ndarray, shape (n, 3, 3), or None
         T_c^b of ``pose`` (Eq A.2) where the platform has computed it already (the reduced
         platform), so that the IMU does not compute it again; None otherwise (and in the

@@ -32,8 +32,7 @@ from contextlib import contextmanager, suppress
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from twin.chain.delay import MAX_DELAY_S
-from twin.chain.filter import MAX_BREAK_HZ, MIN_BREAK_HZ
+from twin.chain.bounds import MAX_BREAK_HZ, MAX_DELAY_S, MIN_BREAK_HZ
 from twin.errors import TwinError, UsageError
 from twin.lifecycle import check_output_file, check_writable
 from twin.ownership import check_replace, kind_of
@@ -311,10 +310,32 @@ def outputs_checked(args: argparse.Namespace) -> None:
     an input (:func:`twin.ownership.check_replace`). Output folders are checked by the
     command, which knows their kind (:func:`twin.lifecycle.check_output_dir`).
     """
-    for value in vars(args).values():
-        for v in value if isinstance(value, list | tuple) else [value]:
-            if isinstance(v, OutputFile):
-                check_replace(v, kind_of(v))
+    values = [v for value in vars(args).values()
+              for v in (value if isinstance(value, list | tuple) else [value])]  # fmt: skip
+    for v in values:
+        if isinstance(v, OutputFile):
+            check_replace(v, kind_of(v))
+            for folder in values:
+                if isinstance(folder, OutputFolder):
+                    refuse_file_in_folder(v, folder)
+
+
+def refuse_file_in_folder(path: str | Path, folder: str | Path) -> None:
+    """Refuse an output file inside the command's output folder (staged, then put in place).
+
+    The folder appears only when complete; a file written into it before would make it a
+    folder of another kind, and the folder's own output would be refused after the work.
+
+    Raises
+    ------
+    UsageError
+        Naming both.
+
+    """
+    here, there = Path(os.path.abspath(path)), Path(os.path.abspath(folder))
+    if there == here or there in here.parents:
+        raise UsageError(f"{path}: must not lie inside the output folder {folder} (it appears "
+                         "only when complete); give a file outside it")  # fmt: skip
 
 
 def rrd_parent(what: str = "save a Rerun recording") -> argparse.ArgumentParser:

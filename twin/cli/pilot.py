@@ -291,6 +291,7 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
 
 def _cmd_run(args: argparse.Namespace) -> int:
     from twin.lifecycle import check_output_file
+    from twin.ownership import check_replace, kind_of
     from twin.pilot.experiment import pitch_remnant_scale
     from twin.pilot.forcing import pitch_task
     from twin.pilot.pitch import PitchPilot, open_loops, simulate_pitch, variance_decomposition
@@ -298,7 +299,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
 
     if args.out:  # every file the runs will go to, before the work
         for path in repetition_paths(args.out, args.runs):
-            check_output_file(path)
+            check_replace(check_output_file(path), kind_of(path))
     cfg = common.configured(args.config, args)
     pilot = PitchPilot()
     progress = common.progress(args)

@@ -108,11 +108,8 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     name = Path(args.signal).stem if Path(args.signal).exists() else args.signal
     folder = Path(args.out or f"out/{run.config.name}-{args.model}-{name}-seed{args.seed}")
     meta = run_meta(run, f"simulated by twin ({args.model} model) from signal {args.signal!r}")
-    if args.rrd and folder.resolve() in Path(args.rrd).resolve().parents:
-        from twin.errors import UsageError
-
-        raise UsageError(f"--rrd {args.rrd}: the recording must not lie inside the run folder "
-                         f"{folder} (the run folder appears only when complete)")  # fmt: skip
+    if args.rrd:
+        common.refuse_file_in_folder(args.rrd, folder)
     recorder = None
     if args.rrd is not None or args.connect is not None:
         from twin.record import Recorder

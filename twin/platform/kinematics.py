@@ -137,15 +137,19 @@ def static_leg_forces(
 
     """
     p = as_pose(pose)
+    n, moment_arms = _leg_axes(geo, p)
+    weight = np.array([0.0, 0.0, mass * gravity])
+    c_b = np.einsum("...ij,j->...i", rotation_matrix(p[..., 3:]), np.asarray(com, dtype=float))
+    wrench = np.concatenate([np.broadcast_to(weight, c_b.shape), np.cross(c_b, weight)], axis=-1)
+    columns = np.concatenate([n, moment_arms], axis=-1)  # (..., 6 legs, 6): row j
+    return np.linalg.solve(np.swapaxes(columns, -1, -2), -wrench[..., None])[..., 0]
+
+
+def _leg_axes(geo: Geometry, p: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """Return the unit leg vectors n_j and their moments (T a_j) x n_j about the UGP."""
     L = leg_vectors(geo, p)
     n = L / np.linalg.norm(L, axis=-1, keepdims=True)
-    a_b = _cabin_gimbals_in_base(geo, p)
-    rot = rotation_matrix(p[..., 3:])
-    weight = np.array([0.0, 0.0, mass * gravity])
-    c_b = np.einsum("...ij,j->...i", rot, np.asarray(com, dtype=float))
-    wrench = np.concatenate([np.broadcast_to(weight, c_b.shape), np.cross(c_b, weight)], axis=-1)
-    columns = np.concatenate([n, np.cross(a_b, n)], axis=-1)  # (..., 6 legs, 6): row j
-    return np.linalg.solve(np.swapaxes(columns, -1, -2), -wrench[..., None])[..., 0]
+    return n, np.cross(_cabin_gimbals_in_base(geo, p), n)
 
 
 def inverse(geo: Geometry, pose: ArrayLike, check: bool = True) -> FloatArray:
@@ -189,11 +193,8 @@ def jacobian(geo: Geometry, pose: ArrayLike) -> FloatArray:
 
     """
     p = as_pose(pose)
-    L = leg_vectors(geo, p)
-    n = L / np.linalg.norm(L, axis=-1, keepdims=True)
-    a_b = _cabin_gimbals_in_base(geo, p)
-    R = euler_rate_matrix(p[..., 3:])
-    rot = np.einsum("...kj,...ji->...ki", np.cross(a_b, n), R)
+    n, moment_arms = _leg_axes(geo, p)
+    rot = np.einsum("...kj,...ji->...ki", moment_arms, euler_rate_matrix(p[..., 3:]))
     return np.concatenate([n, rot], axis=-1)
 
 
