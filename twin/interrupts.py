@@ -8,7 +8,7 @@ and, with a local Dask cluster, its worker processes. So:
   :data:`GRACE_S` is ignored while the command cleans up (partial outputs removed, the cluster
   shut down), and once the command has ended Ctrl-C is ignored for the rest of the process:
   Python then waits for MuJoCo's rollout threads before it exits, and a second Ctrl-C in that
-  wait used to tear the interpreter down under them (a segmentation fault, exit 139). A
+  wait would tear the interpreter down under them (a segmentation fault, exit 139). A
   Ctrl-C after the grace time raises again (should library code have swallowed the first);
 * worker processes ignore SIGINT: a local cluster starts inside :func:`deferred` (a process
   inherits an ignored signal) and its workers load :mod:`twin.tasks.worker_setup`; the

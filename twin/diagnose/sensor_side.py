@@ -6,9 +6,10 @@ Eq 5.11's t_m: a heavier cabin behind the same PD) multiply every excited line b
 factor: the lines cannot tell them apart. The noise can. A filter inside the sensor filters
 the sensor's own noise too (its spectrum falls above f_c); a platform lag leaves the sensor's
 noise as it is. So after the lines have named a ``sensor_filter``, both readings are scored
-on the measurement's noise up to :data:`SIDE_BAND_HZ`, above the lines' band (``--max-hz``)
-where a filter shows most (the off-line bins of :mod:`twin.diagnose.nuisance`, the IMU's
-noise level fitted as a nuisance for each, or held at ``--imu-noise``)::
+on the measurement's noise up to :data:`SIDE_BAND_HZ` (above the lines' default band of
+15 Hz, ``--max-hz``), where a filter shows most (the off-line bins of
+:mod:`twin.diagnose.nuisance`, the IMU's noise level fitted as a nuisance for each, or held at
+``--imu-noise``)::
 
     evidence = 2 (log L_platform - log L_sensor)
 
