@@ -48,6 +48,7 @@ def test_a_pilot_the_model_does_not_hold_is_told_by_the_chi_square_not_the_vaf(r
     assert np.isfinite(fit.evidence["fit"]["chi2"])
 
 
+@pytest.mark.slow  # 9 s: four pilot runs of the full task, sample by sample
 def test_a_feedthrough_of_no_gain_flies_the_same_bits_as_none():
     """The passive path's loop (one sample at a time, the pilot's motion channel queued to its
     own delay) is the loop without one when the path's gain is zero: the same bits through
