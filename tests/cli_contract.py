@@ -24,3 +24,13 @@ def assert_answered(argv: list[str], code: int, err: str) -> None:
     if code == 2:
         lines = [ln for ln in err.splitlines() if ln.strip()]
         assert len(lines) == 1 and lines[0].startswith("twin: error: "), f"twin {shown}: {err}"
+
+
+def fails_in_one_line(capsys, argv: list[str], *fragments: str) -> str:
+    """Run ``twin argv`` with pytest's ``capsys``: exit 2, one line, each fragment in it."""
+    assert main(argv) == 2, argv
+    err = capsys.readouterr().err
+    assert err.startswith("twin: error: ") and err.count("\n") == 1, err
+    for f in fragments:
+        assert f in err, (f, err)
+    return err.strip()

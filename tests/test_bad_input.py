@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from cli_contract import fails_in_one_line as _one_line
 
 from twin.cli.main import EXIT_BROKEN_PIPE, EXIT_BUG, error_line, main
 from twin.errors import DataError
@@ -29,15 +30,6 @@ def run(tmp_path_factory: pytest.TempPathFactory) -> Path:
     out = tmp_path_factory.mktemp("r") / "run"
     assert main([*REST, "--out", str(out)]) == 0
     return out
-
-
-def _one_line(capsys: pytest.CaptureFixture[str], argv: list[str], *fragments: str) -> str:
-    assert main(argv) == 2
-    err = capsys.readouterr().err
-    assert err.startswith("twin: error: ") and err.count("\n") == 1, err
-    for f in fragments:
-        assert f in err, err
-    return err
 
 
 def test_output_paths_are_refused_before_any_work(tmp_path, capsys, monkeypatch):

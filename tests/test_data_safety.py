@@ -13,6 +13,7 @@ import os
 from pathlib import Path
 
 import pytest
+from cli_contract import fails_in_one_line as _fails
 
 from twin.cli.main import main
 from twin.errors import UsageError
@@ -29,16 +30,6 @@ def _tree(folder: Path) -> dict[str, str]:
         for p in sorted(folder.rglob("*"))
         if p.is_file() and p.name != MANIFEST
     }
-
-
-def _fails(capsys, argv: list[str], *words: str) -> str:
-    """Run ``twin argv``: exit 2 with one line holding every word; return the line."""
-    assert main(argv) == 2, argv
-    err = capsys.readouterr().err.strip()
-    assert len(err.splitlines()) == 1 and err.startswith("twin: error: "), err
-    for w in words:
-        assert w in err, (w, err)
-    return err
 
 
 def _report(tmp: Path, files: dict[str, str]) -> None:

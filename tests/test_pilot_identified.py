@@ -18,6 +18,7 @@ def subject_rows():
     return fly_subject(s, 0), identified_subject(s, 0)
 
 
+@pytest.mark.slow  # the subject's identification takes 40-50 s
 def test_the_identified_measures_are_those_of_the_pilots_flown(subject_rows):
     """Same subject, same pilots: where the pilot uses what it is fitted for, the MLE finds
     its parameters (K_v, omega_nm within 15 %, K_m within 25 % where it is used), the model
@@ -34,6 +35,7 @@ def test_the_identified_measures_are_those_of_the_pilots_flown(subject_rows):
         assert np.isfinite(b["tau_m"])
 
 
+@pytest.mark.slow  # the subject's identification takes 40-50 s
 def test_tau_m_is_identified_where_motion_is_used_and_not_behind_the_filter(subject_rows):
     """Behind the 1 Hz filter the adapted subject does not use motion (K_m = 0), so the fit
     cannot see tau_m: flagged, not hidden (Table 6.7's tau_m is an estimate of nothing there)."""
@@ -102,6 +104,7 @@ def test_identified_populations_replicate_as_one_flown_alone(capsys):
         assert 0.2 < lo <= mid <= hi < 5.0
 
 
+@pytest.mark.slow  # the subject's identification takes 40-50 s
 def test_the_condition_figure_of_an_identified_population_shows_the_fits(subject_rows, tmp_path):
     """Fig 6.5-6.9 of identified measures: tau_v, tau_m and each fit's chi-square per dof too."""
     from twin.pilot.population import PopulationResult

@@ -24,21 +24,12 @@ import sys
 from pathlib import Path
 
 import pytest
+from cli_contract import fails_in_one_line as _one_line
 
 from twin.cli.main import build_parser, main
 
 ROOT = Path(__file__).resolve().parents[1]
 REST = ["simulate", "srs", "--model", "reduced", "--signal", "rest-1", "--quiet"]
-
-
-def _one_line(capsys: pytest.CaptureFixture[str], argv: list[str], *fragments: str) -> str:
-    """Run ``twin argv``: exit 2, one line, each fragment in it."""
-    assert main(argv) == 2
-    err = capsys.readouterr().err
-    assert err.startswith("twin: error: ") and err.count("\n") == 1, err
-    for f in fragments:
-        assert f in err, err
-    return err
 
 
 @pytest.fixture(scope="module")
