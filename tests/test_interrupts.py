@@ -21,6 +21,7 @@ import pytest
 from group_signals import ctrl_c, finish, left_behind, start, wait_until, writing_a_run
 
 from twin.cli.main import main
+from twin.interrupts import handling_ctrl_c
 
 INTERRUPTED = "twin: interrupted\n"
 
@@ -145,3 +146,20 @@ def test_the_worker_setup_ignores_ctrl_c():
         print(signal.getsignal(signal.SIGINT) is signal.SIG_IGN)
     """)
     assert out == "True\n"
+
+
+def test_a_command_that_finished_ignores_ctrl_c_while_the_process_exits():
+    """Python waits for MuJoCo's rollout threads after the command's last line: a Ctrl-C
+    then killed the process by the signal (exit -2, no line) where the command had finished
+    without one; now SIGINT is ignored from the end of the command, interrupted or not."""
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        with handling_ctrl_c(process=True) as ctrl_c:
+            pass
+        assert not ctrl_c.interrupted
+        assert signal.getsignal(signal.SIGINT) is signal.SIG_IGN
+        with handling_ctrl_c(process=False):  # a caller's own process: the default comes back
+            pass
+        assert signal.getsignal(signal.SIGINT) is signal.SIG_IGN  # not installed over SIG_IGN
+    finally:
+        signal.signal(signal.SIGINT, previous)

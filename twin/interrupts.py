@@ -77,10 +77,11 @@ def handling_ctrl_c(process: bool) -> Iterator[CtrlC]:
     Parameters
     ----------
     process : bool
-        The block is the whole process's work (the ``twin`` command run as a program): after
-        a Ctrl-C, SIGINT stays ignored when the block ends, as Python waits for the threads
-        still running and exits. Otherwise (a caller running a command in its own process)
-        the default handler is restored.
+        The block is the whole process's work (the ``twin`` command run as a program): when
+        the block ends, interrupted or not, SIGINT stays ignored, as Python waits for the
+        threads still running (MuJoCo's) and exits: a Ctrl-C in that wait would kill the
+        process by the signal, with no line and no exit code of its own. Otherwise (a caller
+        running a command in its own process) the default handler is restored.
 
     Yields
     ------
@@ -96,8 +97,7 @@ def handling_ctrl_c(process: bool) -> Iterator[CtrlC]:
     try:
         yield handler
     finally:
-        ending = process and handler.interrupted
-        signal.signal(signal.SIGINT, signal.SIG_IGN if ending else signal.default_int_handler)
+        signal.signal(signal.SIGINT, signal.SIG_IGN if process else signal.default_int_handler)
 
 
 @contextmanager
