@@ -21,6 +21,7 @@ import numpy as np
 import pytest
 from scipy import signal
 
+import twin.run_checks as checks
 from twin.chain.config import motion_system
 from twin.chain.extensions import Extension
 from twin.chain.imu import G
@@ -34,6 +35,7 @@ from twin.measurement.describing_function import fourier_coefficients
 from twin.measurement.measure import from_run
 from twin.run_checks import read_plausible_run
 from twin.run_folder import execute, run_meta
+from twin.runs import read_run
 from twin.signals import MultiSine, periodic_signal, rest
 
 IMU_HEADER = "t,ax,ay,az,p,q,r"
@@ -262,3 +264,15 @@ def test_a_fit_at_its_search_bound_is_no_finding(tmp_path, monkeypatch, capsys) 
     summary = (out / "summary.md").read_text()
     assert "## At the bound (not findings)" in summary
     assert "- gain in pitch: gain 0.1 at the lower bound" in summary
+
+
+def test_a_run_is_checked_once(runs, monkeypatch) -> None:
+    """The analyses hand each other runs already checked: they are not checked again."""
+    calls = []
+    original = checks.check_plausible
+    monkeypatch.setattr(checks, "check_plausible", lambda r: calls.append(r) or original(r))
+    raw = read_run(runs[0])
+    assert not raw.plausible
+    once = read_plausible_run(raw)
+    assert once.plausible and len(calls) == 1
+    assert read_plausible_run(once) is once and len(calls) == 1

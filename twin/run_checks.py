@@ -381,7 +381,9 @@ def read_plausible_run(folder: str | Path | RecordedRun) -> RecordedRun:
 def plausible_run(run: RecordedRun) -> RecordedRun:
     """Return a run read from a folder at a supported IMU rate, once it passes every check.
 
-    The IMU may come back resampled (:func:`supported_rate`, with a note in ``notes``).
+    The IMU may come back resampled (:func:`supported_rate`, with a note in ``notes``). A run
+    that passed once (``run.plausible``) is returned as it is: an analysis handed runs its
+    caller checked does not check them again.
 
     Raises
     ------
@@ -389,9 +391,11 @@ def plausible_run(run: RecordedRun) -> RecordedRun:
         An IMU too slow, or the first check of :func:`check_plausible` that fails.
 
     """
+    if run.plausible:
+        return run
     run = supported_rate(run)
     check_plausible(run)
-    return run
+    return dataclasses.replace(run, plausible=True)
 
 
 def fingerprint(run: RecordedRun) -> str:

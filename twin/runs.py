@@ -94,6 +94,8 @@ class RecordedRun:
     notes : tuple of str
         What the reader did to the data, one sentence each (e.g. an IMU resampled to a rate
         the analyses are made for: :func:`twin.run_checks.supported_rate`).
+    plausible : bool
+        Whether :func:`twin.run_checks.plausible_run` has passed it (it is not checked again).
 
     """
 
@@ -105,6 +107,7 @@ class RecordedRun:
     actuators: FloatArray | None
     forces: FloatArray | None = None
     notes: tuple[str, ...] = ()
+    plausible: bool = False
 
 
 def _read_csv(path: Path) -> FloatArray:
