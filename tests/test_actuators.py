@@ -18,7 +18,7 @@ from twin.chain.physics import FullPlatform
 from twin.chain.simulate import simulate
 from twin.errors import ConfigError, ModelFileError, PhysicsDivergedError
 from twin.frames import rotation_matrix
-from twin.platform.actuators import TOML_KEYS, LegPhysics
+from twin.platform.actuators import TOML_KEYS, LegPhysics, ReferenceState, shape_reference
 from twin.platform.build import read_build_parameters
 from twin.platform.facts import PLATFORMS, model_dir
 from twin.platform.kinematics import leg_vectors
@@ -111,6 +111,32 @@ def test_a_servo_lag_delays_its_leg_by_its_time_constant():
     shifts = np.arange(0, 60)  # 0-60 ms at 1 kHz: the shift that best maps one on the other
     misfit = [np.mean((a[: a.size - s] - b[s:]) ** 2) for s in shifts]
     assert shifts[int(np.argmin(misfit))] / 1000.0 == pytest.approx(lag, abs=0.003)
+
+
+@pytest.mark.parametrize("tau", [0.00125, 0.02])
+def test_a_servo_lags_rate_reference_is_the_lagged_rate_even_near_the_physics_step(tau):
+    # a 2 Hz sine of 10 mm through 1 / (1 + tau s): its rate reference must have the amplitude
+    # w |H(jw)| = w A / sqrt(1 + (w tau)^2) (computed here by hand), also where tau is close
+    # to the 1 ms step (where (u - y) / tau lost a third of it and a lag of 1.25 ms moved a leg
+    # more than one of 20 ms)
+    h, w, amp = 1e-3, 2 * np.pi * 2.0, 0.01
+    t = np.arange(0.0, 2.0, h)
+    u = amp * np.sin(w * t)[:, None] * np.ones(6)
+    ud = amp * w * np.cos(w * t)[:, None] * np.ones(6)
+    physics = LegPhysics.ideal().replace(lag_s=np.full(6, tau))
+    y, yd = shape_reference(physics, h, u, ud, ReferenceState(np.zeros(6), np.zeros(6)))
+    expected = amp / np.sqrt(1 + (w * tau) ** 2)
+    assert np.abs(y[1000:, 0]).max() == pytest.approx(expected, rel=1e-3)
+    assert np.abs(yd[1000:, 0]).max() == pytest.approx(w * expected, rel=1e-3)
+
+
+def test_a_shorter_servo_lag_moves_its_leg_less():
+    nominal = _run("mpi")
+    off = []
+    for lag in (0.00125, 0.005, 0.02):
+        sim = _run("mpi", LegPhysics.ideal().replace(lag_s=[0, 0, lag, 0, 0, 0]))
+        off.append(np.sqrt(np.mean((sim.response.legs[:, 2] - nominal.response.legs[:, 2]) ** 2)))
+    assert off[0] < off[1] < off[2]
 
 
 def test_a_force_limit_caps_the_force_and_is_counted():

@@ -60,6 +60,15 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="the IMU's noise over its data sheet's, when known (e.g. from a "
                    f"recording at rest; {IMU_NOISE.span}); default: fitted as a "
                    "nuisance")  # fmt: skip
+    p.add_argument(
+        "--physics",
+        action="store_true",
+        help="also weigh physical causes (a heavier cabin, one leg's gain, lag, "
+        "friction or play, a rotated IMU) by simulating the full model on every "
+        "channel the runs have, leg lengths and forces included (about 25 "
+        "simulations per run; implies --model full; --save-config then carries "
+        "the calibrated physics)",
+    )
     p.add_argument("--no-figures", action="store_true", help="skip figures and the .rrd")
     p.add_argument("--each", action="store_true",
                    help="a batch: each RUN_DIR (a run folder, or a folder of run folders "
@@ -92,7 +101,7 @@ def _cmd_each(args: argparse.Namespace) -> int:
         raise UsageError("with --each, configuration overrides need --config (the nominal of "
                          "every measurement); without it each uses its own meta.json")  # fmt: skip
     options = {"model": args.model, "max_hz": args.max_hz, "seed": args.seed, "dofs": args.dof,
-               "imu_noise": args.imu_noise}  # fmt: skip
+               "imu_noise": args.imu_noise, "physics": args.physics}  # fmt: skip
     config = _nominal(args)
     out = Path(args.out) if args.out else Path("out") / "diagnose-batch"
     check_output_dir(out, "batch.json")
@@ -115,6 +124,7 @@ def _cmd_diagnose(args: argparse.Namespace) -> int:
     from twin.diagnose.candidates import describe_bound
     from twin.diagnose.diagnosis import check_options, diagnose
     from twin.diagnose.report import write_report
+    from twin.diagnose.select import BIC_MARGIN
     from twin.diagnose.sensor_side import side_text
 
     with common.options_named({"max_hz": "--max-hz", "imu_noise": "--imu-noise"}):
@@ -126,7 +136,7 @@ def _cmd_diagnose(args: argparse.Namespace) -> int:
 
     d = diagnose(
         args.runs, _nominal(args), args.model, args.validate, args.max_hz, args.seed, args.dof,
-        progress=common.progress(args), imu_noise=args.imu_noise,
+        progress=common.progress(args), imu_noise=args.imu_noise, physics=args.physics,
     )  # fmt: skip
     write_report(d, out, figures=not args.no_figures, rrd=not args.no_figures)
     if args.save_config:
@@ -147,7 +157,10 @@ def _cmd_diagnose(args: argparse.Namespace) -> int:
         print("no finding within the search bounds")
     for i, f in enumerate(d.findings, 1):
         g = f.gain
-        if "chi2_per_line_before" in g:
+        if "chi2_per_line_before" in g and "df_error_db_before" not in g:
+            held = (f"line error {g['chi2_per_line_before']:.2f} -> "
+                    f"{g['chi2_per_line_after']:.2f} chi2/line, every channel")  # fmt: skip
+        elif "chi2_per_line_before" in g:
             held = (
                 f"line error {g['chi2_per_line_before']:.2f} -> {g['chi2_per_line_after']:.2f}"
                 f" chi2/line, DF error {g['df_error_db_before']:.2f} -> "
@@ -162,6 +175,11 @@ def _cmd_diagnose(args: argparse.Namespace) -> int:
         side = f.evidence.get("side")
         if side is not None and side["verdict"] == "undecided":
             print(f"   {side_text(side)}")
+        for alt in f.evidence.get("alternatives") or []:
+            print(
+                f"   as likely (within BIC {BIC_MARGIN:g}): {' + '.join(alt['effects'])} "
+                f"(BIC {alt['delta_bic_below_named']:.1f} lower)"
+            )
     for dof, r in d.dofs.items():
         print(f"{dof}: IMU noise x{r.noise.fit.to_json()['imu_noise_scale']:.2f} of the data "
               "sheet (a nuisance, not a cause)")  # fmt: skip

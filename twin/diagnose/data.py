@@ -129,6 +129,9 @@ class Case:
     unidentifiable : dict
         Effects these runs cannot show, with the reason (e.g. ``delay`` when ``twin import``
         had to estimate the clock offset from the response).
+    runs : tuple of (RecordedRun, Measurement)
+        The runs as read and as post-processed (every channel and log: the physical
+        diagnosis uses them all).
 
     """
 
@@ -138,6 +141,7 @@ class Case:
     channels: list[Channel]
     seed: int
     unidentifiable: dict[str, str] = field(default_factory=dict)
+    runs: tuple[tuple[RecordedRun, Measurement], ...] = ()
 
     @property
     def clean(self) -> MotionSystem:
@@ -358,4 +362,5 @@ def load_case(
         if progress:
             progress(f"nominal twin on {m.source} ({model})")
         channels += measurement_channels(m, nominal, model, imu, seed, 1000 * r, dofs, realisations)
-    return Case(nominal, model, imu, channels, seed, unidentifiable)
+    pairs = tuple(zip(recs, measurements, strict=True))
+    return Case(nominal, model, imu, channels, seed, unidentifiable, pairs)

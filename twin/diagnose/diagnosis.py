@@ -23,12 +23,14 @@ import numpy as np
 from twin.chain.config import MotionSystem
 from twin.chain.extensions import Extension
 from twin.checks import number
-from twin.diagnose.candidates import DYNAMIC, Model, describe_bound
+from twin.diagnose.candidates import DYNAMIC, Model, describe_bound, numeric_names
 from twin.diagnose.data import NOISE_REALISATIONS, Case, load_case
 from twin.diagnose.detect import smallest_detectable
 from twin.diagnose.evidence import lines
 from twin.diagnose.merge import merge_across_dofs
 from twin.diagnose.nuisance import NoiseJudgement, judge_noise
+from twin.diagnose.physical import PhysicalResult, calibrate
+from twin.diagnose.physical_vocabulary import merged_config
 from twin.diagnose.residuals import (
     MAX_HZ,
     LineRatios,
@@ -166,6 +168,8 @@ class Diagnosis:
         Top of the analysis band.
     notes : list of str
         What reading the runs did to them (:attr:`twin.runs.RecordedRun.notes`).
+    physical : PhysicalResult or None
+        The physical causes weighed on the full model (``physics=True``; None: not weighed).
 
     """
 
@@ -175,14 +179,26 @@ class Diagnosis:
     validation: list[str]
     max_hz: float
     notes: list[str] = field(default_factory=list)
+    physical: PhysicalResult | None = None
+
+    @property
+    def chain_findings(self) -> list[Finding]:
+        """The signal chain's findings per DOF (an effect found alike in several DOFs: one)."""
+        return merge_across_dofs([f for r in self.dofs.values() for f in r.findings])
 
     @property
     def findings(self) -> list[Finding]:
         """Every finding, most important (largest BIC improvement) first.
 
-        An effect found with the same parameters in several DOFs is one finding with its DOFs.
+        A physical cause that explains the runs at least as well as the chain's findings
+        replaces them (they are listed as its alternative when the two are within the margin);
+        the motion noise, which no physical cause explains, stays.
         """
-        return merge_across_dofs([f for r in self.dofs.values() for f in r.findings])
+        chain = self.chain_findings
+        p = self.physical
+        if p is None or p.finding is None or not p.preferred:
+            return chain
+        return [p.finding, *(f for f in chain if f.extension.effect == "noise")]
 
     @property
     def at_bound(self) -> list[dict[str, object]]:
@@ -193,23 +209,27 @@ class Diagnosis:
     def extended_config(self) -> MotionSystem:
         """The nominal configuration with every finding added."""
         cfg = self.case.config
-        exts = [f.extension for f in self.findings]
-        if not exts:
+        found = self.findings
+        if not found:
             return cfg
-        names = "+".join(sorted({e.effect for e in exts}))
-        return cfg.replace(
+        exts = [f.extension for f in found if isinstance(f.extension, Extension)]
+        causes = [f.extension for f in found if not isinstance(f.extension, Extension)]
+        names = "+".join(sorted({e.effect for e in (*exts, *causes)}))
+        return merged_config(cfg, causes).replace(  # type: ignore[arg-type]
             name=f"{cfg.name}+{names}",
-            extensions=(*cfg.extensions, *exts),
+            extensions=(*merged_config(cfg, causes).extensions, *exts),  # type: ignore[arg-type]
             description=f"{cfg.name} extended by twin diagnose of {', '.join(self.runs)}",
         )
 
     def statements(self) -> list[str]:
         """Return what the runs could have shown, per DOF and effect (what "no finding" means)."""
-        return [
+        chain = [
             f"{dof}: {entry['statement']}"
             for dof, r in self.dofs.items()
             for entry in r.detectable.values()
         ]
+        physical = self.physical.statements() if self.physical is not None else []
+        return chain + [f"physics: {s}" for s in physical]
 
     def _document(self) -> dict[str, object]:
         """Return the ``--json`` document: ``findings`` and ``nominal`` (numpy values)."""
@@ -229,6 +249,7 @@ class Diagnosis:
                 f"BIC and each member's improve by > {BIC_MARGIN:g} and each member improves "
                 "the held-out line error",
                 "dofs": {d: r.to_json() for d, r in self.dofs.items()},
+                "physical": self.physical.to_json() if self.physical is not None else None,
             },
             "extended_config": self.extended_config.to_meta(),
         }
@@ -305,6 +326,7 @@ def diagnose(
     realisations: int = NOISE_REALISATIONS,
     progress: ProgressFn | None = None,
     imu_noise: float | None = None,
+    physics: bool = False,
 ) -> Diagnosis:
     """Diagnose recorded runs against the nominal twin.
 
@@ -332,6 +354,12 @@ def diagnose(
     imu_noise : float, optional
         The recording IMU's noise over the data sheet's (amplitude) when known, e.g. from a
         recording at rest; by default it is fitted as a nuisance.
+    physics : bool
+        Also weigh the physical causes (a payload, one leg's gain, lag, friction or play, the
+        IMU's alignment) by simulating the full model on every channel the runs have
+        (:mod:`twin.diagnose.physical`; about 25 simulations per run), against the chain's
+        findings. It implies ``model="full"``: every cause is then weighed against the full
+        model's nominal.
 
     Raises
     ------
@@ -341,6 +369,7 @@ def diagnose(
 
     """
     check_options(max_hz, imu_noise)
+    model = "full" if physics else model
     recs, vals = [read_plausible_run(r) for r in runs], [read_plausible_run(r) for r in validate]
     check_distinct([*recs, *vals])
     case = load_case(recs, config, model, seed, dofs, realisations, progress)
@@ -387,7 +416,18 @@ def diagnose(
         if progress:
             progress("diagnosis [DOFs]", i + 1, len(case.dofs))
     notes = [n for r in (*recs, *vals) for n in r.notes]
-    return Diagnosis(case, reports, _names(runs), _names(validate), max_hz, notes)
+    d = Diagnosis(case, reports, _names(runs), _names(validate), max_hz, notes)
+    if physics:
+        if progress:
+            progress("physical causes (full model)")
+        d.physical = calibrate(case.config, case.runs, case.imu, seed, max_hz, progress)
+        chain = [f for f in d.chain_findings if f.extension.effect != "noise"]
+        parameters = sum(len(numeric_names(f.extension.effect)) for f in chain)
+        extended = case.config.replace(extensions=(*case.config.extensions,
+                                                   *(f.extension for f in chain)))  # fmt: skip
+        d.physical.weigh(extended if chain else None, parameters,
+                         "; ".join(f.extension.describe() for f in chain))  # fmt: skip
+    return d
 
 
 def _names(runs: Sequence[str | Path | RecordedRun]) -> list[str]:

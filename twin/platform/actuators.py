@@ -44,7 +44,7 @@ writes them into a private copy of one (a calibrated or faulty platform, no reco
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass, fields, replace
+from dataclasses import dataclass, field, fields, replace
 
 import mujoco
 import numpy as np
@@ -287,6 +287,7 @@ class ReferenceState:
 
     lagged: FloatArray
     rested: FloatArray
+    lagged_rate: FloatArray = field(default_factory=lambda: np.zeros(N_LEGS))
 
 
 def shape_reference(
@@ -296,7 +297,9 @@ def shape_reference(
     """Pass one run's leg references through each leg's servo lag and play (in place of state).
 
     The lag is first order, exact for a reference held over each physics step
-    (y += (1 - exp(-h / tau)) (u - y)), its rate (u - y) / tau; the play is a dead band of
+    (y += (1 - exp(-h / tau)) (u - y)), and its rate reference is the reference's rate through
+    the same lag (the rate of a lagged signal is the lagged rate; (u - y) / tau instead would
+    lose a third of the rate where tau is near the step h); the play is a dead band of
     width ``play_m`` (the rod rests while the lagged reference moves inside it, and follows at
     its edge, at the reference's rate).
 
@@ -320,15 +323,14 @@ def shape_reference(
     tau, half = physics.lag_s, 0.5 * physics.play_m
     lagged_leg = tau > 0
     a = np.where(lagged_leg, -np.expm1(-timestep / np.where(lagged_leg, tau, 1.0)), 1.0)
-    inv_tau = np.where(lagged_leg, 1.0 / np.where(lagged_leg, tau, 1.0), 0.0)
     out, rate = np.empty_like(legs), np.empty_like(legs_dot)
-    lag, rest = state.lagged.copy(), state.rested.copy()
+    lag, rest, v = state.lagged.copy(), state.rested.copy(), state.lagged_rate.copy()
     for k in range(legs.shape[0]):
         lag += a * (legs[k] - lag)
-        v = np.where(lagged_leg, (legs[k] - lag) * inv_tau, legs_dot[k])
+        v += a * (legs_dot[k] - v)  # a = 1 where there is no lag: the rate itself
         lo, hi = lag - half, lag + half
         moving = (rest <= lo) | (rest >= hi)
         rest = np.clip(rest, lo, hi)
         out[k], rate[k] = rest, np.where(moving, v, 0.0)
-    state.lagged, state.rested = lag, rest
+    state.lagged, state.rested, state.lagged_rate = lag, rest, v
     return out, rate
