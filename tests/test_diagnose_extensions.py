@@ -32,6 +32,7 @@ def test_vocabulary_is_the_fixed_set_of_effects():
         "resonance": ("frequency_hz", "damping"), "lead": ("time_constant_s",),
         "sensor_filter": ("cutoff_hz", "channels"), "backlash": ("play",),
         "platform_lag": ("lag_s",), "noise": ("scale",),
+        "imu_alignment": ("roll_rad", "pitch_rad", "yaw_rad"),
     }  # fmt: skip
 
 

@@ -32,11 +32,11 @@ from fractions import Fraction
 from pathlib import Path
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 from scipy import signal
 
 from twin.chain.config import MotionSystem
-from twin.chain.imu import G
+from twin.chain.imu import G, rotate_readings
 from twin.errors import RunFormatError
 from twin.run_expected import BAND_HZ, Comparison, compare, ideal_imu
 from twin.runs import HEADERS, RecordedRun, read_run
@@ -221,19 +221,23 @@ def check_gyro_offset(run: RecordedRun, where: str) -> None:
     )
 
 
-def check_gravity(run: RecordedRun, cmp: Comparison | None, where: str) -> None:
+def check_gravity(
+    run: RecordedRun, cmp: Comparison | None, where: str, rotation: ArrayLike | None = None
+) -> None:
     """Refuse accelerometers that do not read gravity as the commanded attitude does.
 
     The median specific force over the record is compared with the nominal twin's (about
-    (0, 0, -9.81) m/s^2, tilted as the commands tilt the cabin); beyond
-    :data:`GRAVITY_TOLERANCE` the message names the likely cause.
+    (0, 0, -9.81) m/s^2, tilted as the commands tilt the cabin and as the configuration's
+    ``imu_alignment``, ``rotation``, tilts the IMU); beyond :data:`GRAVITY_TOLERANCE` the
+    message names the likely cause.
     """
     got = np.median(run.imu[:, :3], axis=0)
     if cmp is not None:
         want = np.median(cmp.expected[:, :3], axis=0)
     else:  # too short to filter: the commands' own attitude
         c = run.commands
-        want = np.median(ideal_imu(c, run.meta["imu"]["position_m"], c.t)[:, :3], axis=0)
+        ideal = rotate_readings(ideal_imu(c, run.meta["imu"]["position_m"], c.t), rotation)
+        want = np.median(ideal[:, :3], axis=0)
     if np.linalg.norm(got - want) <= GRAVITY_TOLERANCE:
         return
     size = float(np.linalg.norm(got))
@@ -364,7 +368,7 @@ def check_plausible(run: RecordedRun, where: str | None = None) -> None:
     cmp = compare(run, config)
     check_constant(run, cmp, where)
     check_gyro_offset(run, where)
-    check_gravity(run, cmp, where)
+    check_gravity(run, cmp, where, config.imu_rotation)
     check_gyro_scale(cmp, where)
     check_timing(cmp, config, where)
 

@@ -4,7 +4,8 @@ The nominal configuration of a run's ``meta.json`` (its linear blocks: platform 
 resonance, lead, gain and sensor filter; no noise, no backlash, no platform dynamics) moves
 the cabin as the commands ask, and an ideal IMU at the run's mount reads that motion: specific
 force with gravity and angular rate, thesis cabin axes (x forward, y right, z down; at rest
-(0, 0, -9.81) m/s^2), as :func:`twin.chain.imu.specific_force`. Both that reading and the
+(0, 0, -9.81) m/s^2), as :func:`twin.chain.imu.specific_force`, through its axes' rotation
+where the configuration has an ``imu_alignment``. Both that reading and the
 recorded IMU (without single-sample glitches) are band-limited alike (:data:`BAND_HZ`, zero
 phase) onto one grid of :data:`GRID_HZ`, the recorded one :data:`SEARCH_S` beyond the
 commands on either side, so that they can be cross-correlated over lags
@@ -22,6 +23,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy import ndimage, signal
 
 from twin.chain.config import MotionSystem
+from twin.chain.imu import rotate_readings
 from twin.chain.response import GRAVITY_BASE
 from twin.frames import angular_motion, rotation_matrix
 from twin.trajectory import Trajectory, interp_columns
@@ -186,8 +188,8 @@ def compare(run: RecordedRun, config: MotionSystem) -> Comparison | None:
     n = int(np.floor(c.duration * GRID_HZ + 1e-9)) + 1
     search = round(min(SEARCH_S, c.duration / 3) * GRID_HZ)
     t = c.t0 + np.arange(n) / GRID_HZ
-    expected = band_limited(ideal_imu(nominal_pose(c, config), run.meta["imu"]["position_m"], t),
-                            GRID_HZ)  # fmt: skip
+    ideal = ideal_imu(nominal_pose(c, config), run.meta["imu"]["position_m"], t)
+    expected = band_limited(rotate_readings(ideal, config.imu_rotation), GRID_HZ)
     grid = c.t0 + np.arange(-search, n + search) / GRID_HZ
     rate = (len(t_imu) - 1) / (t_imu[-1] - t_imu[0])
     inside = (grid >= t_imu[0]) & (grid <= t_imu[-1])

@@ -38,7 +38,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from twin.chain.block import Backlash, Block
 from twin.chain.delay import MAX_DELAY_S, Delay
-from twin.chain.extensions import Extension
+from twin.chain.extensions import Extension, imu_rotation
 from twin.chain.filter import MAX_BREAK_HZ, MIN_BREAK_HZ, PlatformFilter, check_break_hz
 from twin.chain.lti import LinearModel
 from twin.chain.noise import MotionNoise
@@ -120,6 +120,14 @@ class MotionSystem:
     def of(self, effect: str) -> list[Extension]:
         """Return the extensions of one effect type."""
         return [e for e in self.extensions if e.effect == effect]
+
+    @property
+    def imu_rotation(self) -> NDArray[np.float64] | None:
+        """Rotation of the IMU's axes on the cabin (``imu_alignment``; None: well mounted).
+
+        See :func:`twin.chain.extensions.imu_rotation`.
+        """
+        return imu_rotation(self.extensions)
 
     @property
     def noise_scale(self) -> float:
@@ -239,6 +247,11 @@ class MotionSystem:
 
     def frequency_response(self, f: ArrayLike) -> NDArray[np.complex128]:
         """Return the reduced model (Eq 5.11 and the optional resonance) at ``f`` [Hz].
+
+        An ``imu_alignment`` is left out (here and in :meth:`transfer_function`): it mixes the
+        IMU's channels rather than filtering one (on a DOF's own channel it is a constant
+        factor, a diagonal element of the rotation, 1 - O(angle^2); the leakage goes to the
+        others).
 
         Returns
         -------

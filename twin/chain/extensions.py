@@ -22,16 +22,30 @@ effect              parameters                      block
 ``noise``           ``scale``                       the motion noise (Eq 5.10) times ``scale``
                                                     (the IMU's own noise belongs to the IMU:
                                                     :class:`~twin.chain.imu.ImuSpec`)
+``imu_alignment``   ``roll_rad``, ``pitch_rad``,    the IMU mounted with its axes rotated by
+                    ``yaw_rad``                     R = Rz(yaw) Ry(pitch) Rx(roll) (IMU axes to
+                                                    cabin axes, Eq A.2's form): it reads R^T f and
+                                                    R^T omega, so one DOF leaks into the other
+                                                    channels (each angle within +-0.2 rad)
 ==================  ==============================  =============================================
 
 Command-side blocks act on the platform input in the order of the table (after the
-configuration's own filter and delay); ``sensor_filter`` acts on the IMU samples and ``noise``
-on the noise generators, so all of them run on the full and the reduced platform alike.
+configuration's own filter and delay); ``sensor_filter`` and ``imu_alignment`` act on the IMU
+samples and ``noise`` on the noise generators, so all of them run on the full and the reduced
+platform alike.
+
+``imu_alignment`` takes the angles in the convention of the cabin's own attitude (Eq A.2): an
+IMU pitched nose-up by d on a cabin at rest reads what a well-mounted one reads on a cabin
+pitched nose-up by d, ax = +g sin d. The sensing elements are rotated, so the IMU's bias, noise
+and saturation act in its own axes, after the rotation, and a ``sensor_filter`` after them
+(:class:`~twin.chain.imu.VirtualImu`). It acts on the whole IMU (its ``dofs`` are ignored) and
+has no response of one DOF's own channel (:meth:`Extension.response` refuses it): it is not
+fitted DOF by DOF.
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -42,7 +56,7 @@ from twin.chain.block import Backlash, Block, Gain, Lead, backlash  # noqa: F401
 from twin.chain.lti import LtiBlock
 from twin.checks import check_keys, did_you_mean, number
 from twin.errors import ConfigError, SignalError
-from twin.frames import DOF_NAMES
+from twin.frames import DOF_NAMES, rotation_matrix
 
 FloatArray = NDArray[np.float64]
 ComplexArray = NDArray[np.complex128]
@@ -58,7 +72,11 @@ EFFECTS: Mapping[str, tuple[str, ...]] = {
     "backlash": ("play",),
     "platform_lag": ("lag_s",),
     "noise": ("scale",),
+    "imu_alignment": ("roll_rad", "pitch_rad", "yaw_rad"),
 }
+#: Largest rotation of an ``imu_alignment`` about each axis [rad] (11.5 deg: a misalignment,
+#: not a sensor mounted on another face).
+MAX_ALIGNMENT_RAD = 0.2
 #: Allowed range of each numeric parameter: (low, high, low excluded). The bounds keep a
 #: configuration file physical (a 1e300 Hz filter or a 1e9 s delay is refused, not run).
 RANGES: Mapping[str, tuple[float, float, bool]] = {
@@ -72,6 +90,9 @@ RANGES: Mapping[str, tuple[float, float, bool]] = {
     "play": (0.0, 10.0, False),
     "scale": (0.0, 1e3, False),
     "lag_s": (0.0, 1.0, False),
+    "roll_rad": (-MAX_ALIGNMENT_RAD, MAX_ALIGNMENT_RAD, False),
+    "pitch_rad": (-MAX_ALIGNMENT_RAD, MAX_ALIGNMENT_RAD, False),
+    "yaw_rad": (-MAX_ALIGNMENT_RAD, MAX_ALIGNMENT_RAD, False),
 }
 #: The keys of an extension's JSON form.
 JSON_KEYS = ("effect", "parameters", "dofs")
@@ -94,7 +115,8 @@ class Extension:
     parameters : mapping
         Its parameters (numbers; ``channels`` a list of IMU channel names).
     dofs : tuple of str
-        DOFs it acts on (all six if empty). ``sensor_filter`` and ``noise`` ignore it.
+        DOFs it acts on (all six if empty). ``sensor_filter``, ``noise`` and
+        ``imu_alignment`` ignore it.
 
     Examples
     --------
@@ -155,7 +177,17 @@ class Extension:
         return np.array([d in self.dofs for d in DOF_NAMES])
 
     def describe(self) -> str:
-        """One line, e.g. ``delay: extra_delay_s 0.065 (heave)``."""
+        """One line, e.g. ``delay: extra_delay_s 0.065 (heave)``.
+
+        An ``imu_alignment`` in degrees, without DOFs (it acts on the whole IMU):
+        ``imu_alignment: IMU rotated by roll 0.50°, pitch -0.20°, yaw 1.00°``.
+        """
+        if self.effect == "imu_alignment":
+            angles = ", ".join(
+                f"{axis} {np.degrees(self.value(f'{axis}_rad')):.2f}°"
+                for axis in ("roll", "pitch", "yaw")
+            )
+            return f"{self.effect}: IMU rotated by {angles}"
         pars = ", ".join(
             f"{k} {v:.4g}" if isinstance(v, float | int) else f"{k} {v}"
             for k, v in self.parameters.items()
@@ -193,7 +225,14 @@ class Extension:
         """Return the factor the extension multiplies a DOF's response by, at ``f`` [Hz].
 
         ``platform_filter`` is relative to the configuration's own filter (``nominal_break_hz``;
-        None: no filter). Non-linear effects (``backlash``, ``noise``) have none.
+        None: no filter). Non-linear effects (``backlash``, ``noise``) have none, nor has
+        ``imu_alignment``, which mixes the IMU's channels (:func:`imu_rotation`).
+
+        Raises
+        ------
+        SignalError
+            For an effect without a response of one DOF (the message says why).
+
         """
         s = 2j * np.pi * np.asarray(f, dtype=float)
         p = self.value
@@ -218,6 +257,11 @@ class Extension:
             return 1.0 / (1.0 + s / (2 * np.pi * p("cutoff_hz")))
         if self.effect == "platform_lag":
             return 1.0 / (1.0 + s * p("lag_s"))
+        if self.effect == "imu_alignment":
+            raise SignalError(
+                "imu_alignment has no response of one DOF: it rotates the IMU's axes, so each "
+                "DOF leaks into the other channels (apply it with imu_rotation to all six)"
+            )
         raise SignalError(f"{self.effect} is not a linear effect; it has no frequency response")
 
     # --- blocks --------------------------------------------------------------------------------
@@ -225,8 +269,9 @@ class Extension:
     def block(self) -> Block:
         """Return the command-side stream block of this extension (:mod:`twin.chain.block`).
 
-        ``sensor_filter`` acts inside the IMU (:class:`SensorFilterStream`) and ``noise`` on
-        the noise generators; neither has a command-side block.
+        ``sensor_filter`` and ``imu_alignment`` act inside the IMU (:class:`SensorFilterStream`,
+        :func:`imu_rotation`) and ``noise`` on the noise generators; none has a command-side
+        block.
         """
         mask = tuple(bool(m) for m in self.dof_mask)
         p = self.value
@@ -245,6 +290,44 @@ class Extension:
             sys = ((1.0,), (lag, 1.0)) if lag > 0 else None
             return LtiBlock(tuple(sys if m else None for m in mask), f"platform lag {lag:g} s")
         raise SignalError(f"{self.effect} is not applied to the commands")
+
+
+def imu_rotation(extensions: Iterable[Extension]) -> FloatArray | None:
+    """Return the rotation of the IMU's axes that the ``imu_alignment`` extensions make.
+
+    Several compose in their order, each the IMU's rotation relative to the axes the ones
+    before it left (R = R_1 R_2 ...), so an alignment found on top of a configuration's adds
+    to it.
+
+    Parameters
+    ----------
+    extensions : iterable of Extension
+        A configuration's extensions (the other effects are skipped).
+
+    Returns
+    -------
+    ndarray, shape (3, 3), or None
+        R, taking IMU axes to cabin axes (the IMU reads R^T times a cabin-axes vector);
+        None where there is no ``imu_alignment`` or all its angles are zero, so that a zero
+        rotation leaves the readings' bits as they are.
+
+    Examples
+    --------
+    >>> R = imu_rotation([Extension("imu_alignment",
+    ...                             {"roll_rad": 0.0, "pitch_rad": 0.1, "yaw_rad": 0.0})])
+    >>> round(float((R.T @ [0.0, 0.0, -9.81])[0]), 4)  # nose up: gravity shows in +x
+    0.9794
+
+    """
+    out = None
+    for e in extensions:
+        if e.effect != "imu_alignment":
+            continue
+        angles = [e.value("roll_rad"), e.value("pitch_rad"), e.value("yaw_rad")]
+        if any(angles):
+            R = rotation_matrix(angles)
+            out = R if out is None else out @ R
+    return out
 
 
 class SensorFilterStream:

@@ -2,7 +2,8 @@
 
 :func:`specific_force` gives what an ideal accelerometer at a mount point reads (lever arm
 included); :class:`VirtualImu` samples it and the angular rate at 819.2 Hz from the platform's
-physics-rate response (linear interpolation: 819.2 Hz does not divide 1 kHz), adds seeded
+physics-rate response (linear interpolation: 819.2 Hz does not divide 1 kHz), reads it with
+axes rotated on the cabin where the mount is misaligned (:func:`rotate_readings`), adds seeded
 bias and white noise and saturates like the ADIS16355; :func:`postprocess` applies the
 thesis' FIR and Savitzky-Golay filters and resamples to 100 Hz.
 
@@ -150,6 +151,41 @@ class ImuRecord:
         return (len(self.t) - 1) / float(self.t[-1] - self.t[0])
 
 
+def rotate_readings(values: FloatArray, rotation: ArrayLike | None) -> FloatArray:
+    """Return what an IMU whose axes are rotated by ``rotation`` reads of ``values``.
+
+    Parameters
+    ----------
+    values : ndarray, shape (n, 6)
+        Specific force (ax, ay, az) and angular rate (p, q, r) in cabin axes.
+    rotation : array_like, shape (3, 3), or None
+        R, taking the IMU's axes to the cabin's
+        (:func:`~twin.chain.extensions.imu_rotation`); None: a well-mounted IMU.
+
+    Returns
+    -------
+    ndarray, shape (n, 6)
+        Each triad as R^T v, a new array; ``values`` itself where ``rotation`` is None.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> R = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])  # yawed 90 deg
+    >>> rotate_readings(np.array([[1.0, 0.0, 0.0, 0.0, 2.0, 0.0]]), R)  # x reads as -y
+    array([[ 0., -1.,  0.,  2.,  0.,  0.]])
+
+    """
+    if rotation is None:
+        return values
+    R = np.asarray(rotation, dtype=float)
+    if R.shape != (3, 3):
+        raise SignalError(f"an IMU rotation is a 3 x 3 matrix; got shape {R.shape}")
+    out = np.empty_like(values)
+    out[:, :3] = values[:, :3] @ R  # rows: (R^T v)^T = v^T R
+    out[:, 3:] = values[:, 3:] @ R
+    return out
+
+
 class VirtualImu:
     """Sample a platform response like the ADIS16355, chunk by chunk.
 
@@ -159,11 +195,24 @@ class VirtualImu:
         The sensor.
     seed : int or numpy.random.Generator or None
         Seed for bias and noise (same seed, same bits).
+    rotation : array_like, shape (3, 3), optional
+        The IMU's axes rotated on the cabin (an ``imu_alignment``,
+        :func:`~twin.chain.extensions.imu_rotation`): the sensing elements read the rotated
+        motion, and their bias, noise and saturation act in their own axes after it. The
+        random draws are the same with or without it (same seed: the same noise). None: a
+        well-mounted IMU.
 
     """
 
-    def __init__(self, spec: ImuSpec, seed: int | np.random.Generator | None = 0) -> None:
+    def __init__(
+        self,
+        spec: ImuSpec,
+        seed: int | np.random.Generator | None = 0,
+        rotation: ArrayLike | None = None,
+    ) -> None:
         self.spec = spec
+        self.rotation = None if rotation is None else np.asarray(rotation, dtype=float)
+        rotate_readings(np.zeros((0, 6)), self.rotation)  # a malformed one is refused here
         self._rng = seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
         self._bias = np.concatenate(
             [self._rng.normal(0, spec.accel_bias_sd, 3), self._rng.normal(0, spec.gyro_bias_sd, 3)]
@@ -188,6 +237,7 @@ class VirtualImu:
         self._next = last + 1
         self._carry = (t[-1:].copy(), truth[-1].copy())
         values = np.ascontiguousarray(values)  # a fresh array: the errors go in place
+        values = rotate_readings(values, self.rotation)  # the truth as the rotated axes read it
         sd = np.repeat([self.spec.accel_noise_sd, self.spec.gyro_noise_sd], 3)
         noise = self._rng.standard_normal(values.shape)
         rng = np.repeat([self.spec.accel_range, self.spec.gyro_range], 3)

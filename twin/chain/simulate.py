@@ -205,8 +205,14 @@ class Run:
     def _read(
         self, motion: Iterable[PlatformResponse], seed: int, spec: ImuSpec
     ) -> Iterator[tuple[PlatformResponse, ImuRecord]]:
-        """Yield each chunk of motion with the IMU's reading of it (its noise from ``seed``)."""
-        imu = VirtualImu(spec, np.random.default_rng(np.random.SeedSequence([seed, 1])))
+        """Yield each chunk of motion with the IMU's reading of it (its noise from ``seed``).
+
+        The IMU reads the motion through its mount's rotation (``imu_alignment``), adds its
+        bias and noise and saturates in its own axes; the ``sensor_filter`` s act after that,
+        on what the rotated sensing elements read.
+        """
+        rng = np.random.default_rng(np.random.SeedSequence([seed, 1]))
+        imu = VirtualImu(spec, rng, self.config.imu_rotation)
         filters = [SensorFilterStream(e, spec.rate_hz) for e in self.config.of("sensor_filter")]
         for chunk in motion:
             rec = imu.feed(chunk)

@@ -40,8 +40,10 @@ ComplexArray = NDArray[np.complex128]
 #: The effects fitted to the lines: every one that changes the deterministic response but
 #: ``platform_lag``, whose line response is a ``sensor_filter``'s on the DOF's own channel: the
 #: two are told apart by the noise (a sensor filter filters the sensor's noise too), after the
-#: lines have named one of them (:mod:`twin.diagnose.sensor_side`).
-DYNAMIC = tuple(e for e in EFFECTS if e not in ("noise", "platform_lag"))
+#: lines have named one of them (:mod:`twin.diagnose.sensor_side`); and ``imu_alignment``,
+#: which has no response of one DOF (it leaks each DOF into the other channels: it is fitted
+#: across all six, not line by line in one).
+DYNAMIC = tuple(e for e in EFFECTS if e not in ("noise", "platform_lag", "imu_alignment"))
 #: Parameters searched in log space (positive, scale-like).
 _LOG = {"gain", "break_hz", "frequency_hz", "damping", "cutoff_hz", "play"}
 

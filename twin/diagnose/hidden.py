@@ -47,8 +47,9 @@ from twin.signals import describing_signal
 
 #: The effects the generator hides: the chain's vocabulary as the diagnosis fits it to the
 #: lines (``platform_lag``, the platform-side reading of a ``sensor_filter``, is drawn by the
-#: tests of the sensor-or-platform judgement instead, tests/test_diagnose_sensor_side.py).
-DRAWN = tuple(e for e in EFFECTS if e != "platform_lag")
+#: tests of the sensor-or-platform judgement instead, tests/test_diagnose_sensor_side.py;
+#: ``imu_alignment`` is not fitted to one DOF's lines).
+DRAWN = tuple(e for e in EFFECTS if e not in ("platform_lag", "imu_alignment"))
 
 #: Expected evidence of a drawn effect, in multiples of the naming threshold.
 DETECTABLE_FACTOR = 3.0
