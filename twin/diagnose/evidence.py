@@ -44,13 +44,25 @@ def line_amplitudes(
     :func:`~twin.measurement.describing_function.fourier_coefficients`; over part of the
     measurement window (the held-out halves) the lines are fitted jointly, with a constant.
     """
-    sel = (t >= window[0] - 1e-9) & (t < window[1] - 1e-9)
-    tt = t[sel]
-    a = np.hstack([np.sin(2 * np.pi * np.outer(tt, f)), np.cos(2 * np.pi * np.outer(tt, f))])
-    a = np.hstack([a, np.ones((tt.size, 1))])
-    c, *_ = np.linalg.lstsq(a, y[sel], rcond=None)
+    sel = in_window(t, window)
+    c, *_ = np.linalg.lstsq(line_design(t[sel], f), y[sel], rcond=None)
     m = f.size
     return c[:m] + 1j * c[m : 2 * m]
+
+
+def in_window(t: FloatArray, window: tuple[float, float]) -> NDArray[np.bool_]:
+    """Return the samples of ``t`` in ``window`` [start, end)."""
+    return (t >= window[0] - 1e-9) & (t < window[1] - 1e-9)
+
+
+def line_design(t: FloatArray, f: FloatArray) -> FloatArray:
+    """Return the least-squares design of sines and cosines at ``f`` and a constant at ``t``.
+
+    Columns: sin(2 pi f_i t) for every line, then cos(2 pi f_i t), then 1; the fitted
+    coefficients c give the lines' complex amplitudes c[:m] + j c[m:2m].
+    """
+    return np.hstack([np.sin(2 * np.pi * np.outer(t, f)), np.cos(2 * np.pi * np.outer(t, f)),
+                      np.ones((t.size, 1))])  # fmt: skip
 
 
 @dataclass(frozen=True, eq=False)
@@ -107,13 +119,23 @@ def measured_line_sd(ch: Channel, prediction: FloatArray | None = None) -> Float
     module docstring).
     """
     resid = ch.measured - (ch.nominal if prediction is None else prediction)
-    out = np.empty(ch.lines_hz.size)
-    for i, fs in enumerate(neighbour_bins(ch.lines_hz, ch.window, NEIGHBOURS)):
-        if fs.size < 2:
-            out[i] = np.nan
-            continue
-        c = fourier_coefficients(ch.t, resid, fs, ch.window)
-        out[i] = np.sqrt(np.mean(np.abs(c) ** 2) * (2 * fs.size) / (2 * fs.size - 2))
+    return neighbour_sd(ch.t, resid[:, None], ch.lines_hz, ch.window)[:, 0]
+
+
+def neighbour_sd(
+    t: FloatArray, resid: FloatArray, f: FloatArray, window: tuple[float, float]
+) -> FloatArray:
+    """Return each line amplitude's standard deviation per column of ``resid`` (n, k).
+
+    From the residual's power at the :data:`NEIGHBOURS` non-excited bins on each side of the
+    line, bias-corrected (see the module docstring); NaN for a line with fewer than two.
+    """
+    out = np.full((f.size, resid.shape[1]), np.nan)
+    for i, fs in enumerate(neighbour_bins(f, window, NEIGHBOURS)):
+        if fs.size >= 2:
+            c = fourier_coefficients(t, resid, fs, window)
+            power = np.mean(np.abs(c) ** 2, axis=0)
+            out[i] = np.sqrt(power * (2 * fs.size) / (2 * fs.size - 2))
     return out
 
 

@@ -47,7 +47,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from twin.chain.config import MotionSystem
-from twin.chain.imu import ImuRecord, ImuSpec
+from twin.chain.extensions import Extension, imu_rotation
+from twin.chain.imu import ImuRecord, ImuSpec, rotate_readings
 from twin.diagnose.physical_evidence import Block, Simulated, blocks, reread, simulate_run
 from twin.diagnose.physical_vocabulary import (
     ALIGNMENT,
@@ -58,7 +59,6 @@ from twin.diagnose.physical_vocabulary import (
     nominal_value,
 )
 from twin.diagnose.select import BIC_MARGIN, Finding
-from twin.frames import rotation_matrix
 from twin.measurement.measure import Measurement
 from twin.progress import ProgressFn
 from twin.runs import RecordedRun
@@ -77,13 +77,15 @@ WORKERS = max(2, min(4, os.cpu_count() or 2))
 
 
 def rotated(record: ImuRecord, angles: Sequence[float]) -> ImuRecord:
-    """Return an IMU record read by axes rotated by (roll, pitch, yaw) [rad].
+    """Return an (ideal) IMU's record as axes rotated by (roll, pitch, yaw) [rad] read it.
 
-    The IMU's axes are the platform's rotated by R = Rz(yaw) Ry(pitch) Rx(roll), so it reads
-    R^T v of every vector v (specific force and angular rate).
+    The ``imu_alignment`` extension's rotation (:func:`twin.chain.extensions.imu_rotation`)
+    applied to the readings, which for an ideal IMU is what the rotated IMU reads.
     """
-    r = rotation_matrix(np.asarray(angles, dtype=float))
-    return ImuRecord(record.t, record.accel @ r, record.gyro @ r, record.saturated)
+    angles = {n: float(a) for n, a in zip(ALIGNMENT, angles, strict=True)}
+    r = imu_rotation([Extension("imu_alignment", angles)])
+    values = rotate_readings(np.hstack([record.accel, record.gyro]), r)
+    return ImuRecord(record.t, values[:, :3], values[:, 3:], record.saturated)
 
 
 @dataclass
@@ -617,27 +619,42 @@ def _detectability(
         key = "payload" if c.effect == "payload" else f"leg {c.name}"
         groups.setdefault(key, []).append((c, x))
     for key, items in groups.items():
-        xs = np.array([x for _, x in items])
-        name = items[0][0].name
-        unit = SEARCH[name][3]
+        c0 = items[0][0]
+        lo, hi = c0.bounds
+        reach = abs((hi if c0.probe > c0.nominal else lo) - c0.nominal)  # the search's reach
+        xs = np.array([x if x <= reach else np.inf for _, x in items])
+        unit = SEARCH[c0.name][3]
         if key == "payload":
-            text = (f"a cabin heavier by less than {100 * xs[0]:.0f} % (mass and inertia) could "
+            text = ("no heavier cabin within the search (x3) could have been seen in these runs"
+                    if not np.isfinite(xs[0]) else
+                    f"a cabin heavier by less than {100 * xs[0]:.0f} % (mass and inertia) could "
                     "not have been seen in these runs")  # fmt: skip
         else:
-            what = {"gain": "gain change", "lag_s": "servo lag", "coulomb_n": "Coulomb friction",
-                    "play_m": "play"}[name]  # fmt: skip
-            per = ", ".join(f"{c.leg}: {_fmt(x, unit)}" for c, x in items)
-            text = (
-                f"a leg's {what} below {_fmt(xs.min(), unit)} could not have been seen in "
-                f"these runs (per leg {per}; linearised at {_fmt(items[0][0].probe, unit)})"
+            what = {
+                "gain": "gain off by less than",
+                "lag_s": "servo lag below",
+                "coulomb_n": "Coulomb friction below",
+                "play_m": "play below",
+            }[c0.name]
+            per = ", ".join(
+                f"{c.leg}: {_fmt(x, unit)}" for (c, _), x in zip(items, xs, strict=True)
             )
+            text = (f"a leg's {what} {_fmt(xs.min(), unit)} could not have been seen in "
+                    f"these runs (per leg {per}; linearised at {_fmt(c0.probe, unit)}; 'any': "
+                    "not within the search)")  # fmt: skip
+            if not np.isfinite(xs).any():
+                text = (f"no leg's {what.split(' below')[0].split(' off')[0]} within the search "
+                        "could have been seen in these runs")  # fmt: skip
         out[key] = {"statement": text, "smallest": xs.tolist(), "unit": unit}
     vis = np.asarray(align["visibility"])
     angles = np.sqrt(need / np.maximum(vis, 1e-300))
+    angles = np.where(angles <= SEARCH["angle_rad"][2], angles, np.inf)
     out["imu_alignment"] = {
         "statement": "an IMU rotated by less than "
         + ", ".join(
             f"{n.removesuffix('_rad')} {np.degrees(a):.2f} deg"
+            if np.isfinite(a)
+            else f"{n.removesuffix('_rad')} any (none within the search)"
             for n, a in zip(ALIGNMENT, angles, strict=True)
         )
         + " could not have been seen in these runs",
@@ -650,7 +667,7 @@ def _detectability(
 def _fmt(x: float, unit: str) -> str:
     """Return a detectability threshold with its unit (an infinite one: 'any')."""
     if not np.isfinite(x):
-        return "any"
+        return "any"  # nothing within the search could have been seen
     if unit == "m":
         return f"{x * 1e3:.2g} mm"
     if unit == "s":

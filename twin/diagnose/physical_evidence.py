@@ -38,9 +38,8 @@ from twin.chain.config import MotionSystem
 from twin.chain.imu import ImuRecord, ImuSpec
 from twin.chain.simulate import prepare
 from twin.diagnose.data import clean_config, driven_dofs
-from twin.diagnose.evidence import NEIGHBOURS
+from twin.diagnose.evidence import in_window, line_design, neighbour_sd
 from twin.frames import DOF_NAMES
-from twin.measurement.describing_function import fourier_coefficients, neighbour_bins
 from twin.measurement.measure import Measurement, from_imu
 from twin.runs import RecordedRun
 from twin.trajectory import interp_columns
@@ -183,26 +182,12 @@ class Block:
 
 
 def _projector(t: FloatArray, f: FloatArray, window: tuple[float, float]):
-    """Return the least-squares projector onto sines at ``f`` (and a constant) over a window.
+    """Return the least-squares projector onto the lines over a window, and its samples.
 
-    The same fit as :func:`twin.diagnose.evidence.line_amplitudes`, prepared once for many
-    signals.
+    The fit of :func:`twin.diagnose.evidence.line_amplitudes`, prepared once for many signals.
     """
-    sel = (t >= window[0] - 1e-9) & (t < window[1] - 1e-9)
-    tt = t[sel]
-    a = np.hstack([np.sin(2 * np.pi * np.outer(tt, f)), np.cos(2 * np.pi * np.outer(tt, f)),
-                   np.ones((tt.size, 1))])  # fmt: skip
-    return np.linalg.pinv(a), sel
-
-
-def _line_sd(t, resid, f, window) -> FloatArray:
-    """Return each line amplitude's standard deviation per column, from the neighbouring bins."""
-    out = np.full((f.size, resid.shape[1]), np.nan)
-    for i, fs in enumerate(neighbour_bins(f, window, NEIGHBOURS)):
-        if fs.size >= 2:
-            c = fourier_coefficients(t, resid, fs, window)
-            out[i] = np.sqrt(np.mean(np.abs(c) ** 2, axis=0) * (2 * fs.size) / (2 * fs.size - 2))
-    return out
+    sel = in_window(t, window)
+    return np.linalg.pinv(line_design(t[sel], f)), sel
 
 
 def blocks(
@@ -241,7 +226,7 @@ def blocks(
         f = np.asarray(f, dtype=float)
         keep = f <= max_hz
         f, window = f[keep], tuple(float(w) for w in window)
-        sd_full = _line_sd(m.t, y - p, f, window)
+        sd_full = neighbour_sd(m.t, y - p, f, window)
         ok = np.isfinite(sd_full).all(axis=1)  # a line with no noise-only bin beside it
         f, sd_full = f[ok], np.sqrt(sd_full[ok] ** 2 + floor**2)
         if f.size == 0:
