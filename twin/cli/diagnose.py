@@ -180,6 +180,12 @@ def _cmd_diagnose(args: argparse.Namespace) -> int:
                 f"   as likely (within BIC {BIC_MARGIN:g}): {' + '.join(alt['effects'])} "
                 f"(BIC {alt['delta_bic_below_named']:.1f} lower)"
             )
+    if d.physical is not None:
+        if not d.physical.chain_supported:
+            print(f"not named: {d.physical.chain['describe']} (BIC "
+                  f"{d.physical.chain['delta_bic']:+.1f} on every channel, below 10)")  # fmt: skip
+        for what, gain in d.physical.weak():
+            print(f"weak support, not named: {what} (BIC {gain:+.1f})")
     for dof, r in d.dofs.items():
         print(f"{dof}: IMU noise x{r.noise.fit.to_json()['imu_noise_scale']:.2f} of the data "
               "sheet (a nuisance, not a cause)")  # fmt: skip

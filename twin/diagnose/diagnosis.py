@@ -192,13 +192,18 @@ class Diagnosis:
 
         A physical cause that explains the runs at least as well as the chain's findings
         replaces them (they are listed as its alternative when the two are within the margin);
-        the motion noise, which no physical cause explains, stays.
+        chain findings that do not beat the full nominal by the margin on every channel are
+        not named where the physics was weighed; the motion noise, which no physical cause
+        explains, stays.
         """
         chain = self.chain_findings
         p = self.physical
-        if p is None or p.finding is None or not p.preferred:
+        if p is None:
             return chain
-        return [p.finding, *(f for f in chain if f.extension.effect == "noise")]
+        noise = [f for f in chain if f.extension.effect == "noise"]
+        if p.finding is not None and p.preferred:
+            return [p.finding, *noise]
+        return chain if p.chain_supported else noise
 
     @property
     def at_bound(self) -> list[dict[str, object]]:

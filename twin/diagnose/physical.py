@@ -329,6 +329,25 @@ class PhysicalResult:
                                              self.finding.delta_bic))  # fmt: skip
             self.finding.evidence["ambiguous"] = True
 
+    @property
+    def chain_supported(self) -> bool:
+        """Whether the chain's findings beat the nominal by the margin on every channel too.
+
+        With the physics weighed, every cause named must beat the full nominal model by
+        ``BIC_MARGIN`` on the same evidence; chain findings that do not are not named.
+        """
+        return self.chain is None or float(self.chain["delta_bic"]) > BIC_MARGIN  # type: ignore[arg-type]
+
+    def weak(self) -> list[tuple[str, float]]:
+        """Return the explanations with some support below the margin (description, dBIC)."""
+        out = [(str(e["describe"]), float(e["delta_bic"])) for e in self.table]  # type: ignore[arg-type]
+        if self.chain is not None:
+            out.append((f"the chain's findings: {self.chain['describe']}",
+                        float(self.chain["delta_bic"])))  # type: ignore[arg-type]  # fmt: skip
+        named = self.finding.delta_bic if self.finding is not None else np.inf
+        return sorted(((d, b) for d, b in out if 0 < b <= BIC_MARGIN and b < named),
+                      key=lambda x: -x[1])  # fmt: skip
+
     def statements(self) -> list[str]:
         """Return what the runs could have shown of the physical effects."""
         return [str(d["statement"]) for d in self.detectable.values()]
@@ -346,6 +365,8 @@ class PhysicalResult:
             "chain_findings_on_all_channels": self.chain,
             "named": self.finding.extension.describe() if self.finding else None,
             "preferred_to_chain": self.preferred,
+            "chain_findings_supported": self.chain_supported,
+            "below_the_margin": [{"describe": d, "delta_bic": b} for d, b in self.weak()],
             "screening": self.screening,
             "detectable": self.detectable,
         }
@@ -552,7 +573,8 @@ def _std(c: Candidate, best: float) -> float:
     vs = np.array(sorted(c.points, key=lambda v: abs(v - best))[:3])
     if np.unique(vs).size < 3:
         return float("nan")
-    a = np.polyfit(vs, [c.points[v]["full"] for v in vs], 2)[0]
+    scale = float(np.ptp(vs))  # fitted on a unit spread: the parabola is well conditioned
+    a = np.polyfit((vs - best) / scale, [c.points[v]["full"] for v in vs], 2)[0] / scale**2
     return float(np.sqrt(1.0 / (2 * a))) if a > 0 else float("nan")
 
 

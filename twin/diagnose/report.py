@@ -135,6 +135,12 @@ def _physical_section(p: PhysicalResult) -> list[str]:
         out.append(f"The chain's findings ({p.chain['describe']}), simulated on the full model "
                    f"and scored on the same channels: BIC improvement "
                    f"{float(p.chain['delta_bic']):.1f}.")  # type: ignore[arg-type]  # fmt: skip
+    if not p.chain_supported:
+        out.append("They do not beat the nominal by 10 on every channel: not named.")
+    weak = p.weak()
+    if weak:
+        out.append("Support below the margin (not named): " + "; ".join(
+            f"{d} (BIC +{b:.1f})" for d, b in weak) + ".")  # fmt: skip
     if p.finding is not None:
         f = p.finding
         verdict = "named" if p.preferred else "not named: the chain's findings explain more"
