@@ -107,6 +107,11 @@ def test_the_generator_is_seeded_and_draws_within_its_ranges():
         draw(0, "legs")
 
 
+def _hidden(seed, platform, dof, cause, logs=False, noise=1.0, signal=1, scale=1.0):
+    """A draw of the hidden-physics generator, chosen by hand."""
+    return HiddenPhysics(seed, motion_system(platform), dof, cause, noise, signal, scale, logs)
+
+
 def _finding(effect: str, parameters: dict, dofs=("pitch",)) -> Finding:
     if effect in ("payload", "leg", "imu_alignment"):
         return Finding(PhysicalCause(effect, parameters, dofs), {"delta_bic": 50.0})
@@ -114,16 +119,7 @@ def _finding(effect: str, parameters: dict, dofs=("pitch",)) -> Finding:
 
 
 def test_the_acceptance_judgement():
-    payload = HiddenPhysics(
-        0,
-        motion_system("mpi"),
-        "pitch",
-        PhysicalCause("payload", {"factor": 1.5}),
-        1.0,
-        1,
-        1.0,
-        False,
-    )
+    payload = _hidden(0, "mpi", "pitch", PhysicalCause("payload", {"factor": 1.5}))
     assert judged(payload, [_finding("payload", {"factor": 1.4})]) == "right"
     assert judged(payload, [_finding("platform_lag", {"lag_s": 0.02})]) == "right"
     assert judged(payload, [_finding("platform_lag", {"lag_s": 0.02}, ("roll",))]) == "wrong"
@@ -132,19 +128,10 @@ def test_the_acceptance_judgement():
         == "wrong"
     )
     assert judged(payload, [_finding("noise", {"scale": 2.0})]) == "none"
-    leg = HiddenPhysics(
-        0,
-        motion_system("mpi"),
-        "roll",
-        PhysicalCause("leg", {"leg": 4, "gain": 0.5}),
-        1.0,
-        1,
-        1.0,
-        False,
-    )
+    leg = _hidden(0, "mpi", "roll", PhysicalCause("leg", {"leg": 4, "gain": 0.5}))
     assert judged(leg, [_finding("leg", {"leg": 4, "coulomb_n": 300.0})]) == "right"
     assert judged(leg, [_finding("leg", {"leg": 3, "gain": 0.5})]) == "wrong"
-    clean = HiddenPhysics(0, motion_system("mpi"), "roll", None, 1.0, 1, 1.0, False)
+    clean = _hidden(0, "mpi", "roll", None)
     assert judged(clean, []) == "right"
     assert judged(clean, [_finding("noise", {"scale": 2.0})]) == "right"
     assert judged(clean, [_finding("delay", {"extra_delay_s": 0.01})]) == "wrong"
@@ -168,16 +155,7 @@ def _diagnosed(hidden: HiddenPhysics, tmp_path: Path):
 
 @pytest.mark.slow  # about 60 s: 25 + 20 simulations of a 60 s run on the full model
 def test_a_heavier_cabin_is_named_a_payload_with_its_factor_from_the_imu_alone(tmp_path):
-    hidden = HiddenPhysics(
-        7,
-        motion_system("mpi"),
-        "pitch",
-        PhysicalCause("payload", {"factor": 1.6}),
-        1.0,
-        1,
-        1.0,
-        False,
-    )
+    hidden = _hidden(7, "mpi", "pitch", PhysicalCause("payload", {"factor": 1.6}))
     d = _diagnosed(hidden, tmp_path)
     first = d.findings[0]
     assert first.extension.effect == "payload"
@@ -190,16 +168,7 @@ def test_a_heavier_cabin_is_named_a_payload_with_its_factor_from_the_imu_alone(t
 
 @pytest.mark.slow  # about 60 s
 def test_a_sticky_leg_is_named_by_its_number_from_the_parasitic_motion(tmp_path):
-    hidden = HiddenPhysics(
-        8,
-        motion_system("mpi"),
-        "roll",
-        PhysicalCause("leg", {"leg": 2, "coulomb_n": 400.0}),
-        1.0,
-        1,
-        1.0,
-        False,
-    )
+    hidden = _hidden(8, "mpi", "roll", PhysicalCause("leg", {"leg": 2, "coulomb_n": 400.0}))
     d = _diagnosed(hidden, tmp_path)
     assert judged(hidden, d.findings) == "right"
     sources = d.findings[0].evidence["sources"]
@@ -209,20 +178,11 @@ def test_a_sticky_leg_is_named_by_its_number_from_the_parasitic_motion(tmp_path)
 
 @pytest.mark.slow  # about 2 minutes: the same run with and without its leg logs
 def test_leg_logs_show_a_weak_leg_the_imu_alone_hardly_sees(tmp_path):
-    with_logs = HiddenPhysics(
-        9,
-        motion_system("mpi"),
-        "heave",
-        PhysicalCause("leg", {"leg": 3, "gain": 0.6}),
-        1.0,
-        1,
-        1.0,
-        True,
-    )
+    with_logs = _hidden(9, "mpi", "heave", PhysicalCause("leg", {"leg": 3, "gain": 0.6}), logs=True)
     d = _diagnosed(with_logs, tmp_path / "logs")
     assert judged(with_logs, d.findings) == "right"
     assert {"legs", "forces"} <= set(d.physical.sources)
-    imu_only = HiddenPhysics(9, with_logs.config, "heave", with_logs.cause, 1.0, 1, 1.0, False)
+    imu_only = _hidden(9, "mpi", "heave", with_logs.cause)
     e = _diagnosed(imu_only, tmp_path / "imu")
     best = {x["describe"].split(":")[0]: x["delta_bic"] for x in e.physical.table}
     assert d.findings[0].delta_bic > 2 * best.get("leg 3", 0.0)
@@ -232,16 +192,7 @@ def test_leg_logs_show_a_weak_leg_the_imu_alone_hardly_sees(tmp_path):
 def test_the_calibrated_configuration_reproduces_the_run(tmp_path):
     from twin.diagnose.diagnosis import diagnose
 
-    hidden = HiddenPhysics(
-        10,
-        motion_system("srs"),
-        "roll",
-        PhysicalCause("payload", {"factor": 1.5}),
-        1.0,
-        2,
-        1.0,
-        False,
-    )
+    hidden = _hidden(10, "srs", "roll", PhysicalCause("payload", {"factor": 1.5}), signal=2)
     run = record(hidden, tmp_path)
     d = diagnose([run], physics=True)
     assert d.findings[0].extension.effect == "payload"
@@ -267,7 +218,7 @@ def test_the_calibrated_configuration_reproduces_the_run(tmp_path):
 
 @pytest.mark.slow  # about 60 s
 def test_a_clean_full_physics_run_names_nothing(tmp_path):
-    hidden = HiddenPhysics(11, motion_system("srs"), "yaw", None, 2.5, 2, 0.7, True)
+    hidden = _hidden(11, "srs", "yaw", None, logs=True, noise=2.5, signal=2, scale=0.7)
     d = _diagnosed(hidden, tmp_path)
     assert judged(hidden, d.findings) == "right"
     assert d.physical.finding is None

@@ -133,7 +133,7 @@ def diagnose_each(
     progress : callable, optional
         Called as measurements finish.
     **options
-        ``model``, ``max_hz``, ``seed``, ``dofs``, ``imu_noise`` of
+        ``model``, ``max_hz``, ``seed``, ``dofs``, ``imu_noise``, ``physics`` of
         :func:`twin.diagnose.diagnosis.diagnose`.
 
     Raises

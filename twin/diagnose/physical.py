@@ -420,6 +420,7 @@ def calibrate(
     table.sort(key=lambda e: -float(e["delta_bic"]))  # type: ignore[arg-type]
     finding = _name(table, cal)
     sources = sorted(set(cal.labels.tolist()))
+    cal.progress = None  # a result travels (a task's, pickled): no callback of the caller's
     return PhysicalResult(finding, [_public(e) for e in table], screening, detectable,
                           cal.observations, sources, chi2_0["full"], cal.total, cal)  # fmt: skip
 
