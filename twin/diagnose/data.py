@@ -14,6 +14,7 @@ of the run, with no model of the post-processing needed.
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -31,6 +32,7 @@ from twin.measurement.measure import Measurement, from_imu, from_run
 from twin.progress import ProgressFn
 from twin.run_checks import check_distinct, read_plausible_run
 from twin.runs import RecordedRun
+from twin.threads import concurrently
 from twin.trajectory import Trajectory, interp_columns
 
 FloatArray = NDArray[np.float64]
@@ -261,15 +263,15 @@ def measurement_channels(
     if nominal.noise and dof_index("heave") in driven:  # the motion noise (heave only) is told
         realisations *= MOTION_NOISE_FACTOR  # from the IMU's by the two spectra's shapes
     seeds = [seed + offset + i + 1 for i in range(realisations)]
-    # the prediction (ideal IMU) and the IMU's realisations share one noise-free motion
+    # the prediction (ideal IMU) and the IMU's realisations share one noise-free motion; with
+    # motion noise each seed moves the platform differently: the simulations run side by side
     readings = [(seed, imu.ideal()), *((s, imu) for s in seeds)]
-    pred, *read = simulate_measurements(clean, m.commands, m.t, model, readings)
-    motion = [
-        simulate_measurement(nominal, m.commands, m.t, model, s, imu.ideal()) - pred
-        if nominal.noise
-        else np.zeros_like(pred)
-        for s in seeds
-    ]
+    jobs = [functools.partial(simulate_measurements, clean, m.commands, m.t, model, readings)]
+    if nominal.noise:
+        jobs += [functools.partial(simulate_measurement, nominal, m.commands, m.t, model, s,
+                                   imu.ideal()) for s in seeds]  # fmt: skip
+    (pred, *read), *noisy = concurrently(jobs)
+    motion = [r - pred for r in noisy] if nominal.noise else [np.zeros_like(pred) for _ in seeds]
     sensor = [r - pred for r in read]
     out = []
     for k in driven:

@@ -1,0 +1,64 @@
+"""Simulations a diagnosis runs side by side give the bits they give one after the other."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import twin.threads
+from twin.chain.config import motion_system
+from twin.chain.simulate import prepare
+from twin.diagnose.candidates import Model, make_extension
+from twin.diagnose.data import Case, measurement_channels, nominal_imu
+from twin.measurement.measure import from_imu
+from twin.run_folder import signal_meta
+from twin.signals import describing_signal
+
+
+def _measurement(platform: str, dof: str):
+    config = motion_system(platform)
+    sig = describing_signal(1, dof, settle_s=None)
+    imu = nominal_imu({}, platform)
+    sim = prepare(config, sig.commands, "reduced", 3, imu).collect()
+    return config, imu, from_imu(sig.commands, sim.imu, "run", config, {"signal": signal_meta(sig)})
+
+
+def _same(a, b) -> bool:
+    return a.shape == b.shape and bool((a.view(np.int64) == b.view(np.int64)).all())
+
+
+@pytest.fixture
+def one_thread(monkeypatch):
+    def use_one():
+        monkeypatch.setattr(twin.threads, "SIMULATION_THREADS", 1)
+
+    return use_one
+
+
+def test_noise_realisations_side_by_side_are_those_one_after_the_other(one_thread):
+    config, imu, m = _measurement("mpi", "heave")  # motion noise: a simulation per seed
+    together = measurement_channels(m, config, "reduced", imu, seed=2, realisations=2)
+    one_thread()
+    alone = measurement_channels(m, config, "reduced", imu, seed=2, realisations=2)
+    for a, b in zip(together, alone, strict=True):
+        assert a.sources[0].any() and _same(a.sources, b.sources) and _same(a.nominal, b.nominal)
+
+
+def test_plays_simulated_side_by_side_are_the_bases_one_after_the_other(one_thread):
+    config, imu, m = _measurement("srs", "pitch")
+    channels = measurement_channels(m, config, "reduced", imu, seed=1, realisations=2)
+    case = Case(config, "reduced", imu, channels, 1)
+    plays = [1e-4, 3e-3, 2e-2]
+
+    def with_play(model: Model, p: float) -> Model:
+        return model.with_(make_extension("backlash", ["play"], [p], "pitch"))
+
+    model = Model(case, "pitch")
+    model.prefetch(plays, channels)
+    assert len(model._cache) == len(plays)  # simulated, not yet asked for
+    together = [with_play(model, p).base(channels[0]) for p in plays]
+    assert len(model._cache) == len(plays)
+    one_thread()
+    alone = [with_play(Model(case, "pitch"), p).base(channels[0]) for p in plays]
+    assert all(_same(a, b) for a, b in zip(together, alone, strict=True))
+    assert not _same(together[0], together[2])
