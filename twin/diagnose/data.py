@@ -25,7 +25,7 @@ from numpy.typing import NDArray
 from twin.agard.df import periodic_design
 from twin.chain.config import MotionSystem, motion_system
 from twin.chain.imu import ImuSpec
-from twin.chain.simulate import MODELS, default_imu, prepare
+from twin.chain.simulate import MODELS, Run, default_imu, make_platform, prepare
 from twin.errors import RunFormatError, SignalError
 from twin.frames import DOF_NAMES, dof_index
 from twin.measurement.measure import Measurement, from_imu, from_run
@@ -228,14 +228,19 @@ def simulate_measurements(
 
     Without heave noise the motion is the same for every pair (only the IMU's noise differs:
     :meth:`twin.chain.simulate.Run.read_by_imus`, the same bits); with it each pair is its
-    own simulation.
+    own simulation. The full platform leaves the actuators' forces out (read by no
+    measurement).
     """
-    run = prepare(config, commands, model, *readings[0])
+
+    def run_of(seed: int, imu: ImuSpec) -> Run:
+        plat = make_platform(config.platform, model, physics=config.physics, leg_forces=False)
+        return prepare(config, commands, model, seed, imu, platform=plat)
+
+    run = run_of(*readings[0])
     if run.noise is None:
         sims = run.read_by_imus(readings)
     else:
-        sims = [run.collect()] + [prepare(config, commands, model, s, i).collect()
-                                  for s, i in readings[1:]]  # fmt: skip
+        sims = [run.collect()] + [run_of(s, i).collect() for s, i in readings[1:]]
     out = []
     for sim in sims:
         m = from_imu(sim.commands, sim.imu, f"{config.name} ({model})", config, {})
