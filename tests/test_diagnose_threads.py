@@ -62,3 +62,20 @@ def test_plays_simulated_side_by_side_are_the_bases_one_after_the_other(one_thre
     alone = [with_play(Model(case, "pitch"), p).base(channels[0]) for p in plays]
     assert all(_same(a, b) for a, b in zip(together, alone, strict=True))
     assert not _same(together[0], together[2])
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_the_plays_simulated_ahead_are_the_first_two_the_search_asks_for(seed):
+    """_brent_start predicts SciPy's bounded search (its first two points need no values)."""
+    from twin.diagnose.candidates import PLAY_XATOL, Space, _brent_start, _refine
+
+    rng = np.random.default_rng(seed)
+    lo = float(np.exp(rng.uniform(-9, -3)))
+    hi = lo * float(np.exp(rng.uniform(0.1, 2.0)))
+    centre = float(np.exp(rng.uniform(np.log(lo), np.log(hi))))
+    asked, ahead = [], []
+    space = Space(("play",), (np.array([lo]),), ((lo / 10, hi * 10),))
+    _refine(lambda p: asked.append(p) or (np.log(p / centre)) ** 2, lo, hi, space, ahead.extend)
+    assert ahead == asked[:2] and len(asked) > 4
+    a, b = np.log(lo), np.log(hi)
+    assert [float(np.exp(u)) for u in _brent_start(a, b, PLAY_XATOL)] == asked[:2]

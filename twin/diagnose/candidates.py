@@ -539,13 +539,45 @@ def _profile(
     return profile
 
 
-def _refine(profile: Callable[[float], float], lo: float, hi: float, space: Space) -> None:
-    """Bounded search of the play in [lo, hi] (log scale) within the effect's bounds."""
+#: Tolerance of the bounded search of the play [log units] (:func:`_refine`).
+PLAY_XATOL = 0.03
+
+
+def _refine(
+    profile: Callable[[float], float],
+    lo: float,
+    hi: float,
+    space: Space,
+    prefetch: Callable[[list[float]], None] | None = None,
+) -> None:
+    """Bounded search of the play in [lo, hi] (log scale) within the effect's bounds.
+
+    ``prefetch``: called first with the search's first two plays (:func:`_brent_start`),
+    which do not depend on the profile, to simulate them side by side.
+    """
     lo, hi = max(lo, space.bounds[0][0]), min(max(hi, lo * 1.0001), space.bounds[0][1])
-    r = optimize.minimize_scalar(lambda u: profile(float(np.exp(u))),
-                                 bounds=(np.log(lo), np.log(hi)), method="bounded",
-                                 options={"xatol": 0.03})  # fmt: skip
+    a, b = np.log(lo), np.log(hi)
+    if prefetch is not None:
+        prefetch([float(np.exp(u)) for u in _brent_start(a, b, PLAY_XATOL)])
+    r = optimize.minimize_scalar(lambda u: profile(float(np.exp(u))), bounds=(a, b),
+                                 method="bounded", options={"xatol": PLAY_XATOL})  # fmt: skip
     profile(float(np.exp(r.x)))
+
+
+def _brent_start(a: float, b: float, xatol: float) -> tuple[float, float]:
+    """Return the first two points SciPy's bounded Brent search evaluates in [a, b].
+
+    The golden-section point of the interval, then a golden-section step from it into the
+    wider side (the first step has no parabola to take), in SciPy's arithmetic: neither
+    depends on the function. (Should SciPy change its search, the plays simulated ahead are
+    simply not the ones asked for: the result stays the search's.)
+    """
+    golden, sqrt_eps = 0.5 * (3.0 - np.sqrt(5.0)), np.sqrt(2.2e-16)
+    x1 = a + golden * (b - a)
+    e = a - x1 if x1 >= 0.5 * (a + b) else b - x1
+    rat = golden * e
+    tol1 = sqrt_eps * np.abs(x1) + xatol / 3.0
+    return x1, x1 + (np.sign(rat) + (rat == 0)) * np.maximum(np.abs(rat), tol1)
 
 
 def _amplitude_ratio(
@@ -619,7 +651,7 @@ def _fit_with_backlash(
         i = int(np.argmin(costs))
         lo, hi = grid[max(i - 1, 0)], grid[min(i + 1, grid.size - 1)]
     if not coarse:
-        _refine(profile, lo, hi, space)
+        _refine(profile, lo, hi, space, lambda plays: model.prefetch(plays, channels))
     play = min(memo, key=lambda p: memo[p][0])  # the best play evaluated
     chi2, exts, jac, layout = memo[play]
     ext_b = make_extension("backlash", ["play"], [play], model.dof)
