@@ -138,14 +138,15 @@ def test_a_ctrl_c_while_deferred_comes_after_and_processes_started_meanwhile_ign
     assert out.split("\n") == ["inside True", "after", "restored True", ""]
 
 
-def test_the_worker_setup_ignores_ctrl_c():
+def test_the_worker_setup_ignores_ctrl_c_and_simulates_one_run_at_a_time():
     out = _python("""
         import signal
+        import twin.threads
         from twin.tasks.worker_setup import dask_setup
         dask_setup(None)
-        print(signal.getsignal(signal.SIGINT) is signal.SIG_IGN)
+        print(signal.getsignal(signal.SIGINT) is signal.SIG_IGN, twin.threads.SIMULATION_THREADS)
     """)
-    assert out == "True\n"
+    assert out == "True 1\n"
 
 
 def test_a_command_that_finished_ignores_ctrl_c_while_the_process_exits():

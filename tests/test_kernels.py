@@ -210,3 +210,100 @@ def test_a_kernel_pickles_as_its_name():
 
     again = pickle.loads(pickle.dumps(kernels.sensor_errors))
     assert again is kernels.sensor_errors
+
+
+def _limit_loop(lim, dt, x, xd, broken, state):
+    """The NumPy loop the compiled limiter replaced (ActuatorLimits._limit before the kernel)."""
+    a, vmax = lim.max_acceleration, lim.max_velocity
+    y, yd = x.copy(), xd.copy()
+    pos, vel = state.length.copy(), state.velocity.copy()
+    k, n = 0, len(x)
+    active = state.active
+    while k < n:
+        if not active:
+            nxt = np.flatnonzero(broken[k:])
+            if nxt.size == 0:
+                break
+            k += int(nxt[0])
+            pos, vel = (y[k - 1], yd[k - 1]) if k > 0 else (pos, vel)
+            active = True
+        e = x[k] - pos
+        correction = np.sign(e) * np.minimum(np.abs(e) / dt, np.sqrt(2 * a * np.abs(e)))
+        v = np.clip(xd[k] + correction, vel - a * dt, vel + a * dt)
+        v = np.clip(v, -vmax, vmax)
+        new = np.clip(pos + v * dt, lim.leg_min, lim.leg_max)
+        v = (new - pos) / dt
+        y[k], yd[k] = new, v
+        pos, vel = new, v
+        if np.all(np.abs(x[k] - new) < 1e-7) and np.all(np.abs(xd[k] - v) <= a * dt):
+            active = False
+        k += 1
+    state.length, state.velocity, state.active = y[-1].copy(), yd[-1].copy(), active
+    return y, yd
+
+
+def _leg_references(rng, n, lim):
+    """Leg references that jump (a play), leave the stroke, rest and hold; some signed zeros."""
+    t = np.arange(n) / 1000.0
+    mid = 0.5 * (lim.leg_min + lim.leg_max)
+    span = 0.5 * (lim.leg_max - lim.leg_min)
+    phase = 2 * np.pi * rng.uniform(0.2, 3.0, 6) * t[:, None] + rng.uniform(0, 6, 6)
+    x = mid + span * np.sin(phase)
+    x *= 1 + 0.15 * (rng.uniform(size=(n, 1)) < 0.01)  # jumps, some beyond the stroke
+    x += np.cumsum(rng.normal(0, 2e-4, (n, 6)), axis=0)
+    xd = np.gradient(x, 1e-3, axis=0)
+    x[n // 2 : n // 2 + 400] = x[n // 2]  # a rest the limiter rejoins in
+    xd[n // 2 : n // 2 + 400] = rng.choice([0.0, -0.0], (400, 6))
+    return x, xd
+
+
+@pytest.mark.parametrize("platform", ["mpi", "srs"])
+def test_the_compiled_limiter_is_the_numpy_loop(platform):
+    from copy import deepcopy
+
+    from twin.chain.limits import ActuatorLimits, LimiterState
+    from twin.platform.facts import load_facts
+
+    geo = load_geometry(platform)
+    lim = ActuatorLimits.of(geo, load_facts(platform))
+    rng = np.random.default_rng(8)
+    dt = 1e-3
+    limited = 0
+    for trial in range(6):
+        x, xd = _leg_references(rng, 3000, lim)
+        broken = rng.uniform(size=len(x)) < (0.002 if trial % 2 else 0.05)
+        broken[0] = trial == 2
+        state = LimiterState(x[0] + rng.normal(0, 1e-3, 6), rng.normal(0, 0.05, 6), trial > 3)
+        mine, ref = deepcopy(state), deepcopy(state)
+        for chunk in np.array_split(np.arange(len(x)), 4):  # carried between chunks
+            got = lim._limit(dt, x[chunk], xd[chunk], broken[chunk], mine)
+            want = _limit_loop(lim, dt, x[chunk], xd[chunk], broken[chunk], ref)
+            assert same_bits(got[0], want[0]) and same_bits(got[1], want[1])
+            assert same_bits(mine.length, ref.length) and same_bits(mine.velocity, ref.velocity)
+            assert mine.active == ref.active
+            limited += int((got[0] != x[chunk]).any(axis=1).sum())
+    assert limited > 1000, "the references were limited for a good share of the samples"
+
+
+@pytest.mark.parametrize("max_acceleration", [3.0, 0.0])  # 0: the clips meet zeros of both signs
+def test_the_compiled_limiter_keeps_numpys_nans_and_signed_zeros(max_acceleration):
+    from copy import deepcopy
+
+    from twin.chain.limits import ActuatorLimits, LimiterState
+
+    legs = np.full(6, 1.0)
+    lim = ActuatorLimits(legs * 0.5, legs * 2.0, 0.5, max_acceleration)
+    rng = np.random.default_rng(9)
+    dt = 1e-3
+    x = rng.choice([1.0, 1.0 + 1e-9, 0.4, 2.5, np.nan], (400, 6))
+    xd = rng.choice([0.0, -0.0, 0.003, -0.003, 1.0, np.nan], (400, 6))
+    broken = rng.uniform(size=400) < 0.1
+    for active in (False, True):
+        state = LimiterState(rng.choice([1.0, 3.0], 6), rng.choice([0.0, -0.0, 0.003], 6), active)
+        mine, ref = deepcopy(state), deepcopy(state)
+        got = lim._limit(dt, x, xd, broken, mine)
+        want = _limit_loop(lim, dt, x, xd, broken, ref)
+        for g, w in zip(got, want, strict=True):
+            nan = np.isnan(w)
+            assert (np.isnan(g) == nan).all() and same_bits(g[~nan], w[~nan])
+        assert mine.active == ref.active

@@ -232,3 +232,18 @@ def test_motion_read_by_several_imus_equals_a_simulation_per_imu(model):
         prepare("mpi", cmd, model, 1).read_by_imus(readings)
     with pytest.raises(SignalError, match="at least one"):
         prepare("srs", cmd, model, 1).read_by_imus([])
+
+
+def test_a_full_platform_without_leg_forces_moves_the_same():
+    """leg_forces=False (a diagnosis' predictions) drops the forces only: the same motion bits."""
+    from twin.chain.physics import FullPlatform
+
+    sig = describing_signal(1, "heave")
+    cmd = Trajectory(sig.commands.rate_hz, sig.commands.values[:400])
+    with_forces = simulate("srs", cmd, "full", seed=4)
+    without = simulate("srs", cmd, "full", seed=4, platform=FullPlatform("srs", leg_forces=False))
+    assert without.response.leg_force is None and with_forces.response.leg_force is not None
+    for name in ("pose", "acceleration", "omega", "omega_dot", "legs", "leg_velocity"):
+        assert np.array_equal(getattr(with_forces.response, name), getattr(without.response, name))
+    assert np.array_equal(with_forces.imu.accel, without.imu.accel)
+    assert np.array_equal(with_forces.imu.gyro, without.imu.gyro)

@@ -41,3 +41,31 @@ def test_importing_the_library_leaves_blas_alone():
     """Only the command line decides for its process; ``import twin.chain`` does not."""
     code = "import twin.chain.simulate, os; print(os.environ.get('OPENBLAS_NUM_THREADS', '-'))"
     assert _run(code) == ["-"]
+
+
+def test_concurrent_jobs_run_side_by_side_and_come_back_in_order():
+    import threading
+
+    from twin.threads import concurrently
+
+    meet = threading.Barrier(2, timeout=30)  # two jobs that wait for each other: side by side
+    jobs = [lambda: (meet.wait(), "a")[1], lambda: (meet.wait(), "b")[1], lambda: "c"]
+    assert concurrently(jobs, workers=2) == ["a", "b", "c"]
+    assert concurrently([lambda: threading.current_thread().name], workers=1) == ["MainThread"]
+
+
+@pytest.mark.parametrize("workers", [1, 2])
+def test_the_first_failing_job_in_order_raises_or_is_returned(workers):
+    from twin.threads import concurrently
+
+    ran = []
+
+    def fail(k):
+        ran.append(k)
+        raise ValueError(f"job {k}")
+
+    jobs = [lambda: 1, lambda: fail(1), lambda: fail(2)]
+    with pytest.raises(ValueError, match="job 1"):
+        concurrently(jobs, workers=workers)
+    out = concurrently(jobs, workers=workers, return_exceptions=True)
+    assert out[0] == 1 and [str(e) for e in out[1:]] == ["job 1", "job 2"]

@@ -334,3 +334,95 @@ def cubic_jets(
                 out1[q, col] = (3 * c3 * tau + 2 * c2) * tau + c1
             if order >= 2:
                 out2[q, col] = 6 * c3 * tau + 2 * c2
+
+
+@_jit
+def limit_legs(
+    x: FloatArray, xd: FloatArray, broken: NDArray[np.bool_], length: FloatArray,
+    velocity: FloatArray, active: bool, dt: float, max_acceleration: float,
+    max_velocity: float, leg_min: FloatArray, leg_max: FloatArray, y: FloatArray,
+    yd: FloatArray,
+) -> bool:  # fmt: skip
+    """Limit leg references sample by sample (:meth:`twin.chain.limits.ActuatorLimits._limit`).
+
+    Per sample, from a violation until the reference is rejoined (all legs within 1e-7 m and
+    a * dt in velocity), the NumPy of the loop it replaces, leg by leg:
+    ``e = x - pos``, ``v = xd + sign(e) * minimum(|e| / dt, sqrt(2 a |e|))``, clipped to the
+    previous velocity +- a dt (array bounds) and to +- v_max (scalar bounds), the new length
+    ``clip(pos + v dt)`` to the stroke and ``v = (new - pos) / dt``. The clips keep NumPy's
+    two conventions for a tie of signed zeros (bounds given as arrays: the bound; as scalars:
+    the value) and its NaN propagation, so the bits are NumPy's.
+
+    Parameters
+    ----------
+    x, xd : ndarray, shape (n, legs)
+        Reference lengths [m] and velocities [m/s].
+    broken : ndarray of bool, shape (n,)
+        Samples with a violation (where an inactive limiter starts).
+    length, velocity : ndarray, shape (legs,)
+        The limited reference at the sample before the chunk.
+    active : bool
+        Whether the limiter is off the reference at the chunk's start.
+    dt : float
+        Sample interval [s].
+    max_acceleration, max_velocity : float
+        The legs' limits [m/s^2, m/s].
+    leg_min, leg_max : ndarray, shape (legs,)
+        Stroke ends [m].
+    y, yd : ndarray, shape (n, legs)
+        Copies of ``x`` and ``xd``: the limited references are written into them.
+
+    Returns
+    -------
+    bool
+        Whether the limiter is still off the reference after the chunk.
+
+    """
+
+    def bound_max(v: float, b: float) -> float:  # numpy.clip's lower bound given as an array
+        return v if v != v else (v if v > b else b)
+
+    def bound_min(v: float, b: float) -> float:  # ... its upper bound given as an array
+        return v if v != v else (v if v < b else b)
+
+    def scalar_clip(v: float, lo: float, hi: float) -> float:  # numpy.clip, scalar bounds
+        if v != v or lo != lo or hi != hi:
+            return v + lo + hi  # NaN
+        w = lo if v < lo else v
+        return hi if w > hi else w
+
+    legs = x.shape[1]
+    pos, vel = length.copy(), velocity.copy()
+    step = max_acceleration * dt
+    for k in range(x.shape[0]):
+        if not active:
+            if not broken[k]:
+                continue
+            if k > 0:
+                for j in range(legs):
+                    pos[j], vel[j] = y[k - 1, j], yd[k - 1, j]
+            active = True
+        rejoined = True
+        for j in range(legs):
+            e = x[k, j] - pos[j]
+            ae = abs(e)
+            by_rate, by_braking = ae / dt, np.sqrt(2 * max_acceleration * ae)
+            if by_rate != by_rate:
+                smaller = by_rate
+            elif by_braking != by_braking:
+                smaller = by_braking
+            else:
+                smaller = by_rate if by_rate < by_braking else by_braking
+            sign = 1.0 if e > 0 else (-1.0 if e < 0 else (0.0 if e == 0 else e))
+            v = xd[k, j] + sign * smaller
+            v = bound_min(bound_max(v, vel[j] - step), vel[j] + step)
+            v = scalar_clip(v, -max_velocity, max_velocity)
+            new = bound_min(bound_max(pos[j] + v * dt, leg_min[j]), leg_max[j])
+            v = (new - pos[j]) / dt
+            y[k, j], yd[k, j] = new, v
+            pos[j], vel[j] = new, v
+            if not (abs(x[k, j] - new) < 1e-7 and abs(xd[k, j] - v) <= step):
+                rejoined = False
+        if rejoined:
+            active = False
+    return active

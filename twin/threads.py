@@ -18,6 +18,10 @@ run's chunks (:func:`twin.chain.stepping.overlapped`, where the full model's phy
 a thread of its own) keep BLAS to one thread with ``threadpoolctl`` whatever the process set,
 and restore it after.
 ``bench/blas_threads.py`` counts the threads of each kind of process and times a run both ways.
+
+Independent simulations (a diagnosis' noise realisations, the plays of a backlash search) run
+side by side with :func:`concurrently`: MuJoCo releases the GIL while it rolls, so two full
+model runs take about the time of one on two cores.
 """
 
 from __future__ import annotations
@@ -25,11 +29,17 @@ from __future__ import annotations
 import functools
 import os
 import sys
+import threading
+from collections.abc import Callable, Sequence
 from contextlib import AbstractContextManager
-from typing import Any
+from typing import Any, TypeVar
 
 #: The variables OpenBLAS, OpenMP and MKL read when they load.
 BLAS_THREAD_VARIABLES = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")
+#: Simulations :func:`concurrently` runs at once at most (fewer on fewer cores): each full
+#: model run keeps about one core busy (its physics thread, its Python work overlapping it).
+SIMULATION_THREADS = 2
+T = TypeVar("T")
 
 
 def single_blas_thread() -> bool:
@@ -62,3 +72,85 @@ def one_blas_thread() -> AbstractContextManager[object]:
     chain imports both), so a BLAS library loaded later is not limited.
     """
     return _controller().limit(limits=1, user_api="blas")
+
+
+def cpu_count() -> int:
+    """Return the CPU cores this process may use."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # not on Linux
+        return os.cpu_count() or 1
+
+
+def concurrently(
+    jobs: Sequence[Callable[[], T]], workers: int | None = None, return_exceptions: bool = False
+) -> list[Any]:
+    """Run independent jobs in threads; return their results in the jobs' order.
+
+    For simulations (MuJoCo releases the GIL while it rolls): each result is the one the job
+    gives on its own, whatever ran beside it. BLAS keeps to one thread meanwhile
+    (:func:`one_blas_thread`, restored after). The threads are no daemons and are waited for
+    by events, never by ``Thread.join`` (a join cut short by Ctrl-C marks a running thread
+    ended, bpo-45274): on an interrupt no further job starts, the running ones finish in the
+    background and Python waits for them at exit, not tearing down under MuJoCo.
+
+    Parameters
+    ----------
+    jobs : sequence of callable
+        Calls without arguments.
+    workers : int, optional
+        Threads; :data:`SIMULATION_THREADS`, at most the cores, by default. With one (or one
+        job) the jobs run in this thread, one after the other.
+    return_exceptions : bool
+        Return a job's exception in place of its result (else the first job's exception, in
+        the jobs' order, is raised once every started job has ended).
+
+    Returns
+    -------
+    list
+        The jobs' results (or exceptions), in order.
+
+    """
+    n = len(jobs)
+    workers = min(workers or min(SIMULATION_THREADS, cpu_count()), n)
+    outcomes: list[tuple[bool, Any]] = [(False, None)] * n
+    if workers <= 1:
+        for i, job in enumerate(jobs):
+            try:
+                outcomes[i] = (True, job())
+            except Exception as exc:
+                if not return_exceptions:
+                    raise
+                outcomes[i] = (False, exc)
+        return [value for _, value in outcomes]
+    lock, done = threading.Lock(), threading.Semaphore(0)
+    queue = iter(range(n))
+    stop = threading.Event()
+
+    def work() -> None:
+        while not stop.is_set():
+            with lock:
+                i = next(queue, None)
+            if i is None:
+                break
+            try:
+                outcomes[i] = (True, jobs[i]())
+            except BaseException as exc:  # handed to the caller
+                outcomes[i] = (False, exc)
+            finally:
+                done.release()
+
+    with one_blas_thread():
+        threads = [threading.Thread(target=work, name=f"twin-job-{k}") for k in range(workers)]
+        for t in threads:
+            t.start()
+        try:
+            for _ in range(n):
+                done.acquire()
+        except BaseException:
+            stop.set()  # no further job starts; the running ones end in the background
+            raise
+    for ok, value in outcomes:
+        if not ok and not (return_exceptions and isinstance(value, Exception)):
+            raise value
+    return [value for _, value in outcomes]

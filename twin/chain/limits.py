@@ -15,6 +15,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from twin.errors import ActuatorLimitError
+from twin.kernels import limit_legs
 from twin.platform.facts import PlatformFacts
 from twin.platform.geometry import Geometry
 
@@ -209,30 +210,15 @@ class ActuatorLimits:
         broken: NDArray[np.bool_],
         state: LimiterState,
     ) -> tuple[FloatArray, FloatArray]:
-        """Sequential limiter, run only from a violation until the reference is rejoined."""
-        a, vmax = self.max_acceleration, self.max_velocity
+        """Sequential limiter, run only from a violation until the reference is rejoined.
+
+        Compiled (:func:`twin.kernels.limit_legs`, the bits of the NumPy loop it replaced):
+        a large play or a jump in the references keeps it on for most of a run, where the
+        loop cost some 15 µs a sample.
+        """
         y, yd = x.copy(), xd.copy()
-        pos, vel = state.length.copy(), state.velocity.copy()
-        k, n = 0, len(x)
-        active = state.active  # the chunk may start off the reference
-        while k < n:
-            if not active:
-                nxt = np.flatnonzero(broken[k:])
-                if nxt.size == 0:
-                    break
-                k += int(nxt[0])
-                pos, vel = (y[k - 1], yd[k - 1]) if k > 0 else (pos, vel)
-                active = True
-            e = x[k] - pos
-            correction = np.sign(e) * np.minimum(np.abs(e) / dt, np.sqrt(2 * a * np.abs(e)))
-            v = np.clip(xd[k] + correction, vel - a * dt, vel + a * dt)
-            v = np.clip(v, -vmax, vmax)
-            new = np.clip(pos + v * dt, self.leg_min, self.leg_max)
-            v = (new - pos) / dt
-            y[k], yd[k] = new, v
-            pos, vel = new, v
-            if np.all(np.abs(x[k] - new) < 1e-7) and np.all(np.abs(xd[k] - v) <= a * dt):
-                active = False
-            k += 1
-        state.length, state.velocity, state.active = y[-1].copy(), yd[-1].copy(), active
+        active = limit_legs(x, xd, broken, state.length, state.velocity, state.active, dt,
+                            float(self.max_acceleration), float(self.max_velocity),
+                            self.leg_min, self.leg_max, y, yd)  # fmt: skip
+        state.length, state.velocity, state.active = y[-1].copy(), yd[-1].copy(), bool(active)
         return y, yd

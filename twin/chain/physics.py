@@ -55,6 +55,10 @@ class FullPlatform(Platform):
     payload : Payload, optional
         A rigid body fixed to the cabin (:mod:`twin.platform.payload`): the model is
         recompiled with it.
+    leg_forces : bool
+        Return the actuators' forces (``leg_force``: the PD's plus the static share K_s
+        carries, solved per sample); False: None, for a caller that reads the motion only
+        (a diagnosis' predictions: the static share was most of the Python time of a run).
 
     Attributes
     ----------
@@ -78,8 +82,10 @@ class FullPlatform(Platform):
         timestep_s: float | None = None,
         physics: LegPhysics | None = None,
         payload: Payload | None = None,
+        leg_forces: bool = True,
     ) -> None:
         self.platform = platform
+        self.leg_forces = leg_forces
         self.payload = payload
         self.model = payload.model(platform) if payload else load_model(platform).__copy__()
         if physics is not None or payload is not None:  # a payload moves the static share
@@ -299,7 +305,7 @@ class FullPlatform(Platform):
             omega_dot=np.einsum("...ji,...j->...i", T, dw),
             legs=s[..., self._legs].copy(),
             sensor_gyro=s[..., a["imu_gyro"]].copy(),
-            leg_force=s[..., self._forces] + self._static_forces(pose),
+            leg_force=s[..., self._forces] + self._static_forces(pose) if self.leg_forces else None,
             leg_velocity=s[..., self._leg_rates].copy(),
         )
 

@@ -44,8 +44,12 @@ def make_platform(
     model: str = "full",
     limit_mode: str = "limit",
     physics: PlatformPhysics | None = None,
+    leg_forces: bool = True,
 ) -> Platform:
     """Return the full (MuJoCo) or reduced platform of ``platform``.
+
+    ``leg_forces``: the full platform's actuator forces in its responses (False: None, for a
+    caller that reads the motion only; :class:`twin.chain.physics.FullPlatform`).
 
     Raises
     ------
@@ -55,8 +59,9 @@ def make_platform(
     """
     if model == "full":
         if physics is None:
-            return FullPlatform(platform, limit_mode)
-        return FullPlatform(platform, limit_mode, physics=physics.legs, payload=physics.payload)
+            return FullPlatform(platform, limit_mode, leg_forces=leg_forces)
+        return FullPlatform(platform, limit_mode, physics=physics.legs, payload=physics.payload,
+                            leg_forces=leg_forces)  # fmt: skip
     if model == "reduced":
         if physics is not None:
             raise ConfigError(f"the configuration's physics ({physics.describe()}) needs the "

@@ -14,6 +14,7 @@ of the run, with no model of the post-processing needed.
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -24,13 +25,14 @@ from numpy.typing import NDArray
 from twin.agard.df import periodic_design
 from twin.chain.config import MotionSystem, motion_system
 from twin.chain.imu import ImuSpec
-from twin.chain.simulate import MODELS, default_imu, prepare
+from twin.chain.simulate import MODELS, Run, default_imu, make_platform, prepare
 from twin.errors import RunFormatError, SignalError
 from twin.frames import DOF_NAMES, dof_index
 from twin.measurement.measure import Measurement, from_imu, from_run
 from twin.progress import ProgressFn
 from twin.run_checks import check_distinct, read_plausible_run
 from twin.runs import RecordedRun
+from twin.threads import concurrently
 from twin.trajectory import Trajectory, interp_columns
 
 FloatArray = NDArray[np.float64]
@@ -230,14 +232,19 @@ def simulate_measurements(
 
     Without heave noise the motion is the same for every pair (only the IMU's noise differs:
     :meth:`twin.chain.simulate.Run.read_by_imus`, the same bits); with it each pair is its
-    own simulation.
+    own simulation. The full platform leaves the actuators' forces out (read by no
+    measurement).
     """
-    run = prepare(config, commands, model, *readings[0])
+
+    def run_of(seed: int, imu: ImuSpec) -> Run:
+        plat = make_platform(config.platform, model, physics=config.physics, leg_forces=False)
+        return prepare(config, commands, model, seed, imu, platform=plat)
+
+    run = run_of(*readings[0])
     if run.noise is None:
         sims = run.read_by_imus(readings)
     else:
-        sims = [run.collect()] + [prepare(config, commands, model, s, i).collect()
-                                  for s, i in readings[1:]]  # fmt: skip
+        sims = [run.collect()] + [run_of(s, i).collect() for s, i in readings[1:]]
     out = []
     for sim in sims:
         m = from_imu(sim.commands, sim.imu, f"{config.name} ({model})", config, {})
@@ -265,15 +272,15 @@ def measurement_channels(
     if nominal.noise and dof_index("heave") in driven:  # the motion noise (heave only) is told
         realisations *= MOTION_NOISE_FACTOR  # from the IMU's by the two spectra's shapes
     seeds = [seed + offset + i + 1 for i in range(realisations)]
-    # the prediction (ideal IMU) and the IMU's realisations share one noise-free motion
+    # the prediction (ideal IMU) and the IMU's realisations share one noise-free motion; with
+    # motion noise each seed moves the platform differently: the simulations run side by side
     readings = [(seed, imu.ideal()), *((s, imu) for s in seeds)]
-    pred, *read = simulate_measurements(clean, m.commands, m.t, model, readings)
-    motion = [
-        simulate_measurement(nominal, m.commands, m.t, model, s, imu.ideal()) - pred
-        if nominal.noise
-        else np.zeros_like(pred)
-        for s in seeds
-    ]
+    jobs = [functools.partial(simulate_measurements, clean, m.commands, m.t, model, readings)]
+    if nominal.noise:
+        jobs += [functools.partial(simulate_measurement, nominal, m.commands, m.t, model, s,
+                                   imu.ideal()) for s in seeds]  # fmt: skip
+    (pred, *read), *noisy = concurrently(jobs)
+    motion = [r - pred for r in noisy] if nominal.noise else [np.zeros_like(pred) for _ in seeds]
     sensor = [r - pred for r in read]
     out = []
     for k in driven:

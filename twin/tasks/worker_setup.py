@@ -4,7 +4,9 @@ A local cluster's workers share the terminal's process group with the ``twin`` p
 Ctrl-C reaches them too; the ``twin`` process shuts them down (:mod:`twin.interrupts`), so a
 worker ignores SIGINT instead of dying with a traceback. The first workers inherit the
 ignored signal from the start of the cluster; this preload covers the ones the nanny starts
-again later (after a worker was killed).
+again later (after a worker was killed). A local cluster runs one worker process per core
+(one task thread each), so a worker runs its simulations one after the other
+(:data:`twin.threads.SIMULATION_THREADS` set to 1), as it keeps BLAS to one thread.
 """
 
 from __future__ import annotations
@@ -12,9 +14,11 @@ from __future__ import annotations
 import signal
 from typing import Any
 
+import twin.threads
+
 
 def dask_setup(worker: Any) -> None:
-    """Ignore SIGINT in this worker process (Dask calls this as the worker starts).
+    """Ignore SIGINT, simulate one run at a time (Dask calls this as the worker starts).
 
     Parameters
     ----------
@@ -23,3 +27,4 @@ def dask_setup(worker: Any) -> None:
 
     """
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    twin.threads.SIMULATION_THREADS = 1
