@@ -19,12 +19,13 @@ from twin.chain.simulate import default_imu, prepare
 from twin.diagnose.data import nominal_imu
 from twin.diagnose.diagnosis import diagnose
 from twin.diagnose.hidden import record_runs
-from twin.diagnose.physical import WORKERS, calibrate
+from twin.diagnose.physical import calibrate
 from twin.measurement.measure import from_run
 from twin.platform.payload import Payload
 from twin.platform.platform_physics import PlatformPhysics
 from twin.run_checks import read_plausible_run
 from twin.signals import describing_signal
+from twin.threads import SIMULATION_THREADS, cpu_count
 
 
 def main() -> None:
@@ -44,8 +45,10 @@ def main() -> None:
     t_cal = time.perf_counter() - t0
     found = result.finding.extension.describe() if result.finding else "nothing"
     print(f"one full-model simulation of the {sig.commands.duration:.0f} s run: {one:.1f} s")
-    print(f"physical calibration: {t_cal:.1f} s (goal <= 60 s), {result.simulations} "
-          f"simulations, {WORKERS} at once; found: {found}")  # fmt: skip
+    print(
+        f"physical calibration: {t_cal:.1f} s (goal <= 60 s), {result.simulations} "
+        f"simulations, {min(SIMULATION_THREADS, cpu_count())} at once; found: {found}"
+    )
     t0 = time.perf_counter()
     d = diagnose([run], physics=True)
     t_all = time.perf_counter() - t0

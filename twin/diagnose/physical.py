@@ -38,10 +38,10 @@ toolbox's extra dependencies (plotly, imageio with ffmpeg, jinja2) are not the t
 
 from __future__ import annotations
 
-import os
+import threading
 from collections.abc import Sequence
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
+from functools import partial
 
 import numpy as np
 from numpy.typing import NDArray
@@ -62,6 +62,7 @@ from twin.diagnose.select import BIC_MARGIN, Finding
 from twin.measurement.measure import Measurement
 from twin.progress import ProgressFn
 from twin.runs import RecordedRun
+from twin.threads import concurrently
 
 FloatArray = NDArray[np.float64]
 #: Candidates refined by simulation after the screening.
@@ -72,8 +73,6 @@ BRACKET = 1.6
 SOURCE_TEXT = {"driven": "the driven DOF's IMU channel", "undriven": "the undriven DOFs' IMU "
                "channels (parasitic motion)", "legs": "the leg lengths (actuators.csv)",
                "forces": "the leg forces (forces.csv)"}  # fmt: skip
-#: Simulations run at once (MuJoCo's physics releases the GIL).
-WORKERS = max(2, min(4, os.cpu_count() or 2))
 
 
 def rotated(record: ImuRecord, angles: Sequence[float]) -> ImuRecord:
@@ -179,6 +178,7 @@ class Calibration:
     total: int = 0
 
     def __post_init__(self) -> None:
+        self._lock = threading.Lock()
         self.nominal = self.simulate([self.config])[0]
         self.evidence: dict[str, list[Block]] = {"full": [], "half1": [], "half2": []}
         for i, (rec, m) in enumerate(self.runs):
@@ -197,16 +197,15 @@ class Calibration:
         jobs = [(c, r) for c in configs for r in range(len(self.runs))]
         self.total += len(jobs)
 
-        def one(job: tuple[MotionSystem, int]) -> Simulated:
-            cfg, r = job
+        def one(cfg: MotionSystem, r: int) -> Simulated:
             sim = simulate_run(cfg, self.runs[r][1], self.imu, self.seed)
-            self.done += 1
-            if self.progress:
-                self.progress("physical calibration [simulations]", self.done, self.total)
+            with self._lock:
+                self.done += 1
+                if self.progress:
+                    self.progress("physical calibration [simulations]", self.done, self.total)
             return sim
 
-        with ThreadPoolExecutor(WORKERS) as pool:
-            flat = list(pool.map(one, jobs))
+        flat = concurrently([partial(one, cfg, r) for cfg, r in jobs])
         n = len(self.runs)
         return [flat[i * n : (i + 1) * n] for i in range(len(configs))]
 
@@ -483,33 +482,43 @@ def _alignment_std(d: FloatArray) -> dict[str, float]:
 
 
 def _refine(cal: Calibration, chosen: Sequence[Candidate], config: MotionSystem) -> None:
-    """Fit each chosen candidate by a bracket of simulations around its linearised value."""
+    """Fit each chosen candidate by a bracket of simulations around its linearised value.
+
+    A bracket of three values (the linearised one, and it times and over :data:`BRACKET` in
+    its change from nominal), a parabola through chi2 in the log of the change; where its
+    vertex lies outside the values scored (or it has none), a second bracket around it; the
+    vertex simulated last. All candidates' simulations of a round run side by side.
+    """
     lo_hi = [c.bounds for c in chosen]
     centres = [c.probe if c.linearised is None else c.linearised for c in chosen]
-    for _ in range(2):  # a bracket, then its parabola's vertex
+    settled = [False] * len(chosen)
+    for _ in range(2):
         values = []
-        for c, centre, (lo, hi) in zip(chosen, centres, lo_hi, strict=True):
+        for c, centre, (lo, hi), done in zip(chosen, centres, lo_hi, settled, strict=True):
             ds = _change(c, centre) * np.array([1 / BRACKET, 1.0, BRACKET])
             vs = [float(np.clip(c.nominal + x, lo, hi)) for x in ds]
-            values.append([v for v in dict.fromkeys(vs) if v not in c.points])
+            values.append([] if done else [v for v in dict.fromkeys(vs) if v not in c.points])
         _score(cal, chosen, values, config)
         for i, c in enumerate(chosen):
-            best = _best_value(c)
-            x, y = _log_points(c)
-            vertex = _parabola_min(x, y)
-            lo, hi = lo_hi[i]
-            if vertex is not None:
-                lo_x, hi_x = x.min() - np.log(BRACKET), x.max() + np.log(BRACKET)
-                best_change = np.sign(_change(c, best)) * np.exp(np.clip(vertex, lo_x, hi_x))
-                centres[i] = float(np.clip(c.nominal + best_change, lo, hi))
-            else:
-                centres[i] = best
+            centres[i], settled[i] = _vertex(c, *lo_hi[i])
     _score(
         cal,
         chosen,
         [[v] if v not in c.points else [] for c, v in zip(chosen, centres, strict=True)],
         config,
     )
+
+
+def _vertex(c: Candidate, lo: float, hi: float) -> tuple[float, bool]:
+    """Return the value at the chi2 parabola's vertex, and whether it lies among the scored."""
+    best = _best_value(c)
+    x, y = _log_points(c)
+    vertex = _parabola_min(x, y)
+    if vertex is None:
+        return best, False
+    lo_x, hi_x = x.min() - np.log(BRACKET), x.max() + np.log(BRACKET)
+    change = np.sign(_change(c, best)) * np.exp(np.clip(vertex, lo_x, hi_x))
+    return float(np.clip(c.nominal + change, lo, hi)), bool(x.min() <= vertex <= x.max())
 
 
 def _change(c: Candidate, value: float) -> float:
