@@ -77,6 +77,7 @@ def test_bad_input_is_one_line_and_exit_2(capsys, argv, message):
     assert message in err and err.count("\n") == 1
 
 
+@pytest.mark.slow  # 7 s: three repetitions identified together (make test within 2 minutes)
 def test_repetitions_are_written_one_file_each_and_identified_together(capsys, tmp_path):
     """`pilot run --runs 3 --out` writes three files; `identify` on all three fits them as
     repetitions: the same estimate as the library's fit of the three runs' u."""

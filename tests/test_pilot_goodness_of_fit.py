@@ -66,6 +66,7 @@ def test_a_feedthrough_of_no_gain_flies_the_same_bits_as_none():
         assert same(plain.u, zero.u) and same(plain.theta, zero.theta)
 
 
+@pytest.mark.slow  # 7.5 s: identifies a pilot twice over (make test within its 2 minutes)
 def test_a_passive_feedthrough_is_no_eq_6_7_motion_channel():
     """A passive path a quarter of the pilot's motion response at 3 rad/s, in phase with the
     attitude where Eq 6.7 lags it, on the SRS without the filter (condition 1): the fit's
