@@ -18,6 +18,15 @@ from twin.diagnose.sensor_side import side_text
 from twin.lifecycle import replacing_dir
 from twin.plotting import pyplot
 
+#: What a payload's factor means, with and without the legs' forces among the evidence.
+PAYLOAD_IMU = ("The factor is on the cabin's mass and inertia together: from the IMU alone a "
+               "heavier cabin is a slower one behind the same PD, and mass, inertia and the PD's "
+               "damping trade off, so one factor is what these runs identify (the centre of "
+               "gravity is held at the cabin's). Leg forces (forces.csv) would see the mass "
+               "itself.")  # fmt: skip
+PAYLOAD_FORCES = ("The factor is on the cabin's mass and inertia together; the leg forces "
+                  "(forces.csv) carry the mass directly, so it is the mass that these runs pin "
+                  "down best (the centre of gravity is held at the cabin's).")  # fmt: skip
 HALVES = "the other half of the measurement window (two-fold)"
 
 
@@ -145,6 +154,8 @@ def _physical_section(p: PhysicalResult) -> list[str]:
         f = p.finding
         verdict = "named" if p.preferred else "not named: the chain's findings explain more"
         out.append(f"Physical cause: {f.extension.describe()} ({verdict}).")
+        if f.extension.effect == "payload":
+            out.append(PAYLOAD_FORCES if "forces" in p.sources else PAYLOAD_IMU)
         out += ["", "What each source contributed (fall of χ² with the cause):", ""]
         for s, v in f.evidence["sources"].items():  # type: ignore[union-attr]
             out.append(f"- {SOURCE_TEXT.get(s, s)}: {v['chi2_nominal']:.1f} → "
