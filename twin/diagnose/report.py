@@ -24,9 +24,10 @@ PAYLOAD_IMU = ("The factor is on the cabin's mass and inertia together: from the
                "damping trade off, so one factor is what these runs identify (the centre of "
                "gravity is held at the cabin's). Leg forces (forces.csv) would see the mass "
                "itself.")  # fmt: skip
-PAYLOAD_FORCES = ("The factor is on the cabin's mass and inertia together; the leg forces "
-                  "(forces.csv) carry the mass directly, so it is the mass that these runs pin "
-                  "down best (the centre of gravity is held at the cabin's).")  # fmt: skip
+PAYLOAD_FORCES = ("The factor is on the cabin's mass and inertia together (the centre of "
+                  "gravity held at the cabin's); the leg forces (forces.csv) carry the mass "
+                  "directly, which the IMU cannot tell from inertia: what each source "
+                  "contributed, above, shows how much the factor rests on them.")  # fmt: skip
 HALVES = "the other half of the measurement window (two-fold)"
 
 
