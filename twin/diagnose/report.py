@@ -27,7 +27,7 @@ PAYLOAD_IMU = ("The factor is on the cabin's mass and inertia together: from the
 PAYLOAD_FORCES = ("The factor is on the cabin's mass and inertia together (the centre of "
                   "gravity held at the cabin's); the leg forces (forces.csv) carry the mass "
                   "directly, which the IMU cannot tell from inertia: what each source "
-                  "contributed, above, shows how much the factor rests on them.")  # fmt: skip
+                  "contributed, below, shows how much the factor rests on them.")  # fmt: skip
 HALVES = "the other half of the measurement window (two-fold)"
 
 
