@@ -123,6 +123,7 @@ def _cmd_each(args: argparse.Namespace) -> int:
 def _cmd_diagnose(args: argparse.Namespace) -> int:
     from twin.diagnose.candidates import describe_bound
     from twin.diagnose.diagnosis import check_options, diagnose
+    from twin.diagnose.physical import below_text
     from twin.diagnose.report import write_report
     from twin.diagnose.select import BIC_MARGIN
     from twin.diagnose.sensor_side import side_text
@@ -175,10 +176,12 @@ def _cmd_diagnose(args: argparse.Namespace) -> int:
         side = f.evidence.get("side")
         if side is not None and side["verdict"] == "undecided":
             print(f"   {side_text(side)}")
+        if f.evidence.get("preference"):
+            print(f"   {f.evidence['preference']}")
         for alt in f.evidence.get("alternatives") or []:
             print(
                 f"   as likely (within BIC {BIC_MARGIN:g}): {' + '.join(alt['effects'])} "
-                f"(BIC {alt['delta_bic_below_named']:.1f} lower)"
+                f"({below_text(alt['delta_bic_below_named'])})"
             )
     if d.physical is not None:
         if not d.physical.chain_supported:

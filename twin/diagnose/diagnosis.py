@@ -23,7 +23,7 @@ import numpy as np
 from twin.chain.config import MotionSystem
 from twin.chain.extensions import Extension
 from twin.checks import number
-from twin.diagnose.candidates import DYNAMIC, Model, describe_bound, numeric_names
+from twin.diagnose.candidates import DYNAMIC, Model, describe_bound
 from twin.diagnose.data import NOISE_REALISATIONS, Case, load_case
 from twin.diagnose.detect import smallest_detectable
 from twin.diagnose.evidence import lines
@@ -427,11 +427,9 @@ def diagnose(
             progress("physical causes (full model)")
         d.physical = calibrate(case.config, case.runs, case.imu, seed, max_hz, progress)
         chain = [f for f in d.chain_findings if f.extension.effect != "noise"]
-        parameters = sum(len(numeric_names(f.extension.effect)) for f in chain)
         extended = case.config.replace(extensions=(*case.config.extensions,
                                                    *(f.extension for f in chain)))  # fmt: skip
-        d.physical.weigh(extended if chain else None, parameters,
-                         "; ".join(f.extension.describe() for f in chain))  # fmt: skip
+        d.physical.weigh(extended if chain else None, chain)
     return d
 
 

@@ -49,6 +49,7 @@ from numpy.typing import NDArray
 from twin.chain.config import MotionSystem
 from twin.chain.extensions import Extension, imu_rotation
 from twin.chain.imu import ImuRecord, ImuSpec, rotate_readings
+from twin.diagnose.candidates import numeric_names
 from twin.diagnose.physical_evidence import Block, Simulated, blocks, reread, simulate_run
 from twin.diagnose.physical_vocabulary import (
     ALIGNMENT,
@@ -69,6 +70,12 @@ FloatArray = NDArray[np.float64]
 REFINE = 3
 #: Factor between the points of the refinement's bracket (on the parameter's change).
 BRACKET = 1.6
+#: The stated preference that names a physical cause slightly behind an undecided sensor filter.
+UNDECIDED_SENSOR = (
+    "named before the chain's sensor filter although its BIC is slightly lower: the two are "
+    "within the margin, and the noise could not tell whether the filter is in the sensor "
+    "(a stated preference for the platform side, which predicts every channel)"
+)
 #: What each source of evidence is, in a report (:meth:`Block.source_of`'s labels).
 SOURCE_TEXT = {"driven": "the driven DOF's IMU channel", "undriven": "the undriven DOFs' IMU "
                "channels (parasitic motion)", "legs": "the leg lengths (actuators.csv)",
@@ -234,6 +241,11 @@ def _alternative(describe: str, delta_bic: float, named: float) -> dict[str, obj
             "delta_bic_below_named": named - delta_bic}  # fmt: skip
 
 
+def below_text(below: float) -> str:
+    """Return how far an alternative's BIC lies below the named one's, in words."""
+    return f"BIC {abs(below):.1f} {'lower' if below >= 0 else 'higher'}"
+
+
 def _bic(chi2_0: float, chi2_1: float, p: int, n: int) -> float:
     return 2.0 * (chi2_0 - chi2_1) - p * np.log(n)
 
@@ -294,26 +306,31 @@ class PhysicalResult:
         chi2 = self.calibration.chi2(sims)["full"]
         return _bic(self.chi2_nominal, chi2, parameters, self.observations)
 
-    def weigh(self, chain: MotionSystem | None, parameters: int, describe: str) -> None:
+    def weigh(self, chain: MotionSystem | None, findings: Sequence[Finding]) -> None:
         """Weigh the physical finding against the chain's findings on the same evidence.
 
         The chain's extended configuration is simulated on the full model like a physical
         candidate (its legs and undriven DOFs move too) and scored on every channel. The
-        physical finding is preferred when its BIC is at least as good; the two are reported
-        as alternatives of each other when they lie within ``BIC_MARGIN`` (the runs cannot
-        tell them apart). Sets :attr:`preferred` and :attr:`chain`.
+        physical finding is preferred when its BIC is at least as good. Within
+        ``BIC_MARGIN`` of each other the runs cannot tell the two apart: each is listed as the
+        other's alternative (``ambiguous``), and the physical cause is named first also when
+        it is slightly behind if the chain's findings are sensor filters whose side the noise
+        left undecided (:mod:`twin.diagnose.sensor_side`): the one evidence that could put
+        the cause in the sensor was inconclusive, and the platform side has a mechanism that
+        predicts every channel (a stated preference, reported with the finding). Sets
+        :attr:`preferred` and :attr:`chain`.
 
         Parameters
         ----------
         chain : MotionSystem or None
             The nominal configuration with the chain's findings (None: it found nothing).
-        parameters : int
-            The chain's fitted parameters.
-        describe : str
-            The chain's findings in one line.
+        findings : sequence of Finding
+            The chain's findings (the motion noise's left out).
 
         """
+        describe = "; ".join(f.extension.describe() for f in findings)
         if chain is not None:
+            parameters = sum(len(numeric_names(f.extension.effect)) for f in findings)
             sims = self.calibration.simulate([chain])[0]
             self.simulations = self.calibration.total
             self.chain = {"describe": describe, "parameters": parameters,
@@ -321,12 +338,26 @@ class PhysicalResult:
         if self.finding is None:
             return
         rival = float(self.chain["delta_bic"]) if self.chain else 0.0  # type: ignore[arg-type]
-        self.preferred = self.finding.delta_bic >= rival
-        if self.chain and abs(self.finding.delta_bic - rival) < BIC_MARGIN:
-            alternatives: list = self.finding.evidence["alternatives"]  # type: ignore[assignment]
-            alternatives.append(_alternative(f"the chain's findings: {describe}", rival,
-                                             self.finding.delta_bic))  # fmt: skip
-            self.finding.evidence["ambiguous"] = True
+        close = self.chain is not None and abs(self.finding.delta_bic - rival) < BIC_MARGIN
+        undecided = bool(findings) and all(
+            f.extension.effect == "sensor_filter"
+            and (f.evidence.get("side") or {}).get("verdict") == "undecided"  # type: ignore[union-attr]
+            for f in findings
+        )
+        self.preferred = self.finding.delta_bic >= rival or (close and undecided)
+        if not close:
+            return
+        alternatives: list = self.finding.evidence["alternatives"]  # type: ignore[assignment]
+        alternatives.append(_alternative(f"the chain's findings: {describe}", rival,
+                                         self.finding.delta_bic))  # fmt: skip
+        self.finding.evidence["ambiguous"] = True
+        if self.preferred and self.finding.delta_bic < rival:
+            self.finding.evidence["preference"] = UNDECIDED_SENSOR
+        for f in findings:  # the chain's, named or not, list the physical cause beside them
+            f.evidence.setdefault("alternatives", []).append(  # type: ignore[union-attr]
+                _alternative(self.finding.extension.describe(), self.finding.delta_bic, rival)
+            )
+            f.evidence["ambiguous"] = True
 
     @property
     def chain_supported(self) -> bool:

@@ -12,7 +12,7 @@ import numpy as np
 
 from twin.diagnose.candidates import describe_bound
 from twin.diagnose.diagnosis import Diagnosis, DofReport
-from twin.diagnose.physical import SOURCE_TEXT, PhysicalResult
+from twin.diagnose.physical import SOURCE_TEXT, PhysicalResult, below_text
 from twin.diagnose.residual_figure import plot_residual
 from twin.diagnose.sensor_side import side_text
 from twin.lifecycle import replacing_dir
@@ -101,12 +101,14 @@ def summary(d: Diagnosis) -> str:
             )
         elif "loglik_per_bin_before" in g:
             out.append(f"   - held out: log-likelihood per bin {pair('loglik_per_bin', '.3f')}")
+        if f.evidence.get("preference"):
+            out.append(f"   - {f.evidence['preference']}")
         if "side" in f.evidence:
             out.append(f"   - {side_text(f.evidence['side'])}")
         alts = f.evidence.get("alternatives") or []
         if alts:
             out.append("   - within the margin: " + "; ".join(
-                f"{' + '.join(a['effects'])} (BIC {a['delta_bic_below_named']:.1f} lower)"
+                f"{' + '.join(a['effects'])} ({below_text(a['delta_bic_below_named'])})"
                 for a in alts))  # fmt: skip
     out.append("")
     if d.at_bound:
