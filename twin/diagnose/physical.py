@@ -250,18 +250,33 @@ def _bic(chi2_0: float, chi2_1: float, p: int, n: int) -> float:
     return 2.0 * (chi2_0 - chi2_1) - p * np.log(n)
 
 
+def _distinct(x: FloatArray) -> int:
+    """Return how many values of ``x`` differ by more than 1e-9 of their largest magnitude."""
+    xs = np.sort(np.asarray(x, dtype=float))
+    return 1 + int(np.sum(np.diff(xs) > 1e-9 * max(float(np.abs(xs).max()), 1e-300)))
+
+
+def _fitted(x: FloatArray, y: FloatArray, deg: int) -> tuple[FloatArray, float, float]:
+    """Return a least-squares polynomial in (x - centre) / spread, its centre and spread."""
+    centre, spread = float(np.mean(x)), max(float(np.ptp(x)), 1e-300)
+    return np.polyfit((x - centre) / spread, y, deg), centre, spread
+
+
 def _parabola_min(x: FloatArray, y: FloatArray) -> float | None:
-    """Vertex of the least-squares parabola through (x, y) if it is a minimum, else None."""
-    if np.unique(x).size < 3:
+    """Return the least-squares parabola's vertex through (x, y) if a minimum, else None."""
+    if _distinct(x) < 3:
         return None
-    a, b, _ = np.polyfit(x, y, 2)
-    return float(-b / (2 * a)) if a > 0 else None
+    (a, b, _), centre, spread = _fitted(x, y, 2)
+    return float(centre - spread * b / (2 * a)) if a > 0 else None
 
 
 def _parabola_at(x: FloatArray, y: FloatArray, at: float) -> float:
     """Return the least-squares parabola through (x, y) at ``at`` (a line through two points)."""
-    deg = min(2, np.unique(x).size - 1)
-    return float(np.polyval(np.polyfit(x, y, deg), at))
+    deg = min(2, _distinct(x) - 1)
+    if deg < 1:
+        return float(np.mean(y))
+    coef, centre, spread = _fitted(x, y, deg)
+    return float(np.polyval(coef, (at - centre) / spread))
 
 
 @dataclass
@@ -611,11 +626,12 @@ def _side(c: Candidate, sign: float) -> list[float]:
 
 def _std(c: Candidate, best: float) -> float:
     """Return the value's standard deviation from the chi2 parabola's curvature."""
-    vs = np.array(sorted(c.points, key=lambda v: abs(v - best))[:3])
-    if np.unique(vs).size < 3:
+    x = np.sort(np.array(sorted(c.points, key=lambda v: abs(v - best))[:3]))
+    if x.size < 3 or _distinct(x) < 3:
         return float("nan")
-    scale = float(np.ptp(vs))  # fitted on a unit spread: the parabola is well conditioned
-    a = np.polyfit((vs - best) / scale, [c.points[v]["full"] for v in vs], 2)[0] / scale**2
+    y = np.array([c.points[v]["full"] for v in x])
+    # the parabola through three points: its second coefficient is the second divided difference
+    a = ((y[2] - y[1]) / (x[2] - x[1]) - (y[1] - y[0]) / (x[1] - x[0])) / (x[2] - x[0])
     return float(np.sqrt(1.0 / (2 * a))) if a > 0 else float("nan")
 
 
