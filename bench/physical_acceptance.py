@@ -46,7 +46,7 @@ def main() -> None:
     summary = {}
     for kind in KINDS:
         counts = {"right": 0, "wrong": 0, "none": 0, "below detectability": 0}
-        errors, times = [], []
+        errors, times, kinds = [], [], 0
         for seed in range(first, first + draws):
             hidden = draw(seed, kind)
             run = record(hidden, tmp / kind)
@@ -57,17 +57,21 @@ def main() -> None:
             if kind != "clean" and verdict == "none" and not _detectable(d, hidden):
                 verdict = "below detectability"
             counts[verdict] += 1
+            if kind == "leg" and verdict == "right":  # the leg right: its fault's kind too?
+                kinds += d.findings[0].extension.kind == hidden.cause.kind
             named = "; ".join(f.extension.describe() for f in d.findings) or "nothing"
             if kind == "payload" and d.findings and d.findings[0].extension.effect == "payload":
                 errors.append(d.findings[0].extension.value("factor") /
                               hidden.cause.value("factor") - 1)  # fmt: skip
             print(f"{hidden.describe()} -> {named}  [{verdict}, {times[-1]:.0f} s]", flush=True)
-        summary[kind] = (counts, errors, times)
+        summary[kind] = (counts, errors, times, kinds)
     print()
-    for kind, (counts, errors, times) in summary.items():
+    for kind, (counts, errors, times, kinds) in summary.items():
         judged_n = sum(v for k, v in counts.items() if k != "below detectability")
         rate = counts["right"] / judged_n if judged_n else float("nan")
         extra = ""
+        if kind == "leg":
+            extra = f"; the fault's kind right too in {kinds} of {counts['right']}"
         if errors:
             e = np.abs(errors)
             extra = f"; factor error median {np.median(e):.1%}, max {e.max():.1%}"

@@ -65,9 +65,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         action="store_true",
         help="also weigh physical causes (a heavier cabin, one leg's gain, lag, "
         "friction or play, a rotated IMU) by simulating the full model on every "
-        "channel the runs have, leg lengths and forces included (about 25 "
-        "simulations per run; implies --model full; --save-config then carries "
-        "the calibrated physics)",
+        "channel the runs have, leg lengths and forces included (about 45 "
+        "simulations per run, about a minute; implies --model full; --save-config "
+        "then carries the calibrated physics)",
     )
     p.add_argument("--no-figures", action="store_true", help="skip figures and the .rrd")
     p.add_argument("--each", action="store_true",
@@ -184,10 +184,21 @@ def _cmd_diagnose(args: argparse.Namespace) -> int:
                 f"({below_text(alt['delta_bic_below_named'])})"
             )
     if d.physical is not None:
-        if not d.physical.chain_supported:
-            print(f"not named: {d.physical.chain['describe']} (BIC "
-                  f"{d.physical.chain['delta_bic']:+.1f} on every channel, below 10)")  # fmt: skip
-        for what, gain in d.physical.weak():
+        p = d.physical
+        if args.model != "full":
+            print("note: --physics diagnoses on the full model (the chain's effects too)")
+        if not p.chain_supported:
+            print(f"not named: {p.chain['describe']} (BIC {p.chain['delta_bic']:+.1f} on every "
+                  f"channel, the leg logs included where the runs have them; below "
+                  f"{BIC_MARGIN:g})")  # fmt: skip
+        elif p.preferred and p.chain is not None:
+            print(f"replaced by the physical cause: {p.chain['describe']} (BIC "
+                  f"{p.chain['delta_bic']:+.1f} on every channel)")  # fmt: skip
+        for e in p.table:
+            if e["at_bound"] and e["delta_bic"] > BIC_MARGIN:
+                print(f"at the bound (physical, not named): {e['describe']} (BIC "
+                      f"{e['delta_bic']:+.1f})")  # fmt: skip
+        for what, gain in p.weak():
             print(f"weak support, not named: {what} (BIC {gain:+.1f})")
     for dof, r in d.dofs.items():
         print(f"{dof}: IMU noise x{r.noise.fit.to_json()['imu_noise_scale']:.2f} of the data "

@@ -429,7 +429,10 @@ def diagnose(
         chain = [f for f in d.chain_findings if f.extension.effect != "noise"]
         extended = case.config.replace(extensions=(*case.config.extensions,
                                                    *(f.extension for f in chain)))  # fmt: skip
-        d.physical.weigh(extended if chain else None, chain)
+        per_dof = [
+            f for r in reports.values() for f in r.findings if f.extension.effect != "noise"
+        ]  # annotated: merged ones are made anew
+        d.physical.weigh(extended if chain else None, chain, per_dof)
     return d
 
 

@@ -185,7 +185,6 @@ class Calibration:
     total: int = 0
 
     def __post_init__(self) -> None:
-        self._lock = threading.Lock()
         self.nominal = self.simulate([self.config])[0]
         self.evidence: dict[str, list[Block]] = {"full": [], "half1": [], "half2": []}
         for i, (rec, m) in enumerate(self.runs):
@@ -203,10 +202,11 @@ class Calibration:
         """Simulate every run through each configuration, concurrently."""
         jobs = [(c, r) for c in configs for r in range(len(self.runs))]
         self.total += len(jobs)
+        lock = threading.Lock()  # local: a result that holds this calibration pickles
 
         def one(cfg: MotionSystem, r: int) -> Simulated:
             sim = simulate_run(cfg, self.runs[r][1], self.imu, self.seed)
-            with self._lock:
+            with lock:
                 self.done += 1
                 if self.progress:
                     self.progress("physical calibration [simulations]", self.done, self.total)
@@ -222,12 +222,12 @@ class Calibration:
 
     def chi2(self, sims: Sequence[Simulated]) -> dict[str, float]:
         """chi2 (= -log L) over the full windows and each half."""
-        return {k: float(np.sum(self.residuals(sims, k) ** 2) / 2) for k in self.evidence}
+        return {k: float(np.sum(self.residuals(sims, k) ** 2)) for k in self.evidence}
 
     def by_source(self, sims: Sequence[Simulated]) -> dict[str, float]:
         """chi2 over the full windows, per source of evidence (:meth:`Block.source_of`)."""
         r = self.residuals(sims)
-        return {s: float(np.sum(r[self.labels == s] ** 2) / 2) for s in np.unique(self.labels)}
+        return {s: float(np.sum(r[self.labels == s] ** 2)) for s in np.unique(self.labels)}
 
     def rotated(self, angles: Sequence[float]) -> list[Simulated]:
         """Return the nominal simulations read by an IMU rotated by ``angles``."""
@@ -268,15 +268,6 @@ def _parabola_min(x: FloatArray, y: FloatArray) -> float | None:
         return None
     (a, b, _), centre, spread = _fitted(x, y, 2)
     return float(centre - spread * b / (2 * a)) if a > 0 else None
-
-
-def _parabola_at(x: FloatArray, y: FloatArray, at: float) -> float:
-    """Return the least-squares parabola through (x, y) at ``at`` (a line through two points)."""
-    deg = min(2, _distinct(x) - 1)
-    if deg < 1:
-        return float(np.mean(y))
-    coef, centre, spread = _fitted(x, y, deg)
-    return float(np.polyval(coef, (at - centre) / spread))
 
 
 @dataclass
@@ -321,7 +312,12 @@ class PhysicalResult:
         chi2 = self.calibration.chi2(sims)["full"]
         return _bic(self.chi2_nominal, chi2, parameters, self.observations)
 
-    def weigh(self, chain: MotionSystem | None, findings: Sequence[Finding]) -> None:
+    def weigh(
+        self,
+        chain: MotionSystem | None,
+        findings: Sequence[Finding],
+        annotate: Sequence[Finding] = (),
+    ) -> None:
         """Weigh the physical finding against the chain's findings on the same evidence.
 
         The chain's extended configuration is simulated on the full model like a physical
@@ -341,6 +337,9 @@ class PhysicalResult:
             The nominal configuration with the chain's findings (None: it found nothing).
         findings : sequence of Finding
             The chain's findings (the motion noise's left out).
+        annotate : sequence of Finding
+            The findings to list the physical cause beside when the two are within the
+            margin (the per-DOF ones: :attr:`Diagnosis.findings` merges them anew).
 
         """
         describe = "; ".join(f.extension.describe() for f in findings)
@@ -368,7 +367,7 @@ class PhysicalResult:
         self.finding.evidence["ambiguous"] = True
         if self.preferred and self.finding.delta_bic < rival:
             self.finding.evidence["preference"] = UNDECIDED_SENSOR
-        for f in findings:  # the chain's, named or not, list the physical cause beside them
+        for f in annotate:  # the chain's, named or not, list the physical cause beside them
             f.evidence.setdefault("alternatives", []).append(  # type: ignore[union-attr]
                 _alternative(self.finding.extension.describe(), self.finding.delta_bic, rival)
             )
@@ -461,6 +460,9 @@ def calibrate(
                     key=lambda s: -float(s["chi2_fall"]))  # fmt: skip
     chosen = [c for c in cands if any(s["candidate"] == c.label for s in ranked[:REFINE])]
     _refine(cal, chosen, config)
+    halves = [[v for v in dict.fromkeys(_half_fits(c).values()) if v not in c.points]
+              for c in chosen]  # fmt: skip
+    _score(cal, chosen, halves, config)  # each half's fit, scored on the other: held out
     table = [_entry(c, cal, chi2_0) for c in chosen] + [align["entry"]]
     table.sort(key=lambda e: -float(e["delta_bic"]))  # type: ignore[arg-type]
     finding = _name(table, cal)
@@ -477,11 +479,13 @@ def _screen(c: Candidate, r0: FloatArray) -> dict[str, object]:
     a = float(r0 @ d) / dd if dd > 0 else 0.0
     value = c.nominal + a * (c.probe - c.nominal)
     lo, hi = c.bounds
-    ok = dd > 0 and a > 0 and lo <= value <= hi  # the change points the probe's way
-    c.linearised = float(np.clip(value, lo, hi)) if dd > 0 and a > 0 else None
-    return {"candidate": c.label, "linearised_value": value if ok else None,
+    clipped = float(np.clip(value, lo, hi)) if dd > 0 else c.nominal
+    # refined wherever the linearised fit moves it off nominal, either way and clipped to the
+    # range (a value beyond it is then fitted at the bound and reported so, not dropped)
+    c.linearised = clipped if abs(clipped - c.nominal) > 1e-12 else None
+    return {"candidate": c.label, "linearised_value": c.linearised,
             "chi2_fall": float(r0 @ d) ** 2 / dd if dd > 0 else 0.0,
-            "probe": c.probe, "probe_visibility": dd / 2}  # fmt: skip
+            "probe": c.probe, "probe_visibility": dd}  # fmt: skip
 
 
 def _alignment(cal: Calibration, r0: FloatArray) -> dict[str, object]:
@@ -506,7 +510,7 @@ def _alignment(cal: Calibration, r0: FloatArray) -> dict[str, object]:
         a_half, *_ = np.linalg.lstsq(df, rf, rcond=None)
         after = float(np.sum(cal.residuals(cal.rotated(np.clip(a_half, lo, hi)), score_on) ** 2))
         before = float(np.sum(cal.residuals(cal.nominal, score_on) ** 2))
-        held[f"fit_{fit_on}"] = (before / 2, after / 2)
+        held[f"fit_{fit_on}"] = (before, after)
     cause = PhysicalCause("imu_alignment", dict(zip(ALIGNMENT, angles.tolist(), strict=True)))
     chi2_0 = cal.chi2(cal.nominal)
     entry = {
@@ -517,13 +521,13 @@ def _alignment(cal: Calibration, r0: FloatArray) -> dict[str, object]:
     }  # fmt: skip
     screen = {"candidate": "imu_alignment", "linearised_value": angles.tolist(),
               "chi2_fall": float(chi2_0["full"] - chi2["full"]), "probe": step,
-              "probe_visibility": float(np.sum((d * step) ** 2) / 2)}  # fmt: skip
-    return {"entry": entry, "screen": screen, "visibility": np.sum(d**2, axis=0) / 2}
+              "probe_visibility": float(np.sum((d * step) ** 2))}  # fmt: skip
+    return {"entry": entry, "screen": screen, "visibility": np.sum(d**2, axis=0)}
 
 
 def _alignment_std(d: FloatArray) -> dict[str, float]:
     """Return the standard deviations of the angles from the linear model's Fisher information."""
-    cov = np.linalg.pinv(d.T @ d)  # residuals are unit-variance reals: F = D^T D
+    cov = np.linalg.pinv(2 * d.T @ d)  # -log L = sum r^2 (each r of variance 1/2): F = 2 D^T D
     return {n: float(np.sqrt(max(cov[i, i], 0.0))) for i, n in enumerate(ALIGNMENT)}
 
 
@@ -598,19 +602,34 @@ def _score(cal: Calibration, chosen: Sequence[Candidate], values: Sequence[Seque
         c.points[v], c.sims[v] = cal.chi2(s), s
 
 
-def _entry(c: Candidate, cal: Calibration, chi2_0: dict[str, float]) -> dict[str, object]:
-    """Return the refined fit of one candidate: value, dBIC, held-out halves, its std."""
+def _half_fits(c: Candidate) -> dict[str, float]:
+    """Return the value fitted on each half of the window (the scored values' parabola).
+
+    The vertex is kept within the values scored (no extrapolation); the held-out score is then
+    the simulated chi2 at it on the other half (:func:`_entry`).
+    """
     best = _best_value(c)
-    lo, hi = c.bounds
-    x, _ = _log_points(c)
     sign = np.sign(_change(c, best))
-    held = {}
-    for fit_on, score_on in (("half1", "half2"), ("half2", "half1")):
-        ys = np.array([c.points[v][fit_on] for v in _side(c, sign)])
-        zs = np.array([c.points[v][score_on] for v in _side(c, sign)])
+    x, _ = _log_points(c)
+    out = {}
+    for half in ("half1", "half2"):
+        ys = np.array([c.points[v][half] for v in _side(c, sign)])
         vertex = _parabola_min(x, ys)
         at = x[np.argmin(ys)] if vertex is None else float(np.clip(vertex, x.min(), x.max()))
-        held[f"fit_{fit_on}"] = (chi2_0[score_on], _parabola_at(x, zs, at))
+        out[half] = float(np.clip(c.nominal + sign * np.exp(at), *c.bounds))
+    return out
+
+
+def _entry(c: Candidate, cal: Calibration, chi2_0: dict[str, float]) -> dict[str, object]:
+    """Return the refined fit of one candidate: value, dBIC, held-out halves, its std.
+
+    The half fits (:func:`_half_fits`) must have been simulated (:func:`_score`).
+    """
+    best = _best_value(c)
+    lo, hi = c.bounds
+    halves = _half_fits(c)
+    held = {f"fit_{fit_on}": (chi2_0[score_on], c.points[halves[fit_on]][score_on])
+            for fit_on, score_on in (("half1", "half2"), ("half2", "half1"))}  # fmt: skip
     return {
         "cause": c.cause(best), "sims": c.sims[best], "parameters": 1,
         "delta_bic": _bic(chi2_0["full"], c.points[best]["full"], 1, cal.observations),
@@ -686,15 +705,16 @@ def _detectability(
     """Return the smallest change of each physical parameter the runs could have shown.
 
     The expected BIC improvement of a change x of a parameter whose probe change x_p moved the
-    standardised evidence by d is 2 (x / x_p)^2 <d, d> / 2 - ln n; it reaches the margin at
-    x = x_p sqrt((margin + ln n) / <d, d>).
+    standardised evidence by d (chi2 = -log L = the sum of the squared residuals) is
+    2 (x / x_p)^2 <d, d> - ln n; it reaches the margin at x = x_p sqrt((margin + ln n) /
+    (2 <d, d>)).
     """
     need = BIC_MARGIN + np.log(cal.observations)
     out: dict[str, dict[str, object]] = {}
     groups: dict[str, list[tuple[Candidate, float]]] = {}
     for c in cands:
         dd = float(c.direction @ c.direction)  # type: ignore[union-attr]
-        x = abs(c.probe - c.nominal) * np.sqrt(need / dd) if dd > 0 else np.inf
+        x = abs(c.probe - c.nominal) * np.sqrt(need / (2 * dd)) if dd > 0 else np.inf
         key = "payload" if c.effect == "payload" else f"leg {c.name}"
         groups.setdefault(key, []).append((c, x))
     for key, items in groups.items():
@@ -726,7 +746,7 @@ def _detectability(
                         "could have been seen in these runs")  # fmt: skip
         out[key] = {"statement": text, "smallest": xs.tolist(), "unit": unit}
     vis = np.asarray(align["visibility"])
-    angles = np.sqrt(need / np.maximum(vis, 1e-300))
+    angles = np.sqrt(need / np.maximum(2 * vis, 1e-300))
     angles = np.where(angles <= SEARCH["angle_rad"][2], angles, np.inf)
     out["imu_alignment"] = {
         "statement": "an IMU rotated by less than "

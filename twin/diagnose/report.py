@@ -165,8 +165,11 @@ def _physical_section(p: PhysicalResult) -> list[str]:
                        f"{v['chi2_fitted']:.1f}")  # fmt: skip
     else:
         out.append("No physical cause beats the nominal model by the margin.")
+    out += ["", "The figures and the recording show each DOF's signal-chain model; the physical "
+            "fit is the table above."]  # fmt: skip
     out += ["", "What these runs could have shown of the physics (expected BIC improvement > "
-            "10, linearised):", "", *[f"- {s}" for s in p.statements()], ""]  # fmt: skip
+            "10, linearised at each probe; where a log's noise sits at its floor, 1 um or 1 N, "
+            "the floor sets it):", "", *[f"- {s}" for s in p.statements()], ""]  # fmt: skip
     return out
 
 
