@@ -119,6 +119,7 @@ class Candidate:
     sims: dict[float, list[Simulated]] = field(default_factory=dict, repr=False)
     direction: FloatArray | None = field(default=None, repr=False)
     linearised: float | None = None
+    halves: dict[str, float] = field(default_factory=dict)  # the value fitted on each half
 
     def cause(self, value: float, dofs: tuple[str, ...] = ()) -> PhysicalCause:
         """Return the cause at ``value``."""
@@ -460,8 +461,9 @@ def calibrate(
                     key=lambda s: -float(s["chi2_fall"]))  # fmt: skip
     chosen = [c for c in cands if any(s["candidate"] == c.label for s in ranked[:REFINE])]
     _refine(cal, chosen, config)
-    halves = [[v for v in dict.fromkeys(_half_fits(c).values()) if v not in c.points]
-              for c in chosen]  # fmt: skip
+    for c in chosen:
+        c.halves = _half_fits(c)
+    halves = [[v for v in dict.fromkeys(c.halves.values()) if v not in c.points] for c in chosen]
     _score(cal, chosen, halves, config)  # each half's fit, scored on the other: held out
     table = [_entry(c, cal, chi2_0) for c in chosen] + [align["entry"]]
     table.sort(key=lambda e: -float(e["delta_bic"]))  # type: ignore[arg-type]
@@ -623,11 +625,11 @@ def _half_fits(c: Candidate) -> dict[str, float]:
 def _entry(c: Candidate, cal: Calibration, chi2_0: dict[str, float]) -> dict[str, object]:
     """Return the refined fit of one candidate: value, dBIC, held-out halves, its std.
 
-    The half fits (:func:`_half_fits`) must have been simulated (:func:`_score`).
+    The half fits (:attr:`Candidate.halves`) must have been simulated (:func:`_score`).
     """
     best = _best_value(c)
     lo, hi = c.bounds
-    halves = _half_fits(c)
+    halves = c.halves
     held = {f"fit_{fit_on}": (chi2_0[score_on], c.points[halves[fit_on]][score_on])
             for fit_on, score_on in (("half1", "half2"), ("half2", "half1"))}  # fmt: skip
     return {
