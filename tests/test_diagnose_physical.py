@@ -235,3 +235,18 @@ def test_the_refinements_parabola_is_exact_and_quiet_for_close_values():
     assert _parabola_min(x, y) == pytest.approx(0.7, abs=1e-9)
     near = np.array([1.0, 1.0 + 1e-15, 1.0 + 2e-15])  # no warning (the suite's are errors)
     assert _parabola_min(near, np.array([3.0, 2.0, 3.0])) is None
+
+
+def test_a_fit_whose_statistics_come_later_pickles_with_them():
+    from twin.diagnose.candidates import SetFit
+
+    asked = []
+
+    def statistics():
+        asked.append(1)
+        return {"gain": {"gain": 0.02}}, {"labels": ["gain.gain"], "matrix": [[1.0]]}
+
+    fit = SetFit((Extension("gain", {"gain": 0.9}, ("heave",)),), 3.0, statistics)
+    again = pickle.loads(pickle.dumps(fit))  # a task's result travels (twin diagnose --each)
+    assert again.std == {"gain": {"gain": 0.02}} and asked == [1]
+    assert pickle.loads(pickle.dumps(again)).correlation["labels"] == ["gain.gain"]

@@ -256,6 +256,11 @@ def make_extension(
 Statistics = tuple[dict[str, dict[str, float]], dict[str, object]]
 
 
+def _computed_already() -> Statistics:
+    """Stand in for a fit's statistics function where they are computed already."""
+    raise AssertionError("the statistics were computed when the fit was made or pickled")
+
+
 @dataclass(frozen=True)
 class SetFit:
     """A set of effects fitted jointly on top of a model.
@@ -293,7 +298,14 @@ class SetFit:
         correlation: dict[str, object],
     ) -> SetFit:
         """Return a fit with its statistics computed already."""
-        return cls(extensions, chi2, lambda: (std, correlation))
+        return cls(extensions, chi2, _computed_already, [(std, correlation)])
+
+    def __getstate__(self) -> dict[str, object]:
+        """Pickle with the statistics computed (a task's result travels without closures)."""
+        state = dict(self.__dict__)
+        state["_computed"] = [self._statistics_once()]
+        state["_statistics"] = _computed_already
+        return state
 
     @property
     def std(self) -> dict[str, dict[str, float]]:
