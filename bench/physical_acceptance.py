@@ -45,7 +45,7 @@ def main() -> None:
     tmp = Path(tempfile.mkdtemp())
     summary = {}
     for kind in KINDS:
-        counts = {"right": 0, "wrong": 0, "none": 0, "below detectability": 0}
+        counts = {"right": 0, "wrong": 0, "ambiguous": 0, "none": 0, "below detectability": 0}
         errors, times, kinds = [], [], 0
         for seed in range(first, first + draws):
             hidden = draw(seed, kind)
@@ -76,7 +76,8 @@ def main() -> None:
             e = np.abs(errors)
             extra = f"; factor error median {np.median(e):.1%}, max {e.max():.1%}"
         print(f"{kind:8s}: right {counts['right']}/{judged_n} ({rate:.0%}), wrong "
-              f"{counts['wrong']}, nothing {counts['none']}, below detectability "
+              f"{counts['wrong']}, ambiguous (truth listed as likely) {counts['ambiguous']}, "
+              f"nothing {counts['none']}, below detectability "
               f"{counts['below detectability']}; time median {np.median(times):.0f} s, max "
               f"{max(times):.0f} s{extra}")  # fmt: skip
 

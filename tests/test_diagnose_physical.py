@@ -250,3 +250,17 @@ def test_a_fit_whose_statistics_come_later_pickles_with_them():
     again = pickle.loads(pickle.dumps(fit))  # a task's result travels (twin diagnose --each)
     assert again.std == {"gain": {"gain": 0.02}} and asked == [1]
     assert pickle.loads(pickle.dumps(again)).correlation["labels"] == ["gain.gain"]
+
+
+def test_an_ambiguous_first_finding_with_the_truth_among_its_alternatives_is_not_wrong():
+    leg = _hidden(0, "srs", "surge", PhysicalCause("leg", {"leg": 5, "gain": 0.47}))
+    first = _finding("payload", {"factor": 1.39}, ("surge",))
+    first.evidence.update(
+        ambiguous=True,
+        alternatives=[
+            {"effects": ["leg 5: gain 0.5717"], "delta_bic": 15.2, "delta_bic_below_named": 0.8}
+        ],
+    )
+    assert judged(leg, [first]) == "ambiguous"
+    first.evidence["alternatives"] = [{"effects": ["leg 3: gain 0.6"]}]
+    assert judged(leg, [first]) == "wrong"

@@ -158,8 +158,10 @@ def judged(hidden: HiddenPhysics, findings: list) -> str:
     str
         ``right`` (the true cause named, or nothing for a clean run: for a payload, a
         ``payload`` or a ``platform_lag`` in the driven DOF counts), ``wrong`` (a cause named
-        that is not the truth, e.g. a sensor effect for a heavier cabin), or ``none`` (nothing
-        named where something was hidden).
+        that is not the truth, e.g. a sensor effect for a heavier cabin), ``ambiguous`` (the
+        first finding is flagged ambiguous and the truth is among its alternatives within the
+        margin: the runs could not tell them apart, and the report says so) or ``none``
+        (nothing named where something was hidden).
 
     """
     real = [f.extension for f in findings if f.extension.effect != "noise"]
@@ -172,6 +174,15 @@ def judged(hidden: HiddenPhysics, findings: list) -> str:
         ok = first.effect == "payload" or (
             first.effect == "platform_lag" and hidden.dof in first.dofs
         )
-        return "right" if ok else "wrong"
-    ok = first.effect == "leg" and int(first.value("leg")) == int(hidden.cause.value("leg"))
-    return "right" if ok else "wrong"
+        truth = "payload"
+    else:
+        ok = first.effect == "leg" and int(first.value("leg")) == int(hidden.cause.value("leg"))
+        truth = f"leg {int(hidden.cause.value('leg'))}:"
+    if ok:
+        return "right"
+    top = next(f for f in findings if f.extension.effect != "noise")
+    alternatives = top.evidence.get("alternatives") or []
+    named = [" ".join(a.get("effects", [])) for a in alternatives]
+    if top.evidence.get("ambiguous") and any(truth in n for n in named):
+        return "ambiguous"
+    return "wrong"
