@@ -82,3 +82,7 @@ class OutputError(UsageError):
     def __reduce__(self) -> tuple[type, tuple[str | PathLike[str], str]]:
         """Pickle by path and reason (a task's error crosses processes)."""
         return type(self), (self.path, self.reason)
+
+
+class ScheduleError(DataError):
+    """A test-schedule file (a ``MovementSeries`` or ``twin-schedule/1``) that cannot be run."""

@@ -17,6 +17,7 @@ import numpy as np
 
 from twin.progress import ProgressFn
 from twin.runs import SIMULATED, RunWriter
+from twin.schedule import Schedule
 from twin.signals import DescribingSignal, StepSignal
 from twin.trajectory import interp_columns
 
@@ -67,6 +68,7 @@ def run_meta(
     notes: str,
     config: MotionSystem | None = None,
     signal: DescribingSignal | StepSignal | None = None,
+    schedule: Schedule | None = None,
 ) -> dict[str, object]:
     """Return the ``meta.json`` of a simulated run (the one place it is built).
 
@@ -81,6 +83,10 @@ def run_meta(
         names the nominal configuration instead of the one it was simulated with).
     signal : DescribingSignal or StepSignal, optional
         The signal design, written as the ``signal`` entry (see :func:`signal_meta`).
+    schedule : Schedule, optional
+        The test schedule the commands were made from, written as the ``schedule`` entry
+        (:meth:`twin.schedule.moves.Schedule.to_json`: each move with its time, kind, DOF
+        and the AGARD test it serves).
 
     Returns
     -------
@@ -101,6 +107,8 @@ def run_meta(
     }
     if signal is not None:
         meta["signal"] = signal_meta(signal)
+    if schedule is not None:
+        meta["schedule"] = schedule.to_json()
     return meta
 
 

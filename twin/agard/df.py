@@ -406,16 +406,41 @@ def explained(t: FloatArray, v: FloatArray, f: FloatArray, window: tuple[float, 
 def analyse_df(m: Measurement, dof: str | None = None) -> DfResult:
     """Return the describing functions of one measurement (design from its signal)."""
     k = driven_dof(m, dof)
-    f, window = periodic_design(m, k)
+    return analyse_windows(m, k, [periodic_design(m, k)])
+
+
+def analyse_windows(
+    m: Measurement, k: int, designs: Sequence[tuple[FloatArray, tuple[float, float]]]
+) -> DfResult:
+    """Return the describing functions of DOF ``k`` from windows of one measurement.
+
+    Parameters
+    ----------
+    m : Measurement
+        The run (e.g. a whole test schedule).
+    k : int
+        Driven DOF.
+    designs : sequence of (frequencies [Hz], (start, end) [s])
+        Each window holds whole periods of its frequencies (a schedule's sine moves, or a
+        run's one design); frequencies met in several windows are all kept.
+
+    """
     u = m.commanded[:, k]
-    U = fourier_coefficients(m.t, u, f, window)
-    h = describing_function(m.t, u, m.measured[:, k], f, window)
-    noise = neighbour_noise(m.t, m.measured[:, k], f, window) / np.abs(U)
+    parts = []
+    for f, window in designs:
+        f = np.asarray(f, dtype=float)
+        U = fourier_coefficients(m.t, u, f, window)
+        h = describing_function(m.t, u, m.measured[:, k], f, window)
+        noise = neighbour_noise(m.t, m.measured[:, k], f, window) / np.abs(U)
+        cross = [describing_function(m.t, u, m.measured[:, j], f, window) for j in range(6)]
+        parts.append((f, h, noise, cross))
+    f = np.concatenate([p[0] for p in parts])
+    order = np.argsort(f, kind="stable")
+    h, noise = (np.concatenate([p[i] for p in parts])[order] for i in (1, 2))
     cross = {
-        DOF_NAMES[j]: describing_function(m.t, u, m.measured[:, j], f, window)
-        for j in range(6)
-        if j != k
+        DOF_NAMES[j]: np.concatenate([p[3][j] for p in parts])[order] for j in range(6) if j != k
     }
+    f = f[order]
     model = m.config.without_delay().frequency_response(f)[:, k]
     return _result(DOF_NAMES[k], f, h, cross, model, m.config.delays_s[k], m.source, noise)
 

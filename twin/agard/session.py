@@ -16,7 +16,9 @@ from twin.lifecycle import CloseOrAbort
 from twin.measurement.measure import Bench, Measurement
 from twin.progress import ProgressFn
 from twin.run_folder import execute, run_meta
+from twin.schedule import Schedule
 from twin.signals import DescribingSignal, StepSignal, single_sine
+from twin.trajectory import Trajectory
 
 
 class Session(CloseOrAbort):
@@ -81,23 +83,34 @@ class Session(CloseOrAbort):
 
     def measure(self, sig: DescribingSignal | StepSignal, name: str) -> Measurement:
         """Run one signal and return its measurement."""
+        return self._measure(sig.commands, name, {"signal": sig})
+
+    def measure_schedule(self, schedule: Schedule) -> Measurement:
+        """Run a whole test schedule as one run; return its measurement (with the schedule)."""
+        return self._measure(schedule.commands(), schedule.name, {"schedule": schedule},
+                             progress=True)  # fmt: skip
+
+    def _measure(
+        self, commands: Trajectory, name: str, design: dict[str, object], progress: bool = False
+    ) -> Measurement:
+        """Run ``commands``; ``design``: the ``signal`` or ``schedule`` for ``meta.json``."""
         k = self.count
         self.count += 1
         if self.progress:
             self.progress(f"run {k + 1}: {name} on {self.bench.name}")
-        run = self.bench.prepare(sig.commands, k, name)
-        meta = run_meta(run, f"AGARD-AR-144 test run {name}, simulated by twin", signal=sig)
+        run = self.bench.prepare(commands, k, name)
+        meta = run_meta(run, f"AGARD-AR-144 test run {name}, simulated by twin", **design)  # type: ignore[arg-type]
         folder = None if self.out is None else self.out / "runs" / f"{k:02d}-{name}"
         try:
-            sim = execute(
-                run, meta, folder, overwrite=True, recorder=self.recorder, offset_s=self._offset
-            )
+            sim = execute(run, meta, folder, overwrite=True, recorder=self.recorder,
+                          progress=self.progress if progress else None,
+                          offset_s=self._offset)  # fmt: skip
         except BaseException:
             self.abort()
             raise
-        self._offset += sig.commands.duration + 1.0
+        self._offset += commands.duration + 1.0
         self._counted()
-        return self.bench.measure(sim, {"signal": meta["signal"]})
+        return self.bench.measure(sim, {key: meta[key] for key in design})
 
     def measure_sine(
         self, dof: str, frequency_hz: float, amplitude: float, window_s: float, name: str

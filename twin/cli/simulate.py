@@ -12,6 +12,7 @@ import time
 from pathlib import Path
 
 from twin.cli import common
+from twin.schedule import SUFFIXES, Schedule, read_schedule
 from twin.trajectory import Trajectory
 
 
@@ -20,12 +21,16 @@ def signal_help() -> str:
     from twin.runs import COMMANDS_FILE
     from twin.signals import BUILTIN_HELP
 
-    return (f"a commands.csv (twin-run/1: {COMMANDS_FILE}), a run folder holding one, or a "
+    return (f"a commands.csv (twin-run/1: {COMMANDS_FILE}), a run folder holding one, a test "
+            "schedule (.json MovementSeries or .toml twin-schedule/1), or a "
             f"built-in: {BUILTIN_HELP}")  # fmt: skip
 
 
-def load_signal(spec: str, rate_hz: float = 100.0) -> Trajectory:
-    """Return commands from a ``commands.csv`` path (or a run folder) or a built-in name.
+def load_signal(spec: str, rate_hz: float = 100.0) -> tuple[Trajectory, Schedule | None]:
+    """Return commands from a ``commands.csv`` path (or a run folder), a schedule or a name.
+
+    A schedule (:func:`twin.schedule.read_schedule`) is returned with its commands, for the
+    run's ``meta.json``; the other sources return None there.
 
     Raises
     ------
@@ -42,10 +47,13 @@ def load_signal(spec: str, rate_hz: float = 100.0) -> Trajectory:
     if path.is_dir():
         path = path / "commands.csv"
     elif not path.exists() and path.suffix != ".csv" and "/" not in spec and os.sep not in spec:
-        return builtin_signal(spec, rate_hz)  # a name, not a path
+        return builtin_signal(spec, rate_hz), None  # a name, not a path
     if not path.exists():
         raise UsageError(f"{path}: no such file or folder; --signal takes {signal_help()}")
-    return read_commands(path)
+    if path.suffix.lower() in SUFFIXES:
+        schedule = read_schedule(path)
+        return schedule.commands(rate_hz), schedule
+    return read_commands(path), None
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -101,13 +109,14 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     from twin.chain.simulate import prepare
     from twin.run_folder import execute, run_meta
 
-    commands = load_signal(args.signal)
+    commands, schedule = load_signal(args.signal)
     ms = common.configured(args.config, args)
     limit_mode = "strict" if args.strict else "limit"
     run = prepare(ms, commands, args.model, args.seed, limit_mode=limit_mode)
     name = Path(args.signal).stem if Path(args.signal).exists() else args.signal
     folder = Path(args.out or f"out/{run.config.name}-{args.model}-{name}-seed{args.seed}")
-    meta = run_meta(run, f"simulated by twin ({args.model} model) from signal {args.signal!r}")
+    meta = run_meta(run, f"simulated by twin ({args.model} model) from signal {args.signal!r}",
+                    schedule=schedule)  # fmt: skip
     if args.rrd:
         common.refuse_file_in_folder(args.rrd, folder)
     recorder = None

@@ -1,0 +1,125 @@
+"""Where each AGARD-AR-144 test finds its data in a scheduled run: windows of moves.
+
+A lab runs a whole test schedule (:mod:`twin.schedule`) as one long run; each move serves
+one test (:func:`twin.schedule.moves.test_of`). This module turns the moves into analysis
+windows on the run's clock: a sine move's window is the longest whole number of periods of
+all its frequencies between its fade-in and its fade-out; other moves are used whole.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from twin.frames import dof_index
+from twin.schedule.moves import Move, Schedule
+
+FloatArray = NDArray[np.float64]
+#: A window's frequencies must each fit a whole number of periods to this share of a period.
+WHOLE_PERIODS = 1e-3
+#: Least periods of the lowest frequency a sine window must hold.
+MIN_PERIODS = 1
+
+
+@dataclass(frozen=True)
+class Segment:
+    """One move of a scheduled run, as a test uses it.
+
+    Attributes
+    ----------
+    move : Move
+        The schedule's move.
+    window : tuple of float
+        Analysis window on the run's clock [s].
+    frequencies_hz : ndarray
+        The move's frequencies (sines; empty otherwise).
+    amplitude : float
+        Largest pose amplitude of a sines move in its DOF's units (0 otherwise).
+
+    """
+
+    move: Move
+    window: tuple[float, float]
+    frequencies_hz: FloatArray
+    amplitude: float
+
+    @property
+    def dof(self) -> str:
+        """The driven DOF."""
+        return self.move.dof or ""
+
+    @property
+    def k(self) -> int:
+        """The driven DOF's index."""
+        return dof_index(self.dof)
+
+
+def sine_window(move: Move, offset_s: float = 0.0) -> tuple[float, float] | None:
+    """Return the longest whole-periods window between a sine move's fades (None: too short).
+
+    The window ends where the fade-out starts and holds ``n`` periods of the lowest
+    frequency, ``n`` the largest for which every frequency fits whole periods (to
+    :data:`WHOLE_PERIODS`).
+    """
+    f = move.frequencies_hz
+    fade = float(move.parameters.get("t_fade_s", 0.0))  # type: ignore[arg-type]
+    lo, hi = move.start_s + fade + offset_s, move.end_s - fade + offset_s
+    f_min = float(f.min())
+    for n in range(int(np.floor((hi - lo) * f_min + 1e-9)), MIN_PERIODS - 1, -1):
+        length = n / f_min
+        cycles = f * length
+        if np.abs(cycles - np.round(cycles)).max() <= WHOLE_PERIODS:
+            return hi - length, hi
+    return None
+
+
+def segments(
+    schedule: Schedule, test: str, offset_s: float = 0.0
+) -> tuple[list[Segment], list[str]]:
+    """Return the segments of the moves serving ``test``, and why any move was left out.
+
+    Parameters
+    ----------
+    schedule : Schedule
+        The run's schedule.
+    test : str
+        ``df``, ``hysteresis``, ``bump``, ``limits`` or ``noise`` (see
+        :func:`~twin.schedule.moves.test_of`).
+    offset_s : float
+        Time of the schedule's t = 0 on the run's clock.
+
+    """
+    out, skipped = [], []
+    for move in schedule.tests().get(test, []):
+        if move.kind == "sines":
+            window = sine_window(move, offset_s)
+            if window is None:
+                skipped.append(f"move {move.number}: shorter than a whole period between its "
+                               "fades")  # fmt: skip
+                continue
+            out.append(Segment(move, window, move.frequencies_hz, float(move.amplitudes.max())))
+        else:
+            span = (move.start_s + offset_s, move.end_s + offset_s)
+            out.append(Segment(move, span, np.zeros(0), 0.0))
+    return out, skipped
+
+
+def by_dof(segs: Sequence[Segment]) -> dict[str, list[Segment]]:
+    """Group segments by driven DOF (in the order of the DOFs' first moves)."""
+    out: dict[str, list[Segment]] = {}
+    for s in segs:
+        out.setdefault(s.dof, []).append(s)
+    return out
+
+
+def largest_per_frequency(segs: Sequence[Segment]) -> list[Segment]:
+    """Keep, for each set of frequencies, the move with the largest amplitude (the DF's)."""
+    best: dict[tuple[float, ...], Segment] = {}
+    for s in segs:
+        key = tuple(np.round(s.frequencies_hz, 9))
+        if key not in best or s.amplitude > best[key].amplitude:
+            best[key] = s
+    return sorted(best.values(), key=lambda s: float(s.frequencies_hz.min()))

@@ -1,0 +1,36 @@
+"""Test schedules as motion labs write them: read, turned into commands, split by test.
+
+:func:`read_schedule` reads a SIMONA Research Simulator ``MovementSeries`` (``.json``,
+:mod:`twin.schedule.movement_series`) or the twin's own ``twin-schedule/1`` (``.toml``,
+:mod:`twin.schedule.toml_schedule`) into a :class:`~twin.schedule.moves.Schedule`.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from twin.errors import ScheduleError
+from twin.schedule.movement_series import read_movement_series
+from twin.schedule.moves import Move, Schedule
+from twin.schedule.toml_schedule import read_toml_schedule
+
+__all__ = ["Move", "Schedule", "read_schedule", "SUFFIXES"]
+
+#: File suffixes of schedules and their readers.
+SUFFIXES = {".json": read_movement_series, ".toml": read_toml_schedule}
+
+
+def read_schedule(path: str | Path) -> Schedule:
+    """Read a schedule file: ``.json`` (``MovementSeries``) or ``.toml`` (``twin-schedule/1``).
+
+    Raises
+    ------
+    ScheduleError
+        For another suffix, or a file its reader refuses (one line naming the move).
+
+    """
+    reader = SUFFIXES.get(Path(path).suffix.lower())
+    if reader is None:
+        raise ScheduleError(f"{path}: a schedule is a .json MovementSeries or a .toml "
+                            "twin-schedule/1 file")  # fmt: skip
+    return reader(path)
