@@ -50,7 +50,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from twin.agard.df import periodic_design
+from twin.agard.df import joined_sources, periodic_design
 from twin.agard.session import Session
 from twin.errors import SignalError
 from twin.frames import DOF_NAMES, dof_index
@@ -241,17 +241,17 @@ class ParasiticResult:
 
     def format_table(self) -> str:
         """Plain-text 6 x 6 tables (rows driven, columns measured): rms and coupling."""
-        head = f"{'driven':>8} " + " ".join(f"{m:>10}" for m in DOF_NAMES)
+        head = f"{'driven':>8} " + " ".join(f"{m:>11}" for m in DOF_NAMES)
         tilt = "gravity tilt removed" if self.tilt_removed else "gravity tilt included"
         lines = [
             f"parasitic motion ({self.source}; {tilt}; noise from {self.noise_basis})",
-            "rms [m/s^2 or rad/s^2] over the window, noise rms in brackets:",
+            "rms / noise rms [m/s^2 or rad/s^2] over the window:",
             head,
         ]
         for d in self.dofs:
             row = self.cells[d]
             lines.append(f"{d:>8} " + " ".join(
-                f"{row[m].rms:5.3f}({row[m].noise_rms:4.3f})"[:10].rjust(10) for m in DOF_NAMES
+                f"{row[m].rms:.3f}/{row[m].noise_rms:.3f}".rjust(11) for m in DOF_NAMES
             ))  # fmt: skip
         lines += [
             "coupling at the driven lines, power-weighted |Y/U| [%, SI ratio]; diagonal the "
@@ -264,11 +264,12 @@ class ParasiticResult:
             for m in DOF_NAMES:
                 c = row[m]
                 mark = "" if c.above_noise or m == d else "~"
-                cells.append(f"{mark}{100 * c.coupling_mean:.2f}".rjust(10))
+                cells.append(f"{mark}{100 * c.coupling_mean:.2f}".rjust(11))
             lines.append(f"{d:>8} " + " ".join(cells))
         d, m, c = self.worst()
         lines.append(
-            f"largest: {d} -> {m}, {100 * c.coupling_mean:.2f} % (max {100 * c.coupling_max:.2f} % "
+            f"most above noise: {d} -> {m}, {100 * c.coupling_mean:.2f} % "
+            f"(max {100 * c.coupling_max:.2f} % "
             f"at {c.coupling_max_hz:g} Hz), {c.snr_db:.1f} dB above its noise floor "
             f"{100 * c.coupling_noise:.2f} %"
         )
@@ -304,9 +305,9 @@ class ParasiticResult:
                 else:
                     if noisy[i, j]:
                         ax.add_patch(plt.Rectangle((j - 0.5, i - 0.5), 1, 1, fill=False,
-                                                   hatch="///", ec="0.6", lw=0))  # fmt: skip
-                    text = f"{db[i, j]:.1f}\n{100 * c[i, j]:.2g} %"
-                    colour = "0.6" if noisy[i, j] else "w"
+                                                   hatch="///", ec="w", lw=0))  # fmt: skip
+                    text = f"{'~' if noisy[i, j] else ''}{db[i, j]:.1f}\n{100 * c[i, j]:.2g} %"
+                    colour = "k" if image.norm(db[i, j]) > 0.5 else "w"
                 ax.text(j, i, text, ha="center", va="center", fontsize=7, color=colour)
         ax.set_xticks(range(6), DOF_NAMES)
         ax.set_yticks(range(6), DOF_NAMES)
@@ -543,7 +544,7 @@ def analyse_segments(
         cells[dof] = row
         freqs[dof] = f
     basis = "rest record" if noise is not None else "noise-only bins"
-    source = "; ".join(dict.fromkeys(sources))
+    source = joined_sources(sources)
     return ParasiticResult(cells, freqs, source, basis, remove_tilt)
 
 
