@@ -23,8 +23,7 @@ schedule as one long run gives one segment per sine, all windows in the same mea
 
 Examples
 --------
->>> from twin.agard.df import joined_sources
-from twin.agard.session import Session
+>>> from twin.agard.session import Session
 >>> from twin.measurement.measure import Bench, configure
 >>> s = Session(Bench(configure("srs", noise=False), "reduced"))
 >>> r = run_linearity(s, "heave", frequencies_hz=[1.0], amplitudes=[1.0, 0.1])
