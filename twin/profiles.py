@@ -159,9 +159,7 @@ def _end_speed_message(ai: float, v0: float, v1: float, t_total: float) -> str:
     )
 
 
-def point_to_point(
-    distance: float, vmax: float, amax: float, jmax: float
-) -> JerkProfile:  # fmt: skip
+def point_to_point(distance: float, vmax: float, amax: float, jmax: float) -> JerkProfile:
     """Return the jerk-limited move over ``distance`` (>= 0) from rest to rest.
 
     Seven phases: jerk up, constant acceleration, jerk down, cruise, and the mirror image.

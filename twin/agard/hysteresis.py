@@ -57,7 +57,6 @@ from twin.checks import number
 from twin.errors import DataError, SignalError, SignalLimitError
 from twin.frames import DOF_NAMES, dof_index
 from twin.plotting import finish, pyplot
-from twin.run_folder import execute, run_meta
 from twin.runs import RecordedRun
 from twin.signals import DescribingSignal, MultiSine, check_signal, periodic_signal
 
@@ -522,11 +521,7 @@ def fitting_amplitude(platform: str, dof: str, frequency_hz: float) -> float | s
 def simulate_positions(
     session: Session, sig: DescribingSignal, name: str
 ) -> tuple[PositionRecord, DescribingSignal]:
-    """Run ``sig`` as :meth:`Session.measure` does and return the pose record.
-
-    The session's run count, seeds, run folders and recording are kept as
-    :meth:`Session.measure` keeps them (a Measurement holds no pose, so the simulation is
-    run here).
+    """Run ``sig`` on the session and return the pose record (a Measurement holds no pose).
 
     Raises
     ------
@@ -534,26 +529,8 @@ def simulate_positions(
         If the signal would break a platform limit (the run still counts).
 
     """
-    k = session.count
-    session.count += 1
-    if session.progress:
-        session.progress(f"run {k + 1}: {name} on {session.bench.name}")
-    try:
-        run = session.bench.prepare(sig.commands, k, name)
-    except SignalLimitError:
-        session._counted()
-        raise
-    meta = run_meta(run, f"AGARD-AR-144 test run {name}, simulated by twin", signal=sig)
-    folder = None if session.out is None else session.out / "runs" / f"{k:02d}-{name}"
-    try:
-        sim = execute(run, meta, folder, overwrite=True, recorder=session.recorder,
-                      offset_s=session._offset)  # fmt: skip
-    except BaseException:
-        session.abort()
-        raise
-    session._offset += sig.commands.duration + 1.0
-    session._counted()
-    return PositionRecord.from_simulation(sim), sig
+    session.measure(sig, name)
+    return PositionRecord.from_simulation(session.simulation), sig  # type: ignore[arg-type]
 
 
 def run_hysteresis(

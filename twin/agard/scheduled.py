@@ -1,26 +1,31 @@
-"""The AGARD-AR-144 report of a scheduled run: each test from the moves that serve it.
+"""The AGARD-AR-144 report of a recorded (or scheduled) run: the tests it holds, and not.
 
 A lab's schedule (:mod:`twin.schedule`) runs many tests in one run. :func:`analyse_schedule`
 finds each test's moves (:mod:`twin.agard.segments`), runs the test's analysis on their
-windows and says which tests the schedule does not hold, and why (what moves they need). The
-tests and what they take from a schedule are :data:`ANALYSES`; :func:`write_scheduled`
-writes the report folder (``report.json``, ``summary.md``, a figure per test and DOF).
+windows and says which tests the run does not hold, and why (what moves they need). The
+tests and what they take from a schedule are :data:`ANALYSES`. A run made for one test
+(its ``meta.json`` names the signal design) is reported by :func:`analyse_designed`.
+:meth:`RunReport.write` writes the report folder (``report.json``, ``summary.md``, a figure
+per test and DOF).
 """
 
 from __future__ import annotations
 
 import json
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 import matplotlib.pyplot as plt
+import numpy as np
 
-from twin.agard import df
+from twin.agard import df, hysteresis, linearity, parasitic, threshold
+from twin.agard.hysteresis import PositionRecord
 from twin.agard.segments import Segment, by_dof, largest_per_frequency, segments
+from twin.frames import DOF_NAMES
 from twin.lifecycle import writing
-from twin.measurement.measure import Measurement
-from twin.schedule.moves import Schedule
+from twin.measurement.measure import Measurement, driven_dof
+from twin.schedule.moves import HYSTERESIS_HZ, Schedule
 
 
 @dataclass(frozen=True)
@@ -34,51 +39,118 @@ class Analysis:
     needs : str
         What the schedule must hold for it (the "missing" message).
     analyse : callable
-        ``(measurement, segments of one DOF) -> result`` (``per_dof``), or of every DOF.
+        ``(measurement, segments of one DOF, positions) -> result`` (``per_dof``), or of
+        every DOF; ``positions`` is the run's pose record (None: the run has none).
     per_dof : bool
         One result per driven DOF, or one for all.
-    figure : callable
-        ``(result, measurement) -> matplotlib figure``.
 
     """
 
     moves: str
     needs: str
-    analyse: Callable[[Measurement, list[Segment]], object]
+    analyse: Callable[[Measurement, list[Segment], PositionRecord | None], object]
     per_dof: bool = True
-    figure: Callable[[object, Measurement], object] = field(
-        default=lambda r, m: r.plot()  # type: ignore[attr-defined]
-    )
 
 
-def _df(m: Measurement, segs: list[Segment]) -> df.DfResult:
-    """Describing function of one DOF: its largest amplitude at each schedule frequency."""
+def _plain_figure(result: object, m: Measurement) -> object:
+    return result.plot()  # type: ignore[attr-defined]
+
+
+#: Tests whose figure needs more than the result (default: ``result.plot()``).
+FIGURES: dict[str, Callable[[object, Measurement], object]] = {
+    "df": lambda r, m: r.plot(config=m.config),  # type: ignore[attr-defined]
+}
+
+
+def _df(m: Measurement, segs: list[Segment], positions: object = None) -> df.DfResult:
+    """Return the describing function of one DOF: its largest amplitude per frequency."""
     big = largest_per_frequency(segs)
     return df.analyse_windows(m, big[0].k, [(s.frequencies_hz, s.window) for s in big])
 
 
+def _parasitic(
+    m: Measurement, segs: list[Segment], positions: object = None
+) -> parasitic.ParasiticResult:
+    """Return the parasitic motion of every driven DOF: largest amplitude per frequency."""
+    return parasitic.analyse_segments(
+        {
+            dof: [
+                parasitic.Segment(m, s.window, tuple(s.frequencies_hz))
+                for s in largest_per_frequency(group)
+            ]
+            for dof, group in by_dof(segs).items()
+        }
+    )
+
+
+def _single_sines(segs: list[Segment]) -> list[Segment]:
+    return [s for s in segs if len(s.frequencies_hz) == 1]
+
+
+def _linearity_points(segs: list[Segment]) -> list[Segment]:
+    """Single sines at frequencies the schedule runs at two amplitudes or more."""
+    amplitudes: dict[float, set[float]] = {}
+    for s in _single_sines(segs):
+        amplitudes.setdefault(round(float(s.frequencies_hz[0]), 9), set()).add(s.amplitude)
+    return [s for s in _single_sines(segs)
+            if len(amplitudes[round(float(s.frequencies_hz[0]), 9)]) > 1]  # fmt: skip
+
+
+def _linearity(
+    m: Measurement, segs: list[Segment], positions: object = None
+) -> linearity.LinearityResult:
+    """Return the linearity of one DOF from its sines at two amplitudes or more."""
+    points = [
+        linearity.LinearitySegment(m, *s.window, float(s.frequencies_hz[0]),
+                                   s.amplitude * (2 * np.pi * float(s.frequencies_hz[0])) ** 2)
+        for s in _linearity_points(segs)
+    ]  # fmt: skip
+    if not points:
+        raise NotInRun("no frequency run at two amplitudes or more")
+    return linearity.analyse_linearity(points, segs[0].dof)
+
+
+def _hysteresis(
+    m: Measurement, segs: list[Segment], positions: PositionRecord | None
+) -> hysteresis.HysteresisResult:
+    """Return the hysteresis loops of one DOF's very-low-frequency sines."""
+    if positions is None:
+        raise NotInRun("the run has no position record (actuators.csv: leg lengths)")
+    loops = [hysteresis.HysteresisSegment(positions, *s.window, float(s.frequencies_hz[0]),
+                                          s.amplitude) for s in segs]  # fmt: skip
+    return hysteresis.analyse_hysteresis(loops, segs[0].dof)
+
+
+class NotInRun(Exception):
+    """The run holds a test's moves, but not what the test needs from them (the reason)."""
+
+
 #: The tests a schedule can hold, in report order.
 ANALYSES: dict[str, Analysis] = {
-    "df": Analysis("df", "sine moves in one DOF", _df,
-                   figure=lambda r, m: r.plot(config=m.config)),  # type: ignore[attr-defined]
+    "df": Analysis("df", "sine moves in one DOF", _df),
+    "linearity": Analysis("df", "single sines of one DOF at one frequency in two amplitudes "
+                          "or more", _linearity),
+    "parasitic": Analysis("df", "sine moves in one DOF at a time", _parasitic, per_dof=False),
+    "hysteresis": Analysis("hysteresis", f"a single sine below {HYSTERESIS_HZ:g} Hz in one "
+                           "DOF, and a position record", _hysteresis),
 }
 #: Tests no schedule move serves (they need the twin's own signals: ``twin agard TEST``).
 NOT_FROM_SCHEDULES = {
-    "threshold": "acceleration steps (§3.3.4) are the twin's own signal",
-    "omct": "the OMCT's twelve sines are the twin's own signal",
+    "threshold": "needs the acceleration steps of §3.3.4 (twin agard threshold)",
+    "omct": "needs the OMCT's twelve sines (twin agard omct)",
 }
 
 
 @dataclass(frozen=True)
-class ScheduledReport:
-    """The tests a scheduled run holds, their results, and the tests it lacks.
+class RunReport:
+    """The tests a run holds, their results, and the tests it lacks.
 
     Attributes
     ----------
     source : str
         What was measured.
-    schedule : Schedule
-        The run's schedule.
+    schedule : Schedule or None
+        The run's schedule (None: a run of one designed test signal).
     results : dict of str to dict of str to object
         Test -> DOF (or ``"all"``) -> result (with ``to_dict``, ``format_table``, ``plot``).
     missing : dict of str to str
@@ -89,19 +161,23 @@ class ScheduledReport:
     """
 
     source: str
-    schedule: Schedule
+    schedule: Schedule | None
     results: dict[str, dict[str, object]]
     missing: dict[str, str]
     skipped: dict[str, list[str]]
 
     def to_dict(self) -> dict[str, object]:
         """Return the report as JSON."""
+        s = self.schedule
         return {
             "source": self.source,
-            "schedule": {"name": self.schedule.name, "source": self.schedule.source,
-                         "format": self.schedule.format, "moves": len(self.schedule.moves)},  # fmt: skip
-            "tests": {t: {d: r.to_dict() for d, r in rs.items()}  # type: ignore[attr-defined]
-                      for t, rs in self.results.items()},  # fmt: skip
+            "schedule": None
+            if s is None
+            else {"name": s.name, "source": s.source, "format": s.format, "moves": len(s.moves)},
+            "tests": {
+                t: {d: r.to_dict() for d, r in rs.items()}  # type: ignore[attr-defined]
+                for t, rs in self.results.items()
+            },
             "missing": self.missing,
             "skipped": self.skipped,
         }
@@ -112,9 +188,15 @@ class ScheduledReport:
 
     def _md(self, figures: dict[tuple[str, str], str]) -> list[str]:
         s = self.schedule
-        md = [f"# AGARD-AR-144 report: {self.source}", "",
-              f"Schedule `{s.name}` ({s.format}, {len(s.moves)} moves, {s.duration_s:.0f} s) "
-              f"from {s.source}.", ""]  # fmt: skip
+        md = [
+            f"# AGARD-AR-144 report: {self.source}",
+            "",
+            "One designed test signal (meta.json's signal)."
+            if s is None
+            else f"Schedule `{s.name}` ({s.format}, {len(s.moves)} moves, {s.duration_s:.0f} s) "
+            f"from {s.source}.",
+            "",
+        ]
         for test, rs in self.results.items():
             md += [f"## {test}", ""]
             for dof, r in rs.items():
@@ -134,7 +216,7 @@ class ScheduledReport:
         figures = {}
         for test, rs in self.results.items():
             for dof, r in rs.items():
-                fig = ANALYSES[test].figure(r, m)
+                fig = FIGURES.get(test, _plain_figure)(r, m)
                 path = folder / f"{test}-{dof}.png"
                 try:
                     with writing(path):
@@ -153,7 +235,8 @@ def analyse_schedule(
     schedule: Schedule,
     tests: Sequence[str] | None = None,
     offset_s: float | None = None,
-) -> ScheduledReport:
+    positions: PositionRecord | None = None,
+) -> RunReport:
     """Run every test the scheduled run holds; say which it does not.
 
     Parameters
@@ -166,6 +249,9 @@ def analyse_schedule(
         Only these (default: all of :data:`ANALYSES`).
     offset_s : float, optional
         Time of the schedule's t = 0 on the run's clock (default: the commands' first sample).
+    positions : PositionRecord, optional
+        The run's poses (a simulation's, or from a recorded run's leg lengths): the
+        hysteresis test needs them.
 
     """
     offset = m.commands.t0 if offset_s is None else offset_s
@@ -180,9 +266,52 @@ def analyse_schedule(
             skipped[test] = left_out
         if not segs:
             missing[test] = f"needs {a.needs}; the schedule has none" + (
-                " that the run covers" if schedule.tests().get(a.moves) else "")  # fmt: skip
+                " that the run covers" if schedule.tests().get(a.moves) else ""
+            )
             continue
         groups = by_dof(segs) if a.per_dof else {"all": segs}
-        results[test] = {dof: a.analyse(m, group) for dof, group in groups.items()}
+        found, why = {}, []
+        for dof, group in groups.items():
+            try:
+                found[dof] = a.analyse(m, group, positions)
+            except NotInRun as e:
+                why.append(f"{dof}: {e}" if a.per_dof else str(e))
+        if found:
+            results[test] = found
+            skipped.setdefault(test, []).extend(why)
+        elif why:
+            missing[test] = "; ".join(why)
     missing.update({t: why for t, why in NOT_FROM_SCHEDULES.items() if tests is None})
-    return ScheduledReport(m.source, schedule, results, missing, skipped)
+    skipped = {t: why for t, why in skipped.items() if why}
+    return RunReport(m.source, schedule, results, missing, skipped)
+
+
+def analyse_designed(m: Measurement) -> RunReport:
+    """Report a run made for one test: its ``meta.json`` names the signal design.
+
+    A periodic design (``twin agard df`` and ``parasitic`` runs, a multisine of ``twin
+    simulate``) gives the describing function and the parasitic motion of its DOF; a step
+    design (``twin agard threshold``) the dynamic threshold. Every other test is missing.
+
+    Raises
+    ------
+    SignalError
+        A run whose design cannot be found (see :func:`twin.agard.df.periodic_design`).
+
+    """
+    kind = m.meta.get("signal", {}).get("kind", "periodic")
+    k = driven_dof(m)
+    if kind == "steps":
+        results = {"threshold": {DOF_NAMES[k]: threshold.analyse_threshold(m)}}
+    else:
+        results = {
+            "df": {DOF_NAMES[k]: df.analyse_df(m)},
+            "parasitic": {"all": parasitic.analyse_parasitic(m)},
+        }
+    missing = {
+        t: f"needs {a.needs}; this run is one {kind} test signal"
+        for t, a in ANALYSES.items()
+        if t not in results
+    }
+    missing.update({t: why for t, why in NOT_FROM_SCHEDULES.items() if t not in results})
+    return RunReport(m.source, None, results, missing, {})

@@ -97,8 +97,7 @@ def segments(
         if move.kind == "sines":
             window = sine_window(move, offset_s)
             if window is None:
-                skipped.append(f"move {move.number}: shorter than a whole period between its "
-                               "fades")  # fmt: skip
+                skipped.append(f"move {move.number}: shorter than a whole period between its fades")
                 continue
             out.append(Segment(move, window, move.frequencies_hz, float(move.amplitudes.max())))
         else:

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from twin.chain.simulate import Simulation
 from twin.errors import SignalLimitError
 from twin.lifecycle import CloseOrAbort
 from twin.measurement.measure import Bench, Measurement
@@ -52,6 +53,8 @@ class Session(CloseOrAbort):
         self._job: tuple[str, int, int] | None = None  # what, first run, runs
         self._offset = 0.0
         self.recorder = None
+        #: The last run's simulation (poses, leg lengths and forces beside the measurement).
+        self.simulation: Simulation | None = None
         if rrd is not None:
             from twin.platform.geometry import load_geometry
             from twin.record import Recorder
@@ -98,7 +101,11 @@ class Session(CloseOrAbort):
         self.count += 1
         if self.progress:
             self.progress(f"run {k + 1}: {name} on {self.bench.name}")
-        run = self.bench.prepare(commands, k, name)
+        try:
+            run = self.bench.prepare(commands, k, name)
+        except SignalLimitError:
+            self._counted()  # a refused run still counts in the job
+            raise
         meta = run_meta(run, f"AGARD-AR-144 test run {name}, simulated by twin", **design)  # type: ignore[arg-type]
         folder = None if self.out is None else self.out / "runs" / f"{k:02d}-{name}"
         try:
@@ -109,6 +116,7 @@ class Session(CloseOrAbort):
             self.abort()
             raise
         self._offset += commands.duration + 1.0
+        self.simulation = sim
         self._counted()
         return self.bench.measure(sim, {key: meta[key] for key in design})
 
@@ -120,7 +128,6 @@ class Session(CloseOrAbort):
         try:
             return self.measure(sig, name)
         except SignalLimitError as e:
-            self._counted()  # a skipped run still counts in the job
             return str(e)
 
     def close(self) -> None:

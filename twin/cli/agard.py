@@ -17,14 +17,17 @@ from twin.frames import DOF_NAMES, dof_index
 from twin.lifecycle import check_output_dir, replacing_dir, replacing_file
 from twin.signals import MAX_STEP
 
-TESTS = ("df", "noise", "snr", "threshold", "omct")
+TESTS = ("df", "noise", "snr", "threshold", "omct", "parasitic")
 HELP = {
     "df": "describing function (§3.3.3, Table 5.2 multi-sines): gain, phase, fitted delay",
     "noise": "half-Hertz noise level (§3.3.1): harmonic and stochastic noise ratios (Fig 3.5)",
     "snr": "signal-to-noise grid (§3.3.2): noise-ratio contours vs system limits (Fig 3.6)",
     "threshold": "dynamic threshold (§3.3.4): Eq 3.7 fitted to acceleration steps",
     "omct": "Objective Motion Cueing Test (§5.3.2): DF at the twelve OMCT frequencies",
+    "parasitic": "parasitic motion (§3.3.1): each driven DOF's motion in the five others, 6x6",
 }
+#: Tests a schedule's moves can serve (``--schedule``); the others need the twin's signals.
+SCHEDULED = ("df", "parasitic")
 
 
 #: ``agard threshold --amplitude``: up to the largest step the signals build.
@@ -76,8 +79,11 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
         p.add_argument(
             "--dof",
             choices=DOF_NAMES,
-            help="driven DOF (needed for a configuration; a run says its own)",
+            help="driven DOF (needed for a configuration; a run says its own)"
+            + ("; default all six" if name == "parasitic" else ""),
         )
+        if name in SCHEDULED:
+            _schedule_option(p)
         if name == "threshold":
             p.add_argument(
                 "--amplitude",
@@ -126,15 +132,20 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
         "write report.json, summary.md and figures into a folder. Each DOF's suite is a task "
         "(--scheduler); with --rrd (one recording) the DOFs run one after another here.",
     )
-    rep.add_argument("target", metavar="CONFIG", help=config_help())
+    rep.add_argument(
+        "target",
+        metavar="CONFIG_OR_RUN",
+        help=f"{config_help()}; or a twin-run/1 folder: the tests it holds are reported, and "
+        "the ones it lacks named",
+    )
     rep.add_argument(
         "--dof",
         nargs="+",
         choices=DOF_NAMES,
-        default=["pitch", "heave"],
-        help="DOFs (default pitch heave)",
+        help="DOFs of the twin's own suite (default pitch heave; a schedule names its own)",
     )
-    rep.set_defaults(func=_cmd_report)
+    _schedule_option(rep)
+    rep.set_defaults(func=_cmd_report, model=None, seed=None)
     demo = tests.add_parser(
         "demo",
         parents=[common.out_parent("folder for figures and .rrd (default out/demo)"),
@@ -142,6 +153,17 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
         help="the make-demo sweep: Table 5.2 DFs of MPI and SRS twins",
     )  # fmt: skip
     demo.set_defaults(func=_cmd_demo)
+
+
+def _schedule_option(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--schedule",
+        metavar="FILE",
+        help="a lab's test schedule (.json MovementSeries, .toml twin-schedule/1): on a "
+        "configuration it is simulated as one run; with a recorded run it says what the run "
+        "did (its t = 0 the commands' first sample; a run the twin simulated from a schedule "
+        "carries it). Writes a report folder of the tests the schedule holds.",
+    )
 
 
 def _bench(args: argparse.Namespace, target: str):
@@ -155,11 +177,11 @@ def _bench(args: argparse.Namespace, target: str):
 
 def _simulate(args: argparse.Namespace, out: Path | None):
     """Run a test on a configuration (runs into ``out``); return (result, config)."""
-    from twin.agard import df, noise_level, omct, snr, threshold
+    from twin.agard import df, noise_level, omct, parasitic, snr, threshold
     from twin.agard.session import Session
     from twin.errors import SignalError
 
-    if args.dof is None:
+    if args.dof is None and args.test != "parasitic":
         raise SignalError(f"give --dof for a configuration ({', '.join(DOF_NAMES)})")
     bench = _bench(args, args.target)
     with Session(bench, out, args.rrd, common.progress(args)) as s:
@@ -175,6 +197,9 @@ def _simulate(args: argparse.Namespace, out: Path | None):
                 s, args.dof, _given(args.amplitude, 0.1), _given(args.step_s, 1.0), fix,
                 _given(args.repeats, 1),
             ), bench.config  # fmt: skip
+        if args.test == "parasitic":
+            dofs = DOF_NAMES if args.dof is None else (args.dof,)
+            return parasitic.run_parasitic(s, dofs), bench.config
         return omct.run_omct(s, args.dof, _given(args.fraction, 0.1)), bench.config
 
 
@@ -182,6 +207,19 @@ def _simulate(args: argparse.Namespace, out: Path | None):
 #: model, seed, IMU and signals, and nothing is simulated to record.
 SIMULATION_OPTIONS = ("model", "break_hz", "delay_ms", "no_noise", "resonance", "ideal_imu",
                       "seed", "rrd", "amplitude", "step_s", "repeats", "fraction")  # fmt: skip
+
+
+def _refuse_simulation_options(args: argparse.Namespace) -> None:
+    """Refuse options that only a simulated test takes, for a recorded run."""
+    values = {o: getattr(args, o, None) for o in SIMULATION_OPTIONS}
+    given = [o for o, v in values.items() if v is not None and v is not False]  # 0 is given
+    if given:
+        from twin.errors import UsageError
+
+        names = ", ".join("--" + o.replace("_", "-") for o in given)
+        raise UsageError(f"{names}: only for a test simulated on a configuration; the recorded "
+                         f"run {args.target} has its own configuration, model, seed and "
+                         "signals (leave them out)")  # fmt: skip
 
 
 def _given(value, default):
@@ -192,19 +230,13 @@ def _analyse(args: argparse.Namespace):
     """Run a test's analysis on a recorded run folder; return (result, config)."""
     import numpy as np
 
-    from twin.agard import df, noise_level, omct, snr, threshold
+    from twin.agard import df, noise_level, omct, parasitic, snr, threshold
     from twin.measurement.measure import from_run
 
-    values = {o: getattr(args, o, None) for o in SIMULATION_OPTIONS}
-    given = [o for o, v in values.items() if v is not None and v is not False]  # 0 is given
-    if given:
-        from twin.errors import UsageError
-
-        names = ", ".join("--" + o.replace("_", "-") for o in given)
-        raise UsageError(f"{names}: only for a test simulated on a configuration; the recorded "
-                         f"run {args.target} has its own configuration, model, seed and "
-                         "signals (leave them out)")  # fmt: skip
+    _refuse_simulation_options(args)
     m = from_run(args.target)
+    if args.test == "parasitic":
+        return parasitic.analyse_parasitic(m, args.dof), m.config
     if args.test == "df":
         return df.analyse_df(m, args.dof), m.config
     if args.test == "noise":
@@ -227,6 +259,8 @@ def _cmd_test(args: argparse.Namespace) -> int:
     from twin.measurement.measure import check_target, is_run_folder
 
     check_target(args.target)
+    if getattr(args, "schedule", None) is not None:
+        return _scheduled(args, (args.test,))
     bounds = None
     if args.test == "omct":  # checked before anything runs
         from twin.agard.omct import EXAMPLE_BOUNDS, read_bounds
@@ -270,28 +304,68 @@ def _save(out: Path, test: str, result, payload: dict, config, bounds) -> None:
 
 def _cmd_report(args: argparse.Namespace) -> int:
     from twin.agard.report import write_report
-    from twin.errors import SignalError
     from twin.measurement.measure import check_target, is_run_folder
 
     check_target(args.target)
-    if is_run_folder(args.target):
-        raise SignalError(
-            "report runs the whole suite on a configuration; for a recorded run "
-            "use the single tests (twin agard df RUN_DIR, ...)"
-        )
+    if args.schedule is not None or is_run_folder(args.target):
+        return _scheduled(args, None)
     bench = _bench(args, args.target)
     out = Path(args.out or f"out/agard-{bench.config.name}-{bench.model}")
-    from twin.lifecycle import check_output_dir
-
     check_output_dir(out, "report.json")
     with common.engine(args) as engine:
-        report = write_report(bench, args.dof, out, args.rrd, common.progress(args),
-                              scheduler=engine)  # fmt: skip
+        report = write_report(bench, args.dof or ["pitch", "heave"], out, args.rrd,
+                              common.progress(args), scheduler=engine)  # fmt: skip
     print(
         json.dumps(report, indent=2)
         if args.json
         else (out / "summary.md").read_text(encoding="utf-8")
     )
+    return 0
+
+
+def _scheduled(args: argparse.Namespace, tests: tuple[str, ...] | None) -> int:
+    """Report the tests a recorded run or a simulated schedule holds (``tests``: only these)."""
+    from twin.agard.hysteresis import PositionRecord
+    from twin.agard.scheduled import analyse_designed, analyse_schedule
+    from twin.agard.session import Session
+    from twin.errors import DataError, UsageError
+    from twin.measurement.measure import from_run, is_run_folder
+    from twin.schedule import Schedule, read_schedule
+
+    if args.dof is not None and args.schedule is not None:
+        raise UsageError("--dof: a schedule names the DOFs it drives (leave --dof out)")
+    schedule = read_schedule(args.schedule) if args.schedule is not None else None
+    run = is_run_folder(args.target)
+    if run:
+        _refuse_simulation_options(args)
+        name = Path(args.target).resolve().name
+    else:
+        bench = _bench(args, args.target)
+        name = f"{bench.config.name}-{bench.model}-{schedule.name}"  # type: ignore[union-attr]
+    out = Path(args.out or f"out/agard-{name}")
+    check_output_dir(out, "report.json")
+    with replacing_dir(out, "report.json") as tmp:
+        if run:
+            m = from_run(args.target)
+            if schedule is None and "schedule" in m.meta:
+                schedule = Schedule.from_json(m.meta["schedule"])
+            positions = None
+            with contextlib.suppress(DataError):  # no actuators.csv: no position record
+                positions = PositionRecord.from_run(args.target)
+        else:
+            with Session(bench, tmp, args.rrd, common.progress(args)) as s:
+                m = s.measure_schedule(schedule)  # type: ignore[arg-type]
+                positions = PositionRecord.from_simulation(s.simulation)  # type: ignore[arg-type]
+        if schedule is None:
+            report = analyse_designed(m)
+        else:
+            report = analyse_schedule(m, schedule, tests, positions=positions)
+        report.write(tmp, m)
+    if args.json:
+        print(json.dumps(report.to_dict(), indent=2))
+    else:
+        print(report.format_table())
+        print(f"wrote {out}/report.json, {out}/summary.md and the figures")
     return 0
 
 

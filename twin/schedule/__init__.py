@@ -14,7 +14,7 @@ from twin.schedule.movement_series import read_movement_series
 from twin.schedule.moves import Move, Schedule
 from twin.schedule.toml_schedule import read_toml_schedule
 
-__all__ = ["Move", "Schedule", "read_schedule", "SUFFIXES"]
+__all__ = ["SUFFIXES", "Move", "Schedule", "read_schedule"]
 
 #: File suffixes of schedules and their readers.
 SUFFIXES = {".json": read_movement_series, ".toml": read_toml_schedule}
@@ -31,6 +31,7 @@ def read_schedule(path: str | Path) -> Schedule:
     """
     reader = SUFFIXES.get(Path(path).suffix.lower())
     if reader is None:
-        raise ScheduleError(f"{path}: a schedule is a .json MovementSeries or a .toml "
-                            "twin-schedule/1 file")  # fmt: skip
+        raise ScheduleError(
+            f"{path}: a schedule is a .json MovementSeries or a .toml twin-schedule/1 file"
+        )
     return reader(path)

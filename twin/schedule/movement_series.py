@@ -94,8 +94,10 @@ def read_movement_series(path: str | Path) -> Schedule:
 def movement_series(doc: object, source: str, name: str) -> Schedule:
     """Return the schedule of a parsed ``MovementSeries`` document (see the module)."""
     if not looks_like(doc):
-        raise ScheduleError(f'{source}: not a MovementSeries (a JSON object with "type": '
-                            f'"{FORMAT}" and a list of "moves")')  # fmt: skip
+        raise ScheduleError(
+            f'{source}: not a MovementSeries (a JSON object with "type": '
+            f'"{FORMAT}" and a list of "moves")'
+        )
     entries = doc.get("moves")  # type: ignore[union-attr]
     if not isinstance(entries, list) or not entries:
         raise ScheduleError(f'{source}: "moves" must be a non-empty list of moves')
@@ -116,8 +118,9 @@ def _move(m: object, i: int, start: float, next_start: float | None, source: str
     where = f"{source}: move {i} (t = {start:g} s)"
     if not isinstance(m, dict) or m.get("type") not in MOVE_TYPES:
         kind = m.get("type") if isinstance(m, dict) else m
-        raise ScheduleError(f"{where}: unknown move type {kind!r}; allowed: "
-                            f"{', '.join(MOVE_TYPES)}")  # fmt: skip
+        raise ScheduleError(
+            f"{where}: unknown move type {kind!r}; allowed: {', '.join(MOVE_TYPES)}"
+        )
     if m["type"] == "Still":
         check_keys(m, POSE_KEYS, where, ScheduleError)
         pose = _pose(m, where)
@@ -135,8 +138,10 @@ def _move(m: object, i: int, start: float, next_start: float | None, source: str
     prof = m["profile"]
     ptype = prof.get("type") if isinstance(prof, dict) else None
     if ptype not in MOVE_TYPES[m["type"]]:
-        raise ScheduleError(f"{where}: profile {ptype!r} in a {m['type']}; allowed: "
-                            f"{', '.join(MOVE_TYPES[m['type']])}")  # fmt: skip
+        raise ScheduleError(
+            f"{where}: profile {ptype!r} in a {m['type']}; allowed: "
+            f"{', '.join(MOVE_TYPES[m['type']])}"
+        )
     kind, keys = PROFILES[ptype]
     check_keys(prof, ("type", *keys), f"{where} profile", ScheduleError)
     missing = [k for k in keys if k not in prof]
@@ -145,15 +150,18 @@ def _move(m: object, i: int, start: float, next_start: float | None, source: str
     if "Ttotal" in prof:
         total = number(prof["Ttotal"], f"{where} Ttotal", lo=0, lo_open=True, error=ScheduleError)
         if abs(total - dt) > DURATION_TOL:
-            raise ScheduleError(f"{where}: Ttotal {total:g} s and dt {dt:g} s differ; the "
-                                "move lasts one time")  # fmt: skip
+            raise ScheduleError(
+                f"{where}: Ttotal {total:g} s and dt {dt:g} s differ; the move lasts one time"
+            )
     params = _parameters(ptype, prof, f"{where} {ptype}")
     if m["type"] == "Movement" and "move" in m:
         shift = _pose(m["move"], f"{where} move")
         want = axis * float(params["distance"])  # type: ignore[arg-type]
         if np.abs(shift - want).max() > 1e-6 * max(1.0, np.abs(want).max()):
-            raise ScheduleError(f"{where}: the displacement 'move' {shift.tolist()} is not "
-                                f"axis x dist {want.tolist()}")  # fmt: skip
+            raise ScheduleError(
+                f"{where}: the displacement 'move' {shift.tolist()} is not "
+                f"axis x dist {want.tolist()}"
+            )
     return Move(i, start, dt, kind, origin, axis, params, f"{m['type']} {ptype}")
 
 
@@ -164,22 +172,34 @@ def _parameters(ptype: str, p: Mapping[str, object], where: str) -> dict[str, ob
         return number(p[key], f"{where} {key}", error=ScheduleError, **kw)  # type: ignore[arg-type]
 
     if ptype == "FadedSineProfile":
-        omg, gain, phi = (numbers(p[k], f"{where} {k}", error=ScheduleError).tolist()
-                          for k in ("omg", "gain", "phi0"))  # fmt: skip
+        omg, gain, phi = (
+            numbers(p[k], f"{where} {k}", error=ScheduleError).tolist()
+            for k in ("omg", "gain", "phi0")
+        )
         if not len(omg) == len(gain) == len(phi):
-            raise ScheduleError(f"{where}: omg, gain and phi0 must have one entry per sine; "
-                                f"got {len(omg)}, {len(gain)}, {len(phi)}")  # fmt: skip
+            raise ScheduleError(
+                f"{where}: omg, gain and phi0 must have one entry per sine; "
+                f"got {len(omg)}, {len(gain)}, {len(phi)}"
+            )
         if min(omg) <= 0:
             raise ScheduleError(f"{where}: every omg must be > 0 rad/s; got {omg}")
-        return {"omega_rad_s": omg, "gain": gain, "phase_rad": phi,
-                "t_fade_s": num("Tfade", lo=0)}  # fmt: skip
+        return {"omega_rad_s": omg, "gain": gain, "phase_rad": phi, "t_fade_s": num("Tfade", lo=0)}
     if ptype == "ConstantAccelProfile":
-        return {"acceleration": num("ai"), "v_start": num("v0"), "v_end": num("v1"),
-                "a_start": num("a0"), "a_end": num("a1")}  # fmt: skip
+        return {
+            "acceleration": num("ai"),
+            "v_start": num("v0"),
+            "v_end": num("v1"),
+            "a_start": num("a0"),
+            "a_end": num("a1"),
+        }
     if ptype == "ConstantSpeedProfile":
         return {"speed": num("v0")}
-    return {"distance": num("dist", lo=0), "vmax": num("vmx", lo=0, lo_open=True),
-            "amax": num("amx", lo=0, lo_open=True), "jmax": num("jmx", lo=0, lo_open=True)}  # fmt: skip
+    return {
+        "distance": num("dist", lo=0),
+        "vmax": num("vmx", lo=0, lo_open=True),
+        "amax": num("amx", lo=0, lo_open=True),
+        "jmax": num("jmx", lo=0, lo_open=True),
+    }
 
 
 def _pose(p: object, where: str) -> np.ndarray:
@@ -188,8 +208,9 @@ def _pose(p: object, where: str) -> np.ndarray:
         raise ScheduleError(f"{where}: a pose must be an object with xyz and phithetapsi")
     check_keys(p, POSE_KEYS, where, ScheduleError)
     xyz = numbers(p.get("xyz", [0, 0, 0]), f"{where} xyz", size=3, error=ScheduleError)
-    ang = numbers(p.get("phithetapsi", [0, 0, 0]), f"{where} phithetapsi", size=3,
-                  error=ScheduleError)  # fmt: skip
+    ang = numbers(
+        p.get("phithetapsi", [0, 0, 0]), f"{where} phithetapsi", size=3, error=ScheduleError
+    )
     for key in ("uvw", "pqr"):  # speeds: read (they must be numbers), not used
         if key in p:
             numbers(p[key], f"{where} {key}", size=3, error=ScheduleError)

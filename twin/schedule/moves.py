@@ -89,8 +89,9 @@ class Move:
     def __post_init__(self) -> None:
         """Check the kind and build the profile (a bad parameter names the move)."""
         if self.kind not in KINDS:
-            raise ScheduleError(f"move {self.number}: unknown kind {self.kind!r}; allowed: "
-                                f"{', '.join(KINDS)}")  # fmt: skip
+            raise ScheduleError(
+                f"move {self.number}: unknown kind {self.kind!r}; allowed: {', '.join(KINDS)}"
+            )
         object.__setattr__(self, "origin", np.asarray(self.origin, dtype=float))
         object.__setattr__(self, "axis", np.asarray(self.axis, dtype=float))
         try:
@@ -102,16 +103,22 @@ class Move:
         p, t = self.parameters, self.duration_s
         if self.kind == "constant_acceleration":
             return constant_acceleration(
-                float(p["acceleration"]), float(p["v_start"]), float(p["v_end"]), t,  # type: ignore[arg-type]
-                float(p.get("a_start", 0.0)), float(p.get("a_end", 0.0)),  # type: ignore[arg-type]
-            )  # fmt: skip
+                float(p["acceleration"]),
+                float(p["v_start"]),
+                float(p["v_end"]),
+                t,  # type: ignore[arg-type]
+                float(p.get("a_start", 0.0)),
+                float(p.get("a_end", 0.0)),  # type: ignore[arg-type]
+            )
         if self.kind == "constant_speed":
             return constant_speed(float(p["speed"]), t)  # type: ignore[arg-type]
         if self.kind == "point_to_point":
             prof = point_to_point(*(float(p[k]) for k in KINDS["point_to_point"]))  # type: ignore[arg-type]
             if prof.duration > t + 0.5e-2:
-                raise SignalError(f"the profile takes {prof.duration:.3f} s, longer than the "
-                                  f"move's duration {t:g} s")  # fmt: skip
+                raise SignalError(
+                    f"the profile takes {prof.duration:.3f} s, longer than the "
+                    f"move's duration {t:g} s"
+                )
             return prof
         return None
 
@@ -184,10 +191,15 @@ class Move:
     def from_json(cls, d: Mapping[str, object]) -> Move:
         """Return the move :meth:`to_json` wrote."""
         return cls(
-            int(d["number"]), float(d["start_s"]), float(d["duration_s"]), str(d["kind"]),  # type: ignore[arg-type]
-            np.asarray(d["origin"], dtype=float), np.asarray(d["axis"], dtype=float),
-            dict(d["parameters"]), str(d.get("label", "")),  # type: ignore[arg-type]
-        )  # fmt: skip
+            int(d["number"]),
+            float(d["start_s"]),
+            float(d["duration_s"]),
+            str(d["kind"]),  # type: ignore[arg-type]
+            np.asarray(d["origin"], dtype=float),
+            np.asarray(d["axis"], dtype=float),
+            dict(d["parameters"]),
+            str(d.get("label", "")),  # type: ignore[arg-type]
+        )
 
 
 def _plain(v: object) -> object:
@@ -255,7 +267,7 @@ class Schedule:
     def commands(self, rate_hz: float = 100.0) -> Trajectory:
         """Return the pose commands from t = 0 to the end of the last move at ``rate_hz``."""
         check_duration(self.duration_s, f"schedule {self.name}", ScheduleError)
-        n = int(round(self.duration_s * rate_hz)) + 1
+        n = round(self.duration_s * rate_hz) + 1
         t = np.arange(n) / rate_hz
         poses = np.tile(self.moves[0].origin, (n, 1))
         starts = np.array([m.start_s for m in self.moves])
@@ -296,8 +308,10 @@ def _check_follows(before: Move, move: Move, source: str) -> None:
     """Refuse a move that starts before the last ends, or away from where it left the pose."""
     where = f"{source}: move {move.number} ({move.label or move.kind})"
     if move.start_s < before.end_s - TIME_TOL:
-        raise ScheduleError(f"{where} starts at {move.start_s:g} s, before move {before.number} "
-                            f"ends ({before.end_s:g} s); moves must not overlap")  # fmt: skip
+        raise ScheduleError(
+            f"{where} starts at {move.start_s:g} s, before move {before.number} "
+            f"ends ({before.end_s:g} s); moves must not overlap"
+        )
     pose, rate = before.end()
     jump = np.abs(move.origin - pose)
     if (jump > POSE_TOL).any():
@@ -307,7 +321,7 @@ def _check_follows(before: Move, move: Move, source: str) -> None:
             f"leaves it at {pose[k]:.6g}: a jump of {jump[k]:.3g} cannot be commanded (allowed: "
             f"{POSE_TOL:g} m or rad)"
         )
-    s, v = move.path(np.array([0.0]))
+    _s, v = move.path(np.array([0.0]))
     speed_in = v[0] * move.axis
     gap = move.start_s - before.end_s
     if gap > TIME_TOL:

@@ -91,8 +91,9 @@ def read_toml_schedule(path: str | Path) -> Schedule:
 def toml_schedule(doc: Mapping[str, object], source: str, name: str) -> Schedule:
     """Return the schedule of a parsed ``twin-schedule/1`` document."""
     if doc.get("schedule") != FORMAT:
-        raise ScheduleError(f'{source}: the first line must say schedule = "{FORMAT}"; got '
-                            f"{doc.get('schedule')!r}")  # fmt: skip
+        raise ScheduleError(
+            f'{source}: the first line must say schedule = "{FORMAT}"; got {doc.get("schedule")!r}'
+        )
     check_keys(doc, ("schedule", "name", "move"), source, ScheduleError)
     entries = doc.get("move")
     if not isinstance(entries, list) or not entries:
@@ -124,18 +125,27 @@ def _move(e: object, i: int, origin: np.ndarray, t: float, source: str) -> Move:
 
     start = num("start_s", t, lo=t - 1e-9)
     if kind == "still":
-        return Move(i, start, num("duration_s", lo=0, lo_open=True), kind, origin, np.zeros(6),
-                    {}, "still")  # fmt: skip
+        return Move(
+            i, start, num("duration_s", lo=0, lo_open=True), kind, origin, np.zeros(6), {}, "still"
+        )
     axis = _axis(e, where)
     if kind == "sines":
         f = numbers(e.get("frequencies_hz"), f"{where} frequencies_hz", error=ScheduleError)
         amp = numbers(e.get("amplitudes"), f"{where} amplitudes", size=len(f), error=ScheduleError)
-        ph = numbers(e.get("phases_deg", [0.0] * len(f)), f"{where} phases_deg", size=len(f),
-                     error=ScheduleError)  # fmt: skip
+        ph = numbers(
+            e.get("phases_deg", [0.0] * len(f)),
+            f"{where} phases_deg",
+            size=len(f),
+            error=ScheduleError,
+        )
         if (f <= 0).any():
             raise ScheduleError(f"{where}: frequencies_hz must be > 0; got {f.tolist()}")
-        params = {"omega_rad_s": (2 * np.pi * f).tolist(), "gain": amp.tolist(),
-                  "phase_rad": np.radians(ph).tolist(), "t_fade_s": num("fade_s", lo=0)}  # fmt: skip
+        params = {
+            "omega_rad_s": (2 * np.pi * f).tolist(),
+            "gain": amp.tolist(),
+            "phase_rad": np.radians(ph).tolist(),
+            "t_fade_s": num("fade_s", lo=0),
+        }
         duration = num("duration_s", lo=0, lo_open=True)
     elif kind == "constant_speed":
         params = {"speed": num("speed")}
@@ -143,8 +153,10 @@ def _move(e: object, i: int, origin: np.ndarray, t: float, source: str) -> Move:
     elif kind == "constant_acceleration":
         acc = num("acceleration")
         if acc == 0:
-            raise ScheduleError(f"{where}: acceleration must not be 0 (a constant speed move "
-                                "is kind = \"constant_speed\")")  # fmt: skip
+            raise ScheduleError(
+                f"{where}: acceleration must not be 0 (a constant speed move "
+                'is kind = "constant_speed")'
+            )
         v0, v1, ramp = num("v_start"), num("v_end"), num("ramp_s", RAMP_S, lo=0)
         params = {"acceleration": acc, "v_start": v0, "v_end": v1}
         duration = num("duration_s", (v1 - v0) / acc + ramp, lo=0, lo_open=True)
@@ -153,16 +165,18 @@ def _move(e: object, i: int, origin: np.ndarray, t: float, source: str) -> Move:
         limits = {k: num(k, lo=0, lo_open=True) for k in ("vmax", "amax", "jmax")}
         params = {"distance": abs(d), **limits}
         axis = axis * np.sign(d) if d != 0 else axis
-        duration = num("duration_s", point_to_point(abs(d), *limits.values()).duration, lo=0,
-                       lo_open=True)  # fmt: skip
+        duration = num(
+            "duration_s", point_to_point(abs(d), *limits.values()).duration, lo=0, lo_open=True
+        )
     return Move(i, start, duration, kind, origin, axis, params, kind)
 
 
 def _axis(e: Mapping[str, object], where: str) -> np.ndarray:
     """Return the move's axis: the unit vector of ``dof``, or the ``axis`` it gives."""
     if ("dof" in e) == ("axis" in e):
-        raise ScheduleError(f"{where}: give either dof (one of {', '.join(DOF_NAMES)}) or "
-                            "axis (six numbers)")  # fmt: skip
+        raise ScheduleError(
+            f"{where}: give either dof (one of {', '.join(DOF_NAMES)}) or axis (six numbers)"
+        )
     if "axis" in e:
         axis = numbers(e["axis"], f"{where} axis", size=6, error=ScheduleError)
         if not axis.any():
