@@ -44,6 +44,7 @@ from twin.lifecycle import (
 )
 from twin.ownership import read_manifest
 from twin.platform.facts import PLATFORMS
+from twin.schedule import Schedule
 from twin.trajectory import Trajectory, uniform_rate
 
 FloatArray = NDArray[np.float64]
@@ -278,6 +279,8 @@ def _check_meta(meta: object, path: Path) -> dict:
     numbers(imu.get("position_m"), f"{where}: imu.position_m [x, y, z]", size=3,
             error=RunFormatError)  # fmt: skip
     _check_optional(meta, where)
+    if "schedule" in meta:
+        Schedule.from_json(meta["schedule"], f"{where}: schedule")
     return meta
 
 

@@ -22,6 +22,7 @@ import numpy as np
 from twin.agard import df, hysteresis, linearity, parasitic, threshold
 from twin.agard.hysteresis import PositionRecord
 from twin.agard.segments import Segment, by_dof, largest_per_frequency, segments
+from twin.errors import SignalError
 from twin.frames import DOF_NAMES
 from twin.lifecycle import writing
 from twin.measurement.measure import Measurement, driven_dof
@@ -128,11 +129,15 @@ class NotInRun(Exception):
 #: The tests a schedule can hold, in report order.
 ANALYSES: dict[str, Analysis] = {
     "df": Analysis("df", "sine moves in one DOF", _df),
-    "linearity": Analysis("df", "single sines of one DOF at one frequency in two amplitudes "
-                          "or more", _linearity),
+    "linearity": Analysis(
+        "df", "single sines of one DOF at one frequency in two amplitudes or more", _linearity
+    ),
     "parasitic": Analysis("df", "sine moves in one DOF at a time", _parasitic, per_dof=False),
-    "hysteresis": Analysis("hysteresis", f"a single sine below {HYSTERESIS_HZ:g} Hz in one "
-                           "DOF, and a position record", _hysteresis),
+    "hysteresis": Analysis(
+        "hysteresis",
+        f"a single sine below {HYSTERESIS_HZ:g} Hz in one DOF, and a position record",
+        _hysteresis,
+    ),
 }
 #: Tests no schedule move serves (they need the twin's own signals: ``twin agard TEST``).
 NOT_FROM_SCHEDULES = {
@@ -301,17 +306,16 @@ def analyse_designed(m: Measurement) -> RunReport:
     """
     kind = m.meta.get("signal", {}).get("kind", "periodic")
     k = driven_dof(m)
+    missing: dict[str, str] = {}
     if kind == "steps":
         results = {"threshold": {DOF_NAMES[k]: threshold.analyse_threshold(m)}}
     else:
-        results = {
-            "df": {DOF_NAMES[k]: df.analyse_df(m)},
-            "parasitic": {"all": parasitic.analyse_parasitic(m)},
-        }
-    missing = {
-        t: f"needs {a.needs}; this run is one {kind} test signal"
-        for t, a in ANALYSES.items()
-        if t not in results
-    }
+        results = {"df": {DOF_NAMES[k]: df.analyse_df(m)}}
+        try:
+            results["parasitic"] = {"all": parasitic.analyse_parasitic(m)}
+        except SignalError as e:
+            missing["parasitic"] = str(e)
+    missing.update({t: f"needs {a.needs}; this run is one {kind} test signal"
+                    for t, a in ANALYSES.items() if t not in results and t not in missing})  # fmt: skip
     missing.update({t: why for t, why in NOT_FROM_SCHEDULES.items() if t not in results})
     return RunReport(m.source, None, results, missing, {})

@@ -17,7 +17,7 @@ from twin.frames import DOF_NAMES, dof_index
 from twin.lifecycle import check_output_dir, replacing_dir, replacing_file
 from twin.signals import MAX_STEP
 
-TESTS = ("df", "noise", "snr", "threshold", "omct", "parasitic")
+TESTS = ("df", "noise", "snr", "threshold", "omct", "parasitic", "linearity", "hysteresis")
 HELP = {
     "df": "describing function (§3.3.3, Table 5.2 multi-sines): gain, phase, fitted delay",
     "noise": "half-Hertz noise level (§3.3.1): harmonic and stochastic noise ratios (Fig 3.5)",
@@ -25,9 +25,15 @@ HELP = {
     "threshold": "dynamic threshold (§3.3.4): Eq 3.7 fitted to acceleration steps",
     "omct": "Objective Motion Cueing Test (§5.3.2): DF at the twelve OMCT frequencies",
     "parasitic": "parasitic motion (§3.3.1): each driven DOF's motion in the five others, 6x6",
+    "linearity": "linearity: the describing function at amplitudes a decade apart, with "
+    "confidence intervals",
+    "hysteresis": "hysteresis: output against input position of a very-low-frequency sine; "
+    "the loop's width",
 }
 #: Tests a schedule's moves can serve (``--schedule``); the others need the twin's signals.
-SCHEDULED = ("df", "parasitic")
+SCHEDULED = ("df", "parasitic", "linearity", "hysteresis")
+#: Tests a recorded run serves only through its schedule (they take several sines).
+SCHEDULE_ONLY = ("linearity", "hysteresis")
 
 
 #: ``agard threshold --amplitude``: up to the largest step the signals build.
@@ -166,6 +172,18 @@ def _schedule_option(p: argparse.ArgumentParser) -> None:
     )
 
 
+def _has_schedule(target: str) -> bool:
+    """Return whether ``target`` is a run folder made from a schedule (meta.json says)."""
+    from twin.checks import read_json
+    from twin.errors import RunFormatError
+    from twin.measurement.measure import is_run_folder
+
+    if not is_run_folder(target):
+        return False
+    meta = read_json(Path(target) / "meta.json", "a twin-run/1 meta.json", RunFormatError)
+    return isinstance(meta, dict) and "schedule" in meta
+
+
 def _bench(args: argparse.Namespace, target: str):
     from twin.measurement.measure import Bench
 
@@ -177,7 +195,7 @@ def _bench(args: argparse.Namespace, target: str):
 
 def _simulate(args: argparse.Namespace, out: Path | None):
     """Run a test on a configuration (runs into ``out``); return (result, config)."""
-    from twin.agard import df, noise_level, omct, parasitic, snr, threshold
+    from twin.agard import df, hysteresis, linearity, noise_level, omct, parasitic, snr, threshold
     from twin.agard.session import Session
     from twin.errors import SignalError
 
@@ -200,6 +218,10 @@ def _simulate(args: argparse.Namespace, out: Path | None):
         if args.test == "parasitic":
             dofs = DOF_NAMES if args.dof is None else (args.dof,)
             return parasitic.run_parasitic(s, dofs), bench.config
+        if args.test == "linearity":
+            return linearity.run_linearity(s, args.dof), bench.config
+        if args.test == "hysteresis":
+            return hysteresis.run_hysteresis(s, args.dof), bench.config
         return omct.run_omct(s, args.dof, _given(args.fraction, 0.1)), bench.config
 
 
@@ -234,6 +256,11 @@ def _analyse(args: argparse.Namespace):
     from twin.measurement.measure import from_run
 
     _refuse_simulation_options(args)
+    if args.test in SCHEDULE_ONLY:
+        from twin.errors import UsageError
+
+        raise UsageError(f"{args.target}: a {args.test} test takes several sines; give the "
+                         "schedule the run was made with (--schedule FILE)")  # fmt: skip
     m = from_run(args.target)
     if args.test == "parasitic":
         return parasitic.analyse_parasitic(m, args.dof), m.config
@@ -259,7 +286,7 @@ def _cmd_test(args: argparse.Namespace) -> int:
     from twin.measurement.measure import check_target, is_run_folder
 
     check_target(args.target)
-    if getattr(args, "schedule", None) is not None:
+    if args.test in SCHEDULED and (args.schedule is not None or _has_schedule(args.target)):
         return _scheduled(args, (args.test,))
     bounds = None
     if args.test == "omct":  # checked before anything runs

@@ -298,10 +298,22 @@ class Schedule:
         }
 
     @classmethod
-    def from_json(cls, d: Mapping[str, object]) -> Schedule:
-        """Return the schedule :meth:`to_json` wrote."""
-        moves = tuple(Move.from_json(m) for m in d["moves"])  # type: ignore[attr-defined]
-        return cls(str(d["name"]), str(d["source"]), moves, str(d.get("format", "")))
+    def from_json(cls, d: object, where: str = "schedule") -> Schedule:
+        """Return the schedule :meth:`to_json` wrote (``where`` names it in errors).
+
+        Raises
+        ------
+        ScheduleError
+            For anything :meth:`to_json` does not write, or moves that do not follow.
+
+        """
+        try:
+            moves = tuple(Move.from_json(m) for m in d["moves"])  # type: ignore[index]
+            return cls(str(d["name"]), str(d["source"]), moves, str(d.get("format", "")))  # type: ignore[index,union-attr]
+        except (KeyError, TypeError, ValueError, AttributeError, IndexError) as e:
+            if isinstance(e, ScheduleError):
+                raise
+            raise ScheduleError(f"{where}: not a schedule as the twin writes it ({e!r:.80})") from e
 
 
 def _check_follows(before: Move, move: Move, source: str) -> None:
