@@ -55,8 +55,22 @@ def scheduled_run(tmp_path_factory):
     path = root / "heave.toml"
     path.write_text(SCHEDULE, encoding="utf-8")
     run = root / "run"
-    assert main(["simulate", "mpi", "--model", "reduced", "--signal", str(path), "--out",
-                 str(run), "--quiet"]) == 0  # fmt: skip
+    assert (
+        main(
+            [
+                "simulate",
+                "mpi",
+                "--model",
+                "reduced",
+                "--signal",
+                str(path),
+                "--out",
+                str(run),
+                "--quiet",
+            ]
+        )
+        == 0
+    )
     return path, run
 
 
@@ -68,8 +82,9 @@ def test_simulate_writes_the_schedule_into_meta(scheduled_run):
     assert [m["test"] for m in moves] == ["noise", "df", "df", "hysteresis"]
 
 
-def test_report_of_a_scheduled_run_holds_its_tests_and_names_the_rest(scheduled_run, tmp_path,
-                                                                      capsys):  # fmt: skip
+def test_report_of_a_scheduled_run_holds_its_tests_and_names_the_rest(
+    scheduled_run, tmp_path, capsys
+):
     _, run = scheduled_run
     out = tmp_path / "rep"
     assert main(["agard", "report", str(run), "--out", str(out), "--json"]) == 0
@@ -99,8 +114,23 @@ def test_single_test_on_a_scheduled_run_reports_only_that_test(scheduled_run, tm
 
 
 def test_report_of_a_one_test_run_names_the_tests_it_lacks(tmp_path, capsys):
-    assert main(["agard", "df", "mpi", "--dof", "pitch", "--model", "reduced", "--out",
-                 str(tmp_path / "df"), "--quiet"]) == 0  # fmt: skip
+    assert (
+        main(
+            [
+                "agard",
+                "df",
+                "mpi",
+                "--dof",
+                "pitch",
+                "--model",
+                "reduced",
+                "--out",
+                str(tmp_path / "df"),
+                "--quiet",
+            ]
+        )
+        == 0
+    )
     run = sorted((tmp_path / "df" / "runs").iterdir())[0]
     capsys.readouterr()
     assert main(["agard", "report", str(run), "--out", str(tmp_path / "rep"), "--json"]) == 0
@@ -112,8 +142,22 @@ def test_report_of_a_one_test_run_names_the_tests_it_lacks(tmp_path, capsys):
 
 
 def test_linearity_of_a_run_without_schedule_is_refused(tmp_path, capsys):
-    assert main(["simulate", "mpi", "--model", "reduced", "--signal", "multisine1-heave",
-                 "--out", str(tmp_path / "run"), "--quiet"]) == 0  # fmt: skip
+    assert (
+        main(
+            [
+                "simulate",
+                "mpi",
+                "--model",
+                "reduced",
+                "--signal",
+                "multisine1-heave",
+                "--out",
+                str(tmp_path / "run"),
+                "--quiet",
+            ]
+        )
+        == 0
+    )
     assert main(["agard", "linearity", str(tmp_path / "run")]) == 2
     err = capsys.readouterr().err
     assert "takes several sines; give the schedule" in err and err.count("\n") == 1
@@ -121,14 +165,17 @@ def test_linearity_of_a_run_without_schedule_is_refused(tmp_path, capsys):
 
 def test_a_malformed_schedule_stops_the_command_in_one_line(tmp_path, capsys):
     bad = tmp_path / "bad.toml"
-    bad.write_text('schedule = "twin-schedule/1"\n[[move]]\nkind = "sines"\ndof = "heave"\n'
-                   "frequencies_hz = [0.5]\namplitudes = [0.1]\nduration_s = 5\n")  # fmt: skip
+    bad.write_text(
+        'schedule = "twin-schedule/1"\n[[move]]\nkind = "sines"\ndof = "heave"\n'
+        "frequencies_hz = [0.5]\namplitudes = [0.1]\nduration_s = 5\n"
+    )
     assert main(["simulate", "mpi", "--signal", str(bad), "--out", str(tmp_path / "o")]) == 2
     err = capsys.readouterr().err
     assert "move 1: a sines move needs fade_s" in err and err.count("\n") == 1
     assert not (tmp_path / "o").exists()
-    assert main(["agard", "report", "mpi", "--schedule", str(bad), "--out",
-                 str(tmp_path / "r")]) == 2  # fmt: skip
+    assert (
+        main(["agard", "report", "mpi", "--schedule", str(bad), "--out", str(tmp_path / "r")]) == 2
+    )
     assert not (tmp_path / "r").exists()
 
 

@@ -18,13 +18,27 @@ from twin.schedule import Schedule, read_schedule
 
 
 def _pose(xyz=(0.0, 0.0, 0.0), ang=(0.0, 0.0, 0.0)) -> dict:
-    return {"type": "Pose", "uvw": [0.0] * 3, "pqr": [0.0] * 3, "xyz": list(xyz),
-            "phithetapsi": list(ang)}  # fmt: skip
+    return {
+        "type": "Pose",
+        "uvw": [0.0] * 3,
+        "pqr": [0.0] * 3,
+        "xyz": list(xyz),
+        "phithetapsi": list(ang),
+    }
 
 
 def _profile_motion(t, axis, profile, dt, frm=None, move=None) -> dict:
-    return {"time": t, "move": {"type": "ProfileMotion", "from": frm or _pose(),
-            "move": move or _pose((0.0, 0.0, 1.0)), "axis": axis, "profile": profile, "dt": dt}}  # fmt: skip
+    return {
+        "time": t,
+        "move": {
+            "type": "ProfileMotion",
+            "from": frm or _pose(),
+            "move": move or _pose((0.0, 0.0, 1.0)),
+            "axis": axis,
+            "profile": profile,
+            "dt": dt,
+        },
+    }
 
 
 def _series(*moves) -> dict:
@@ -40,8 +54,14 @@ def _write(tmp_path, doc, name="s.json"):
 # A faded sine in pitch (axis scale 0.7 rad per unit), then a heave bump series: constant
 # acceleration through a reversal, constant speed, and a jerk-limited return to neutral.
 W, GAIN = 2 * math.pi * 0.5, 0.1
-SINE = {"type": "FadedSineProfile", "Tfade": 2.0, "Ttotal": 10.0, "omg": [W], "gain": [GAIN],
-        "phi0": [0.0]}  # fmt: skip
+SINE = {
+    "type": "FadedSineProfile",
+    "Tfade": 2.0,
+    "Ttotal": 10.0,
+    "omg": [W],
+    "gain": [GAIN],
+    "phi0": [0.0],
+}
 
 
 def _bump_series() -> dict:
@@ -49,21 +69,46 @@ def _bump_series() -> dict:
     # -0.1 m/s^2; 3) -0.1 m/s for 1 s; 4) -0.1 -> 0 at 0.1 m/s^2; 5) back to 0 by a Profile.
     still = {"time": 0.0, "move": {"type": "Still", "xyz": [0, 0, 0], "phithetapsi": [0, 0, 0]}}
     acc = "ConstantAccelProfile"
-    m1 = _profile_motion(1.0, [0, 0, 1, 0, 0, 0], {"type": acc, "a0": 0, "a1": 0, "ai": 0.1,
-                         "v0": 0.0, "v1": 0.1, "Ttotal": 1.01}, 1.01)  # fmt: skip
-    m2 = _profile_motion(2.01, [0, 0, 1, 0, 0, 0], {"type": acc, "a0": 0, "a1": 0, "ai": -0.1,
-                         "v0": 0.1, "v1": -0.1, "Ttotal": 2.01}, 2.01,
-                         frm=_pose((0, 0, 0.0505)))  # fmt: skip
-    m3 = _profile_motion(4.02, [0, 0, 1, 0, 0, 0], {"type": "ConstantSpeedProfile", "v0": -0.1,
-                         "Ttotal": 1.0}, 1.0, frm=_pose((0, 0, 0.0505)))  # fmt: skip
-    m4 = _profile_motion(5.02, [0, 0, 1, 0, 0, 0], {"type": acc, "a0": 0, "a1": 0, "ai": 0.1,
-                         "v0": -0.1, "v1": 0.0, "Ttotal": 1.01}, 1.01,
-                         frm=_pose((0, 0, -0.0495)))  # fmt: skip
+    m1 = _profile_motion(
+        1.0,
+        [0, 0, 1, 0, 0, 0],
+        {"type": acc, "a0": 0, "a1": 0, "ai": 0.1, "v0": 0.0, "v1": 0.1, "Ttotal": 1.01},
+        1.01,
+    )
+    m2 = _profile_motion(
+        2.01,
+        [0, 0, 1, 0, 0, 0],
+        {"type": acc, "a0": 0, "a1": 0, "ai": -0.1, "v0": 0.1, "v1": -0.1, "Ttotal": 2.01},
+        2.01,
+        frm=_pose((0, 0, 0.0505)),
+    )
+    m3 = _profile_motion(
+        4.02,
+        [0, 0, 1, 0, 0, 0],
+        {"type": "ConstantSpeedProfile", "v0": -0.1, "Ttotal": 1.0},
+        1.0,
+        frm=_pose((0, 0, 0.0505)),
+    )
+    m4 = _profile_motion(
+        5.02,
+        [0, 0, 1, 0, 0, 0],
+        {"type": acc, "a0": 0, "a1": 0, "ai": 0.1, "v0": -0.1, "v1": 0.0, "Ttotal": 1.01},
+        1.01,
+        frm=_pose((0, 0, -0.0495)),
+    )
     # 4) ends at -0.0495 - 0.0505 = -0.1 m; a 0.1 m Profile move back up
     p = point_to_point(0.1, 0.4, 4.0, 100.0).duration
-    m5 = {"time": 6.03, "move": {"type": "Movement", "from": _pose((0, 0, -0.1)),
-          "move": _pose((0, 0, 0.1)), "axis": [0, 0, 1, 0, 0, 0], "dt": p,
-          "profile": {"type": "Profile", "dist": 0.1, "vmx": 0.4, "amx": 4.0, "jmx": 100.0}}}  # fmt: skip
+    m5 = {
+        "time": 6.03,
+        "move": {
+            "type": "Movement",
+            "from": _pose((0, 0, -0.1)),
+            "move": _pose((0, 0, 0.1)),
+            "axis": [0, 0, 1, 0, 0, 0],
+            "dt": p,
+            "profile": {"type": "Profile", "dist": 0.1, "vmx": 0.4, "amx": 4.0, "jmx": 100.0},
+        },
+    }
     return _series(still, m1, m2, m3, m4, m5)
 
 
@@ -171,21 +216,53 @@ jmax = 50.0
 BAD_JSON = [
     ({"type": "Sequence", "moves": []}, "not a MovementSeries"),
     (_series({"time": 0, "move": {"type": "Spin"}}), "move 1 (t = 0 s): unknown move type 'Spin'"),
-    (_series(_profile_motion(0, [0, 0, 1, 0, 0, 0], {**SINE, "Ttotal": 9.0}, 10.0)),
-     "Ttotal 9 s and dt 10 s differ"),
-    (_series(_profile_motion(0, [0, 0, 1, 0, 0, 0], SINE, 10.0),
-             _profile_motion(5, [0, 0, 1, 0, 0, 0], SINE, 10.0)), "move 2"),
-    (_series(_profile_motion(0, [0, 0, 1, 0, 0, 0], SINE, 10.0),
-             _profile_motion(10, [0, 0, 1, 0, 0, 0], SINE, 10.0, frm=_pose((0, 0, 0.3)))),
-     "a jump of 0.3"),
+    (
+        _series(_profile_motion(0, [0, 0, 1, 0, 0, 0], {**SINE, "Ttotal": 9.0}, 10.0)),
+        "Ttotal 9 s and dt 10 s differ",
+    ),
+    (
+        _series(
+            _profile_motion(0, [0, 0, 1, 0, 0, 0], SINE, 10.0),
+            _profile_motion(5, [0, 0, 1, 0, 0, 0], SINE, 10.0),
+        ),
+        "move 2",
+    ),
+    (
+        _series(
+            _profile_motion(0, [0, 0, 1, 0, 0, 0], SINE, 10.0),
+            _profile_motion(10, [0, 0, 1, 0, 0, 0], SINE, 10.0, frm=_pose((0, 0, 0.3))),
+        ),
+        "a jump of 0.3",
+    ),
     (_series(_profile_motion(0, [0, 0, 0, 0, 0, 0], SINE, 10.0)), "axis is all zero"),
-    (_series(_profile_motion(0, [0, 0, 1, 0, 0, 0], {**SINE, "omg": [1.0, 2.0]}, 10.0)),
-     "one entry per sine"),
-    (_series(_profile_motion(0, [0, 0, 1, 0, 0, 0], {"type": "ConstantAccelProfile", "a0": 0,
-             "a1": 0, "ai": 0.1, "v0": 0, "v1": 0.5, "Ttotal": 1.0}, 1.0)), "cannot take speed"),
-    (_series(_profile_motion(0, [0, 0, 1, 0, 0, 0], {**SINE, "omg": [float("nan")]}, 10.0)),
-     "omg[0] must be a number"),
-]  # fmt: skip
+    (
+        _series(_profile_motion(0, [0, 0, 1, 0, 0, 0], {**SINE, "omg": [1.0, 2.0]}, 10.0)),
+        "one entry per sine",
+    ),
+    (
+        _series(
+            _profile_motion(
+                0,
+                [0, 0, 1, 0, 0, 0],
+                {
+                    "type": "ConstantAccelProfile",
+                    "a0": 0,
+                    "a1": 0,
+                    "ai": 0.1,
+                    "v0": 0,
+                    "v1": 0.5,
+                    "Ttotal": 1.0,
+                },
+                1.0,
+            )
+        ),
+        "cannot take speed",
+    ),
+    (
+        _series(_profile_motion(0, [0, 0, 1, 0, 0, 0], {**SINE, "omg": [float("nan")]}, 10.0)),
+        "omg[0] must be a number",
+    ),
+]
 
 
 @pytest.mark.parametrize(("doc", "message"), BAD_JSON)
@@ -200,17 +277,28 @@ BAD_TOML = [
     ('schedule = "twin-schedule/2"\n', "must say schedule"),
     ('schedule = "twin-schedule/1"\n', "no moves"),
     ('schedule = "twin-schedule/1"\n[[move]]\nkind = "wobble"\n', "move 1: unknown kind"),
-    ('schedule = "twin-schedule/1"\n[[move]]\nkind = "sines"\ndof = "heave"\n'
-     'frequencies_hz = [1.0]\namplitudes = [0.1, 0.2]\nfade_s = 1\nduration_s = 5\n',
-     "amplitudes must be 1 numbers"),
-    ('schedule = "twin-schedule/1"\n[[move]]\nkind = "constant_speed"\ndof = "bob"\n'
-     "speed = 1\nduration_s = 1\n", "unknown dof 'bob'"),
-    ('schedule = "twin-schedule/1"\n[[move]]\nkind = "constant_speed"\ndof = "heave"\n'
-     "speed = 1\nduration_s = 1\nspin = 2\n", "unknown key 'spin'"),
-    ('schedule = "twin-schedule/1"\n[[move]]\nkind = "constant_speed"\ndof = "heave"\n'
-     'speed = 1\nduration_s = 1\n[[move]]\nkind = "still"\nduration_s = 1\n', "speed jumps"),
+    (
+        'schedule = "twin-schedule/1"\n[[move]]\nkind = "sines"\ndof = "heave"\n'
+        "frequencies_hz = [1.0]\namplitudes = [0.1, 0.2]\nfade_s = 1\nduration_s = 5\n",
+        "amplitudes must be 1 numbers",
+    ),
+    (
+        'schedule = "twin-schedule/1"\n[[move]]\nkind = "constant_speed"\ndof = "bob"\n'
+        "speed = 1\nduration_s = 1\n",
+        "unknown dof 'bob'",
+    ),
+    (
+        'schedule = "twin-schedule/1"\n[[move]]\nkind = "constant_speed"\ndof = "heave"\n'
+        "speed = 1\nduration_s = 1\nspin = 2\n",
+        "unknown key 'spin'",
+    ),
+    (
+        'schedule = "twin-schedule/1"\n[[move]]\nkind = "constant_speed"\ndof = "heave"\n'
+        'speed = 1\nduration_s = 1\n[[move]]\nkind = "still"\nduration_s = 1\n',
+        "speed jumps",
+    ),
     ("schedule = [", "not valid TOML"),
-]  # fmt: skip
+]
 
 
 @pytest.mark.parametrize(("text", "message"), BAD_TOML)

@@ -315,7 +315,8 @@ def analyse_designed(m: Measurement) -> RunReport:
             results["parasitic"] = {"all": parasitic.analyse_parasitic(m)}
         except SignalError as e:
             missing["parasitic"] = str(e)
-    missing.update({t: f"needs {a.needs}; this run is one {kind} test signal"
-                    for t, a in ANALYSES.items() if t not in results and t not in missing})  # fmt: skip
+    for t, a in ANALYSES.items():
+        if t not in results and t not in missing:
+            missing[t] = f"needs {a.needs}; this run is one {kind} test signal"
     missing.update({t: why for t, why in NOT_FROM_SCHEDULES.items() if t not in results})
     return RunReport(m.source, None, results, missing, {})
