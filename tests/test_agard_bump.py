@@ -115,7 +115,7 @@ def test_bad_input_names_what_is_allowed():
         analyse_bump(m, "heave", window=(5.0, 4.0))
     still = Measurement(np.arange(301) / 100, np.zeros((301, 6)), np.zeros((301, 6)),
                         rest(3.0), "rest", configure("srs"), {})  # fmt: skip
-    with pytest.raises(SignalError, match="do not move|no velocity reversal"):
+    with pytest.raises(SignalError, match="no velocity reversal"):
         analyse_bump(still, "heave")
     # 0.5 m/s reversing at 0.1 m/s^2 needs metres of heave: refused before it is run
     session = Session(Bench(configure("mpi"), "reduced"))
