@@ -9,7 +9,7 @@ from twin.agard.bump import analyse_bump, bump_signal, run_bump
 from twin.agard.session import Session
 from twin.chain.simulate import default_imu
 from twin.errors import SignalError, SignalLimitError
-from twin.measurement.measure import Bench, Measurement, configure
+from twin.measurement.measure import Bench, Measurement, configure, from_run
 from twin.platform.actuators import LegPhysics
 from twin.platform.facts import load_model
 from twin.platform.geometry import load_geometry
@@ -207,3 +207,18 @@ def test_one_leg_friction_makes_a_bump():
     peak = np.mean([abs(x.peak) for x in one.reversals])
     print("one leg 400 N: |peak|", peak, "nominal", max(abs(x.peak) for x in nominal.reversals))
     assert peak > 20 * max(abs(x.peak) for x in nominal.reversals)
+
+
+def test_a_recorded_run_gives_the_same_bumps(tmp_path):
+    """The run folder a session writes, read back and analysed: the same reversals and bumps."""
+    imu = default_imu("mpi").ideal()
+    session = Session(Bench(_with_friction(100.0), "full", seed=0, imu=imu), out=tmp_path)
+    live = run_bump(session, "heave", velocities=(0.1,))
+    recorded = analyse_bump(from_run(tmp_path / "runs" / "00-bump-heave"))
+    assert recorded.dof == "heave"
+    assert [x.t_s for x in recorded.reversals] == pytest.approx(
+        [x.t_s for x in live.reversals], abs=1e-6)  # fmt: skip
+    # the IMU written to imu.csv and read back: the same peaks to the file's precision
+    assert [x.peak for x in recorded.reversals] == pytest.approx(
+        [x.peak for x in live.reversals], rel=0.02)  # fmt: skip
+    assert abs(recorded.reversals[0].peak) > 10 * recorded.noise_rms
