@@ -620,7 +620,8 @@ def run_limits(
         share = level if size is None else size
         sig = limits_signal(dof, share * computed.excursion_max, -share * computed.excursion_min,
                             level * v, level * a, level * j, level)  # fmt: skip
-        sim, m = session.simulate(sig, f"limits-{dof}-{level:g}", check_limits=False)
+        m = session.measure(sig, f"limits-{dof}-{level:g}", check_limits=False)
+        sim = session.simulation
         pose = np.column_stack([np.interp(m.t, sim.response.t, sim.response.pose[:, c])
                                 for c in range(6)])  # fmt: skip
         counts = {**sim.limits.samples, "force": sim.limits.force_samples}
