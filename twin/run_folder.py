@@ -36,14 +36,19 @@ def signal_meta(sig: DescribingSignal | StepSignal) -> dict[str, object]:
     Parameters
     ----------
     sig : DescribingSignal or StepSignal
-        The designed test signal the run was driven with.
+        The designed test signal the run was driven with (or any signal with a ``meta()``
+        method returning this entry: :mod:`twin.agard.bump`, :mod:`twin.agard.limits`).
 
     Returns
     -------
     dict
-        ``kind`` ("periodic" or "steps"), ``dof`` and the design's parameters.
+        ``kind`` ("periodic", "steps", or the signal's own), ``dof`` and the design's
+        parameters.
 
     """
+    own = getattr(sig, "meta", None)
+    if callable(own):  # a test signal that describes itself (bump, system limits)
+        return own()
     if isinstance(sig, StepSignal):
         return {
             "kind": "steps",

@@ -84,9 +84,16 @@ class Session(CloseOrAbort):
         if self.count - first >= runs:
             self._job = None
 
-    def measure(self, sig: DescribingSignal | StepSignal, name: str) -> Measurement:
-        """Run one signal and return its measurement."""
-        return self._measure(sig.commands, name, {"signal": sig})
+    def measure(
+        self, sig: DescribingSignal | StepSignal, name: str, check_limits: bool = True
+    ) -> Measurement:
+        """Run one signal and return its measurement.
+
+        ``check_limits=False`` runs commands beyond the platform limits through the actuator
+        limiter (limited and counted in :attr:`simulation`) instead of refusing them: the
+        system-limits test (:mod:`twin.agard.limits`) drives into them.
+        """
+        return self._measure(sig.commands, name, {"signal": sig}, check_limits=check_limits)
 
     def measure_schedule(self, schedule: Schedule) -> Measurement:
         """Run a whole test schedule as one run; return its measurement (with the schedule)."""
@@ -94,7 +101,12 @@ class Session(CloseOrAbort):
                              progress=True)  # fmt: skip
 
     def _measure(
-        self, commands: Trajectory, name: str, design: dict[str, object], progress: bool = False
+        self,
+        commands: Trajectory,
+        name: str,
+        design: dict[str, object],
+        progress: bool = False,
+        check_limits: bool = True,
     ) -> Measurement:
         """Run ``commands``; ``design``: the ``signal`` or ``schedule`` for ``meta.json``."""
         k = self.count
@@ -102,7 +114,7 @@ class Session(CloseOrAbort):
         if self.progress:
             self.progress(f"run {k + 1}: {name} on {self.bench.name}")
         try:
-            run = self.bench.prepare(commands, k, name)
+            run = self.bench.prepare(commands, k, name, check_limits)
         except SignalLimitError:
             self._counted()  # a refused run still counts in the job
             raise

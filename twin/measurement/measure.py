@@ -223,9 +223,16 @@ class Bench:
         """Short description, e.g. ``mpi (full, seed 0)``."""
         return f"{self.config.name} ({self.model}, seed {self.seed})"
 
-    def prepare(self, commands: Trajectory, k: int = 0, label: str = "signal") -> Run:
-        """Check ``commands`` against the platform limits and set up run ``k``."""
-        check_signal(commands, self.config.platform, label)
+    def prepare(
+        self, commands: Trajectory, k: int = 0, label: str = "signal", check_limits: bool = True
+    ) -> Run:
+        """Check ``commands`` against the platform limits and set up run ``k``.
+
+        ``check_limits=False`` lets commands beyond the limits through to the actuator
+        limiter (the system-limits test, :mod:`twin.agard.limits`, drives into them).
+        """
+        if check_limits:
+            check_signal(commands, self.config.platform, label)
         return prepare(self.config, commands, self.model, self.seed + k, self.imu)
 
     def measure(self, sim: Simulation, meta: dict | None = None) -> Measurement:
