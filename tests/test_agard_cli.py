@@ -108,10 +108,11 @@ def test_report_writes_a_complete_folder(capsys, tmp_path):
     assert main(["agard", "report", "srs", "--model", "reduced", "--dof", "heave", "--out",
                  str(out), "--quiet"]) == 0  # fmt: skip
     names = {p.name for p in out.iterdir()}
-    assert {"report.json", "summary.md", "df-heave.png", "noise-heave.png",
-            "threshold-heave.png", "omct-heave.png", "snr-heave.png", "runs"} <= names  # fmt: skip
+    tests = {"df", "noise", "threshold", "omct", "snr", "linearity", "hysteresis", "parasitic",
+             "bump", "limits"}  # fmt: skip
+    assert {"report.json", "summary.md", "runs"} | {f"{t}-heave.png" for t in tests} <= names
     report = json.loads((out / "report.json").read_text())
-    assert set(report["dofs"]["heave"]) == {"df", "noise", "threshold", "omct", "snr"}
+    assert set(report["dofs"]["heave"]) == tests
     assert "## heave" in (out / "summary.md").read_text()
     assert not (tmp_path / "rep.partial").exists()
 

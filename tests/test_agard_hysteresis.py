@@ -8,13 +8,13 @@ import pytest
 
 from twin.agard.hysteresis import (
     HysteresisSegment,
-    PositionRecord,
     analyse_hysteresis,
     fitting_amplitude,
     hysteresis_signal,
     run_hysteresis,
     simulate_positions,
 )
+from twin.agard.positions import PositionRecord
 from twin.agard.session import Session
 from twin.errors import DataError, SignalError
 from twin.measurement.measure import Bench, configure

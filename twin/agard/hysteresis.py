@@ -44,20 +44,18 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
 
 from twin.agard.df import joined_sources
+from twin.agard.positions import PositionRecord
 from twin.agard.session import Session
 from twin.chain.config import MotionSystem
-from twin.chain.simulate import Simulation
 from twin.checks import number
-from twin.errors import DataError, SignalError, SignalLimitError
+from twin.errors import SignalError, SignalLimitError
 from twin.frames import DOF_NAMES, dof_index
 from twin.plotting import finish, pyplot
-from twin.runs import RecordedRun
 from twin.signals import DescribingSignal, MultiSine, check_signal, periodic_signal
 
 FloatArray = NDArray[np.float64]
@@ -84,65 +82,6 @@ AMPLITUDE_TOLERANCE = 0.25
 def position_unit(dof: str) -> str:
     """Return the position unit of a DOF: ``m`` or ``rad``."""
     return "rad" if dof_index(dof) >= 3 else "m"
-
-
-@dataclass(frozen=True, eq=False)
-class PositionRecord:
-    """Commanded and measured poses of one run, on one time grid.
-
-    Attributes
-    ----------
-    t : ndarray, shape (n,)
-        Time [s], uniform.
-    commanded, output : ndarray, shape (n, 6)
-        Pose offsets from neutral (m, rad): the commands, and the platform's pose.
-    config : MotionSystem
-        The configuration (for its lag).
-    source : str
-        What was measured.
-
-    """
-
-    t: FloatArray
-    commanded: FloatArray
-    output: FloatArray
-    config: MotionSystem
-    source: str
-
-    @classmethod
-    def from_simulation(cls, sim: Simulation) -> PositionRecord:
-        """Return the simulated pose of the response against the commands at its samples."""
-        r = sim.response
-        source = f"{sim.config.name} ({sim.model}) run seed {sim.seed}"
-        return cls(r.t, sim.commands.at(r.t), r.pose, sim.config, source)
-
-    @classmethod
-    def from_run(cls, run: RecordedRun | str | Path) -> PositionRecord:
-        """Return the pose from a recorded run's leg lengths (``actuators.csv``) by kinematics.
-
-        Raises
-        ------
-        DataError
-            For a run without ``actuators.csv``: it has no position record.
-
-        """
-        from twin.measurement.measure import run_config
-        from twin.platform.geometry import load_geometry
-        from twin.platform.kinematics import forward
-        from twin.run_checks import read_plausible_run
-
-        rec = run if isinstance(run, RecordedRun) else read_plausible_run(run)
-        if rec.actuators is None:
-            raise DataError(
-                f"{rec.path}: the run lacks a position record (no actuators.csv with the leg "
-                "lengths); the hysteresis test needs the output position, and the IMU's "
-                "accelerations cannot be integrated twice over minutes without drifting"
-            )
-        config = run_config(rec)
-        t = rec.actuators[:, 0]
-        commanded = rec.commands.at(t)
-        fk = forward(load_geometry(config.platform), rec.actuators[:, 1:], initial=commanded)
-        return cls(t, commanded, fk.pose, config, str(rec.path))
 
 
 @dataclass(frozen=True)

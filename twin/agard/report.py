@@ -1,8 +1,9 @@
 """``twin agard report``: the whole AGARD-AR-144 / OMCT suite on one bench, as a folder.
 
 For each DOF: describing function (Table 5.2 signals), half-Hertz noise levels, dynamic
-threshold (§3.3.4 steps), OMCT (with the illustrative bounds unless others are given) and the
-signal-to-noise grid. The folder holds ``report.json``, ``summary.md``, one PNG per test and
+threshold (§3.3.4 steps), OMCT (with the illustrative bounds unless others are given), the
+signal-to-noise grid, linearity, hysteresis, parasitic motion, turn-around bump and the
+system limits measured. The folder holds ``report.json``, ``summary.md``, one PNG per test and
 DOF, and every run as a ``twin-run/1`` folder under ``runs/``; it is written under a temporary
 name and renamed when complete, so a failed report leaves nothing behind.
 """
@@ -18,7 +19,18 @@ from pathlib import Path
 
 import matplotlib.pyplot as plt
 
-from twin.agard import df, noise_level, omct, snr, threshold
+from twin.agard import (
+    bump,
+    df,
+    hysteresis,
+    limits,
+    linearity,
+    noise_level,
+    omct,
+    parasitic,
+    snr,
+    threshold,
+)
 from twin.agard.session import Session
 from twin.frames import dof_index
 from twin.lifecycle import replacing_dir, writing
@@ -115,7 +127,7 @@ def dof_suite(
 
 def _in_session(bench, dofs, tmp, rrd, progress, bounds) -> list[DofPart]:
     """Run every DOF's suite in one session (one recording), one after another."""
-    tests = 5 * len(dofs)
+    tests = TESTS_PER_DOF * len(dofs)
 
     def beside(message: str, done: float | None = None, total: float | None = None) -> None:
         if progress:  # a test's own runs, shown beside the report's bar
@@ -126,7 +138,7 @@ def _in_session(bench, dofs, tmp, rrd, progress, bounds) -> list[DofPart]:
         for i, dof in enumerate(dofs):
             s.count = i * RUNS_PER_DOF
             parts.append(_suite(s, dof, tmp, bounds, lambda k, i=i: progress and progress(
-                f"AGARD tests on {bench.name}", 5 * i + k, tests)))  # fmt: skip
+                f"AGARD tests on {bench.name}", TESTS_PER_DOF * i + k, tests)))  # fmt: skip
     return parts
 
 
@@ -140,24 +152,31 @@ def _figure(fig, path: Path) -> str:
 
 
 def _tests(dof: str, bounds, cfg):
-    """Return the five tests of a DOF: (name, run, JSON of the result, figure, table)."""
+    """Return the tests of a DOF: (name, run, JSON of the result, figure, table)."""
     amp, step = threshold_defaults(dof)
+    plain = (lambda r: r.to_dict(), lambda r: r.plot(), lambda r: r.format_table())
     return (
         ("df", lambda s: df.run_df(s, dof), lambda r: r.to_dict(),
          lambda r: r.plot(config=cfg), lambda r: r.format_table()),
-        ("noise", lambda s: noise_level.run_noise(s, dof), lambda r: r.to_dict(),
-         lambda r: r.plot(), lambda r: r.format_table()),
-        ("threshold", lambda s: threshold.run_threshold(s, dof, amp, step), lambda r: r.to_dict(),
-         lambda r: r.plot(), lambda r: r.format_table()),
+        ("noise", lambda s: noise_level.run_noise(s, dof), *plain),
+        ("threshold", lambda s: threshold.run_threshold(s, dof, amp, step), *plain),
         ("omct", lambda s: omct.run_omct(s, dof), lambda r: r.to_dict(bounds),
          lambda r: omct.plot_omct([r], bounds), lambda r: r.format_table(bounds)),
-        ("snr", lambda s: snr.run_snr(s, dof), lambda r: r.to_dict(),
-         lambda r: r.plot(), lambda r: r.format_table()),
+        ("snr", lambda s: snr.run_snr(s, dof), *plain),
+        ("linearity", lambda s: linearity.run_linearity(s, dof), *plain),
+        ("hysteresis", lambda s: hysteresis.run_hysteresis(s, dof), *plain),
+        ("parasitic", lambda s: parasitic.run_parasitic(s, (dof,)), *plain),
+        ("bump", lambda s: bump.run_bump(s, dof), *plain),
+        ("limits", lambda s: limits.run_limits(s, dof), *plain),
     )  # fmt: skip
 
 
+#: Tests each DOF of a report runs (:func:`_tests`).
+TESTS_PER_DOF = len(_tests("surge", None, None))
+
+
 def _suite(s: Session, dof: str, tmp: Path, bounds, tested=None) -> DofPart:
-    """Run df, noise, threshold, omct and snr in ``dof``; figures into ``tmp``."""
+    """Run every test of :func:`_tests` in ``dof``; figures into ``tmp``."""
     first = s.count
     entry: dict[str, object] = {}
     md = [f"## {dof}", ""]
@@ -174,7 +193,7 @@ def _suite(s: Session, dof: str, tmp: Path, bounds, tested=None) -> DofPart:
             "",
         ]
     if tested:
-        tested(5)
+        tested(TESTS_PER_DOF)
     if s.count - first > RUNS_PER_DOF:
         raise RuntimeError(f"{dof}: {s.count - first} runs, more than RUNS_PER_DOF allows")
     return DofPart(dof, entry, md, s.count - first)

@@ -11,6 +11,7 @@ per test and DOF).
 
 from __future__ import annotations
 
+import dataclasses
 import json
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -19,8 +20,8 @@ from pathlib import Path
 import matplotlib.pyplot as plt
 import numpy as np
 
-from twin.agard import df, hysteresis, linearity, parasitic, threshold
-from twin.agard.hysteresis import PositionRecord
+from twin.agard import bump, df, hysteresis, limits, linearity, parasitic, threshold
+from twin.agard.positions import PositionRecord
 from twin.agard.segments import Segment, by_dof, largest_per_frequency, segments
 from twin.errors import SignalError
 from twin.frames import DOF_NAMES
@@ -122,9 +123,62 @@ def _hysteresis(
     return hysteresis.analyse_hysteresis(loops, segs[0].dof)
 
 
+def _span(segs: list[Segment]) -> tuple[float, float]:
+    return min(s.window[0] for s in segs), max(s.window[1] for s in segs)
+
+
+def _bump(m: Measurement, segs: list[Segment], positions: object = None) -> bump.BumpResult:
+    """Return the turn-around bumps of one DOF: every reversal from its first to its last."""
+    return bump.analyse_bump(m, segs[0].dof, window=_span(segs))
+
+
+def _limits(
+    m: Measurement, segs: list[Segment], positions: PositionRecord | None
+) -> limits.LimitsResult:
+    """Return the limits one DOF's point-to-point moves reached, and what stopped each.
+
+    Without the limiter's counts per move (a recorded run has none), what stopped a move is
+    found from its shortfall against the commands (:data:`twin.agard.limits.SHORTFALL`).
+    """
+    if positions is None:
+        raise NotInRun("the run has no position record (actuators.csv: leg lengths)")
+    pose = positions.on(m.t)
+    levels = tuple(limits.analyse_limits(m, pose, segs[0].dof, window=s.window) for s in segs)
+    computed = limits.dof_limits(m.config.platform, segs[0].dof)
+    return limits.LimitsResult(segs[0].dof, levels, computed, m.source)
+
+
+def _span(segs: list[Segment]) -> tuple[float, float]:
+    return min(s.window[0] for s in segs), max(s.window[1] for s in segs)
+
+
+def _bump(m: Measurement, segs: list[Segment], positions: object = None) -> bump.BumpResult:
+    """Return the turn-around bumps of one DOF: every reversal from its first to its last."""
+    return bump.analyse_bump(m, segs[0].dof, window=_span(segs))
+
+
+def _limits(
+    m: Measurement, segs: list[Segment], positions: PositionRecord | None
+) -> limits.LimitsResult:
+    """Return the limits one DOF's point-to-point moves reached, and what stopped each.
+
+    Without the limiter's counts per move (a recorded run has none), what stopped a move is
+    found from its shortfall against the commands (:data:`twin.agard.limits.SHORTFALL`).
+    """
+    if positions is None:
+        raise NotInRun("the run has no position record (actuators.csv: leg lengths)")
+    pose = positions.on(m.t)
+    levels = tuple(limits.analyse_limits(m, pose, segs[0].dof, window=s.window) for s in segs)
+    computed = limits.dof_limits(m.config.platform, segs[0].dof)
+    return limits.LimitsResult(segs[0].dof, levels, computed, m.source)
+
+
 class NotInRun(Exception):
     """The run holds a test's moves, but not what the test needs from them (the reason)."""
 
+
+#: Most a non-sine move may be cut at the ends of the run [s].
+CLIP_S = 0.1
 
 #: The tests a schedule can hold, in report order.
 ANALYSES: dict[str, Analysis] = {
@@ -138,6 +192,8 @@ ANALYSES: dict[str, Analysis] = {
         f"a single sine below {HYSTERESIS_HZ:g} Hz in one DOF, and a position record",
         _hysteresis,
     ),
+    "bump": Analysis("bump", "a constant acceleration through a speed reversal in one DOF", _bump),
+    "limits": Analysis("limits", "point-to-point moves in one DOF, and a position record", _limits),
 }
 #: Tests no schedule move serves (they need the twin's own signals: ``twin agard TEST``).
 NOT_FROM_SCHEDULES = {
@@ -266,7 +322,7 @@ def analyse_schedule(
     for test in tests or ANALYSES:
         a = ANALYSES[test]
         segs, left_out = segments(schedule, a.moves, offset)
-        segs = [s for s in segs if m.t[0] - 1e-6 <= s.window[0] and s.window[1] <= m.t[-1] + 1e-6]
+        segs = covered(segs, (float(m.t[0]), float(m.t[-1])))
         if left_out:
             skipped[test] = left_out
         if not segs:
@@ -279,7 +335,7 @@ def analyse_schedule(
         for dof, group in groups.items():
             try:
                 found[dof] = a.analyse(m, group, positions)
-            except NotInRun as e:
+            except (NotInRun, SignalError) as e:  # the report goes on: the reason is shown
                 why.append(f"{dof}: {e}" if a.per_dof else str(e))
         if found:
             results[test] = found
@@ -289,6 +345,22 @@ def analyse_schedule(
     missing.update({t: why for t, why in NOT_FROM_SCHEDULES.items() if tests is None})
     skipped = {t: why for t, why in skipped.items() if why}
     return RunReport(m.source, schedule, results, missing, skipped)
+
+
+def covered(segs: list[Segment], span: tuple[float, float]) -> list[Segment]:
+    """Return the segments the run covers: a sine's window whole, another move's mostly.
+
+    A move that is not a sine loses at most :data:`CLIP_S` at either end of the run (the
+    IMU's last sample falls short of the commands' end by less than a sample).
+    """
+    out = []
+    for s in segs:
+        lo, hi = max(s.window[0], span[0]), min(s.window[1], span[1])
+        inside = lo - s.window[0] <= 1e-6 and s.window[1] - hi <= 1e-6
+        if inside or (not s.frequencies_hz.size and max(lo - s.window[0], s.window[1] - hi)
+                      <= CLIP_S and hi > lo):  # fmt: skip
+            out.append(dataclasses.replace(s, window=(lo, hi)))
+    return out
 
 
 def analyse_designed(m: Measurement) -> RunReport:

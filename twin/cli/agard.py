@@ -17,7 +17,8 @@ from twin.frames import DOF_NAMES, dof_index
 from twin.lifecycle import check_output_dir, replacing_dir, replacing_file
 from twin.signals import MAX_STEP
 
-TESTS = ("df", "noise", "snr", "threshold", "omct", "parasitic", "linearity", "hysteresis")
+TESTS = ("df", "noise", "snr", "threshold", "omct", "parasitic", "linearity", "hysteresis",
+         "bump", "limits")  # fmt: skip
 HELP = {
     "df": "describing function (§3.3.3, Table 5.2 multi-sines): gain, phase, fitted delay",
     "noise": "half-Hertz noise level (§3.3.1): harmonic and stochastic noise ratios (Fig 3.5)",
@@ -29,9 +30,12 @@ HELP = {
     "confidence intervals",
     "hysteresis": "hysteresis: output against input position of a very-low-frequency sine; "
     "the loop's width",
+    "bump": "turn-around bump: the acceleration peak at velocity reversals, against speed",
+    "limits": "system limits measured: excursion, velocity, acceleration and jerk reached by "
+    "jerk-limited moves, and the limit that stopped each",
 }
 #: Tests a schedule's moves can serve (``--schedule``); the others need the twin's signals.
-SCHEDULED = ("df", "parasitic", "linearity", "hysteresis")
+SCHEDULED = ("df", "parasitic", "linearity", "hysteresis", "bump", "limits")
 #: Tests a recorded run serves only through its schedule (they take several sines).
 SCHEDULE_ONLY = ("linearity", "hysteresis")
 
@@ -195,7 +199,18 @@ def _bench(args: argparse.Namespace, target: str):
 
 def _simulate(args: argparse.Namespace, out: Path | None):
     """Run a test on a configuration (runs into ``out``); return (result, config)."""
-    from twin.agard import df, hysteresis, linearity, noise_level, omct, parasitic, snr, threshold
+    from twin.agard import (
+        bump,
+        df,
+        hysteresis,
+        limits,
+        linearity,
+        noise_level,
+        omct,
+        parasitic,
+        snr,
+        threshold,
+    )
     from twin.agard.session import Session
     from twin.errors import SignalError
 
@@ -222,6 +237,10 @@ def _simulate(args: argparse.Namespace, out: Path | None):
             return linearity.run_linearity(s, args.dof), bench.config
         if args.test == "hysteresis":
             return hysteresis.run_hysteresis(s, args.dof), bench.config
+        if args.test == "bump":
+            return bump.run_bump(s, args.dof), bench.config
+        if args.test == "limits":
+            return limits.run_limits(s, args.dof), bench.config
         return omct.run_omct(s, args.dof, _given(args.fraction, 0.1)), bench.config
 
 
@@ -252,8 +271,10 @@ def _analyse(args: argparse.Namespace):
     """Run a test's analysis on a recorded run folder; return (result, config)."""
     import numpy as np
 
-    from twin.agard import df, noise_level, omct, parasitic, snr, threshold
-    from twin.measurement.measure import from_run
+    from twin.agard import bump, df, limits, noise_level, omct, parasitic, snr, threshold
+    from twin.agard.positions import PositionRecord
+    from twin.measurement.measure import driven_dof, from_run
+    from twin.run_checks import read_plausible_run
 
     _refuse_simulation_options(args)
     if args.test in SCHEDULE_ONLY:
@@ -264,6 +285,15 @@ def _analyse(args: argparse.Namespace):
     m = from_run(args.target)
     if args.test == "parasitic":
         return parasitic.analyse_parasitic(m, args.dof), m.config
+    if args.test == "bump":
+        return bump.analyse_bump(m, args.dof), m.config
+    if args.test == "limits":
+        rec = read_plausible_run(args.target)
+        pose = PositionRecord.from_run(rec).on(m.t)
+        level = limits.analyse_limits(m, pose, args.dof, limits.recorded_counts(rec))
+        dof = DOF_NAMES[driven_dof(m, args.dof)]
+        computed = limits.dof_limits(m.config.platform, dof)
+        return limits.LimitsResult(dof, (level,), computed, m.source), m.config
     if args.test == "df":
         return df.analyse_df(m, args.dof), m.config
     if args.test == "noise":
@@ -352,7 +382,7 @@ def _cmd_report(args: argparse.Namespace) -> int:
 
 def _scheduled(args: argparse.Namespace, tests: tuple[str, ...] | None) -> int:
     """Report the tests a recorded run or a simulated schedule holds (``tests``: only these)."""
-    from twin.agard.hysteresis import PositionRecord
+    from twin.agard.positions import PositionRecord
     from twin.agard.scheduled import analyse_designed, analyse_schedule
     from twin.agard.session import Session
     from twin.errors import DataError, UsageError
