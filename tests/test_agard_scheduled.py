@@ -185,3 +185,79 @@ def test_the_report_never_writes_into_its_run(scheduled_run, capsys):
     assert main(["agard", "report", str(run), "--out", str(run)]) == 2
     assert "an input of this command" in capsys.readouterr().err
     assert sorted(p.name for p in run.iterdir()) == before
+
+
+BUMP_AND_LIMITS = """
+schedule = "twin-schedule/1"
+name = "sway bumps and a limits move"
+
+[[move]]
+kind = "still"
+duration_s = 1.0
+
+[[move]]
+kind = "constant_acceleration"
+dof = "sway"
+acceleration = 0.1
+v_start = 0.0
+v_end = 0.1
+
+[[move]]
+kind = "constant_speed"
+dof = "sway"
+speed = 0.1
+duration_s = 1.0
+
+[[move]]
+kind = "constant_acceleration"
+dof = "sway"
+acceleration = -0.1
+v_start = 0.1
+v_end = -0.1
+
+[[move]]
+kind = "constant_speed"
+dof = "sway"
+speed = -0.1
+duration_s = 1.0
+
+[[move]]
+kind = "constant_acceleration"
+dof = "sway"
+acceleration = 0.1
+v_start = -0.1
+v_end = 0.0
+
+[[move]]
+kind = "still"
+duration_s = 1.0
+
+[[move]]
+kind = "point_to_point"
+dof = "heave"
+distance = 0.1
+vmax = 0.2
+amax = 1.0
+jmax = 20.0
+
+[[move]]
+kind = "still"
+duration_s = 2.0
+"""
+
+
+def test_report_of_bumps_and_limits_in_a_schedule(tmp_path, capsys):
+    path = tmp_path / "bl.toml"
+    path.write_text(BUMP_AND_LIMITS, encoding="utf-8")
+    assert main(["agard", "report", "mpi", "--model", "reduced", "--schedule", str(path),
+                 "--out", str(tmp_path / "rep"), "--json", "--quiet"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert set(doc["tests"]) == {"bump", "limits"}
+    (rev,) = doc["tests"]["bump"]["sway"]["reversals"]  # the one move through zero speed
+    assert rev["speed"] == pytest.approx(0.1, rel=0.01)
+    assert rev["acceleration"] == pytest.approx(-0.1, rel=0.01)
+    (level,) = doc["tests"]["limits"]["heave"]["levels"]
+    # a 0.1 m move well inside the MPI's limits: reached as commanded, nothing stopped it
+    assert level["reached"]["excursion_max"] == pytest.approx(0.1, abs=2e-3)
+    assert level["stopped_by"] == []
+    assert {"df", "linearity", "parasitic", "hysteresis"} <= set(doc["missing"])

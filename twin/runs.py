@@ -394,9 +394,15 @@ def _trajectory(cmd: FloatArray, path: Path) -> Trajectory:
 
 
 def _write_rows(fh: TextIO, t: FloatArray, values: FloatArray, block: int = 8192) -> None:
+    """Write rows of ``%.10g`` numbers, as ``np.savetxt`` would, one block at a time.
+
+    Each block is formatted by one ``%`` of the repeated row format (C, not a Python loop per
+    row as ``savetxt``): the same text, about twice as fast.
+    """
     for k in range(0, len(t), block):  # in blocks: no whole-run copy
         rows = np.column_stack([t[k : k + block], values[k : k + block]])
-        np.savetxt(fh, rows, delimiter=",", fmt="%.10g")
+        row = ",".join(["%.10g"] * rows.shape[1]) + "\n"
+        fh.write((row * len(rows)) % tuple(rows.ravel().tolist()))
 
 
 #: The kind of output a run folder is (its marker file, :class:`~twin.lifecycle.StagedFolder`).

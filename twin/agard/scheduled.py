@@ -129,7 +129,16 @@ def _span(segs: list[Segment]) -> tuple[float, float]:
 
 def _bump(m: Measurement, segs: list[Segment], positions: object = None) -> bump.BumpResult:
     """Return the turn-around bumps of one DOF: every reversal from its first to its last."""
-    return bump.analyse_bump(m, segs[0].dof, window=_span(segs))
+    lo, hi = _span(segs)  # widened: the platform turns round after its filter and delay
+    window = (max(lo - BUMP_MARGIN_S, float(m.t[0])), _settled(m, segs[-1], hi, BUMP_MARGIN_S))
+    return bump.analyse_bump(m, segs[0].dof, window=window)
+
+
+def _settled(m: Measurement, seg: Segment, end: float, most_s: float) -> float:
+    """Return ``end`` widened by up to ``most_s`` while the platform rests after ``seg``."""
+    if seg.move.kind == "constant_acceleration" or not np.isfinite(seg.rest_until_s):
+        return min(end + most_s, float(m.t[-1]))
+    return min(max(end, min(end + most_s, seg.rest_until_s)), float(m.t[-1]))
 
 
 def _limits(
@@ -143,7 +152,11 @@ def _limits(
     if positions is None:
         raise NotInRun("the run has no position record (actuators.csv: leg lengths)")
     pose = positions.on(m.t)
-    levels = tuple(limits.analyse_limits(m, pose, segs[0].dof, window=s.window) for s in segs)
+    levels = tuple(
+        limits.analyse_limits(m, pose, segs[0].dof,
+                              window=(s.window[0], _settled(m, s, s.window[1], LIMITS_SETTLE_S)))
+        for s in segs
+    )  # fmt: skip
     computed = limits.dof_limits(m.config.platform, segs[0].dof)
     return limits.LimitsResult(segs[0].dof, levels, computed, m.source)
 
@@ -154,7 +167,16 @@ def _span(segs: list[Segment]) -> tuple[float, float]:
 
 def _bump(m: Measurement, segs: list[Segment], positions: object = None) -> bump.BumpResult:
     """Return the turn-around bumps of one DOF: every reversal from its first to its last."""
-    return bump.analyse_bump(m, segs[0].dof, window=_span(segs))
+    lo, hi = _span(segs)  # widened: the platform turns round after its filter and delay
+    window = (max(lo - BUMP_MARGIN_S, float(m.t[0])), _settled(m, segs[-1], hi, BUMP_MARGIN_S))
+    return bump.analyse_bump(m, segs[0].dof, window=window)
+
+
+def _settled(m: Measurement, seg: Segment, end: float, most_s: float) -> float:
+    """Return ``end`` widened by up to ``most_s`` while the platform rests after ``seg``."""
+    if seg.move.kind == "constant_acceleration" or not np.isfinite(seg.rest_until_s):
+        return min(end + most_s, float(m.t[-1]))
+    return min(max(end, min(end + most_s, seg.rest_until_s)), float(m.t[-1]))
 
 
 def _limits(
@@ -168,7 +190,11 @@ def _limits(
     if positions is None:
         raise NotInRun("the run has no position record (actuators.csv: leg lengths)")
     pose = positions.on(m.t)
-    levels = tuple(limits.analyse_limits(m, pose, segs[0].dof, window=s.window) for s in segs)
+    levels = tuple(
+        limits.analyse_limits(m, pose, segs[0].dof,
+                              window=(s.window[0], _settled(m, s, s.window[1], LIMITS_SETTLE_S)))
+        for s in segs
+    )  # fmt: skip
     computed = limits.dof_limits(m.config.platform, segs[0].dof)
     return limits.LimitsResult(segs[0].dof, levels, computed, m.source)
 
@@ -177,6 +203,11 @@ class NotInRun(Exception):
     """The run holds a test's moves, but not what the test needs from them (the reason)."""
 
 
+#: Time a bump series' window reaches beyond its reversal moves [s]: the turn-around comes
+#: after the platform filter's lag and the delay, and is measured up to 0.75 s after it.
+BUMP_MARGIN_S = 1.5
+#: Most a limits move's window reaches into the rest after it: the platform arrives late [s].
+LIMITS_SETTLE_S = 2.0
 #: Most a non-sine move may be cut at the ends of the run [s].
 CLIP_S = 0.1
 

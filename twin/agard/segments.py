@@ -38,6 +38,10 @@ class Segment:
         The move's frequencies (sines; empty otherwise).
     amplitude : float
         Largest pose amplitude of a sines move in its DOF's units (0 otherwise).
+    rest_until_s : float
+        Until when the platform stays at rest after the move, on the run's clock: the start
+        of the next move that is not still (the end of the schedule after the last). A
+        platform behind its filter and delay arrives there.
 
     """
 
@@ -45,6 +49,7 @@ class Segment:
     window: tuple[float, float]
     frequencies_hz: FloatArray
     amplitude: float
+    rest_until_s: float = np.nan
 
     @property
     def dof(self) -> str:
@@ -102,7 +107,10 @@ def segments(
             out.append(Segment(move, window, move.frequencies_hz, float(move.amplitudes.max())))
         else:
             span = (move.start_s + offset_s, move.end_s + offset_s)
-            out.append(Segment(move, span, np.zeros(0), 0.0))
+            later = [m.start_s for m in schedule.moves
+                     if m.start_s >= move.end_s - 1e-9 and m.kind != "still"]  # fmt: skip
+            rest = min(later, default=schedule.duration_s) + offset_s
+            out.append(Segment(move, span, np.zeros(0), 0.0, rest))
     return out, skipped
 
 

@@ -97,7 +97,7 @@ class Session(CloseOrAbort):
 
     def measure_schedule(self, schedule: Schedule) -> Measurement:
         """Run a whole test schedule as one run; return its measurement (with the schedule)."""
-        return self._measure(schedule.commands(), schedule.name, {"schedule": schedule},
+        return self._measure(schedule.commands(), schedule.slug, {"schedule": schedule},
                              progress=True)  # fmt: skip
 
     def _measure(

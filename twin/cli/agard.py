@@ -398,7 +398,7 @@ def _scheduled(args: argparse.Namespace, tests: tuple[str, ...] | None) -> int:
         name = Path(args.target).resolve().name
     else:
         bench = _bench(args, args.target)
-        name = f"{bench.config.name}-{bench.model}-{schedule.name}"  # type: ignore[union-attr]
+        name = f"{bench.config.name}-{bench.model}-{schedule.slug}"  # type: ignore[union-attr]
     out = Path(args.out or f"out/agard-{name}")
     check_output_dir(out, "report.json")
     with replacing_dir(out, "report.json") as tmp:

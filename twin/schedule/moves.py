@@ -13,6 +13,7 @@ move serves (:func:`test_of`).
 
 from __future__ import annotations
 
+import re
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
@@ -258,6 +259,11 @@ class Schedule:
             raise ScheduleError(f"{self.source}: the schedule has no moves")
         for before, move in zip(self.moves, self.moves[1:], strict=False):
             _check_follows(before, move, self.source)
+
+    @property
+    def slug(self) -> str:
+        """The name as a file name: letters, digits, ``.``, ``_`` and ``-`` only."""
+        return re.sub(r"[^A-Za-z0-9._-]+", "-", self.name).strip("-.") or "schedule"
 
     @property
     def duration_s(self) -> float:
