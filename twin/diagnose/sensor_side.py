@@ -49,6 +49,12 @@ def platform_reading(sensor: Extension, dof: str) -> Extension:
                      (dof,))  # fmt: skip
 
 
+#: Named effects that put power off the lines themselves (a backlash's harmonics): beside
+#: them the off-line noise cannot say whether the sensor filters it, so the side is left
+#: undecided (a run at rest, noise alone, decides).
+OFF_LINE_EFFECTS = ("backlash",)
+
+
 @dataclass(frozen=True)
 class SideJudgement:
     """Whether a ``sensor_filter`` the lines named is in the sensor or the platform.
@@ -124,6 +130,8 @@ def judge_side(model: Model, imu_noise: float | None = None) -> SideJudgement | 
     evidence = 2.0 * (l_platform - l_sensor)
     if SIDE_BAND_HZ < 2.0 * sensor.value("cutoff_hz"):
         verdict = "undecided"  # less than an octave of filtered noise in the band
+    elif any(e.effect in OFF_LINE_EFFECTS for e in others):
+        verdict = "undecided"  # off-line power of its own, read as unfiltered noise
     else:
         verdict = ("platform" if evidence > BIC_MARGIN else "sensor" if evidence < -BIC_MARGIN
                    else "undecided")  # fmt: skip
