@@ -157,7 +157,7 @@ def measured():
     [
         ((5.0, 14.5), 1.0, 0.2, "whole number"),
         ((5.0, 15.0), 1.0, 0.05, "not the stated 0.05"),
-        ((-5.0, 22.0), 1.0, 0.2, "within the measurement"),
+        ((-5.0, 22.0), 1.0, 0.2, "within what was measured"),
         ((5.0, 15.0), -1.0, 0.2, "frequency"),
     ],
 )

@@ -249,8 +249,24 @@ duration_s = 2.0
 def test_report_of_bumps_and_limits_in_a_schedule(tmp_path, capsys):
     path = tmp_path / "bl.toml"
     path.write_text(BUMP_AND_LIMITS, encoding="utf-8")
-    assert main(["agard", "report", "mpi", "--model", "reduced", "--schedule", str(path),
-                 "--out", str(tmp_path / "rep"), "--json", "--quiet"]) == 0
+    assert (
+        main(
+            [
+                "agard",
+                "report",
+                "mpi",
+                "--model",
+                "reduced",
+                "--schedule",
+                str(path),
+                "--out",
+                str(tmp_path / "rep"),
+                "--json",
+                "--quiet",
+            ]
+        )
+        == 0
+    )
     doc = json.loads(capsys.readouterr().out)
     assert set(doc["tests"]) == {"bump", "limits"}
     (rev,) = doc["tests"]["bump"]["sway"]["reversals"]  # the one move through zero speed

@@ -56,6 +56,7 @@ from itertools import pairwise
 import numpy as np
 from numpy.typing import NDArray
 
+from twin.agard.segments import window_in
 from twin.agard.session import Session
 from twin.chain.filter import PlatformFilter
 from twin.checks import number
@@ -490,14 +491,7 @@ def analyse_bump(
     """
     k = driven_dof(m, dof)
     t = m.t
-    lo, hi = float(t[0]), float(t[-1])
-    if window is not None:
-        if len(window) != 2:
-            raise SignalError(f"a bump window is (start, end) in seconds; got {window!r}")
-        w0 = number(window[0], "bump window start [s]", lo=lo, hi=hi, error=SignalError)
-        w1 = number(window[1], "bump window end [s]", lo=w0, lo_open=True, hi=hi,
-                    error=SignalError)  # fmt: skip
-        lo, hi = w0, w1
+    lo, hi = window_in(window, (float(t[0]), float(t[-1])), "bump")
     span = (t >= lo - 1e-9) & (t <= hi + 1e-9)
     ts = t[span]
     speed = m.commands.at(ts, 1)[:, k]

@@ -50,6 +50,7 @@ from numpy.typing import NDArray
 
 from twin.agard.df import joined_sources
 from twin.agard.positions import PositionRecord
+from twin.agard.segments import AMPLITUDE_TOLERANCE, checked_window
 from twin.agard.session import Session
 from twin.chain.config import MotionSystem
 from twin.checks import number
@@ -73,10 +74,6 @@ INNER = 0.9
 LEVELS = 181
 #: Lowest and highest test frequency [Hz].
 MIN_FREQUENCY_HZ, MAX_FREQUENCY_HZ = 1e-3, 1.0
-#: Largest distance of a window's periods from a whole number.
-WHOLE_PERIODS_TOLERANCE = 0.01
-#: Largest relative difference between a segment's stated amplitude and the commanded one.
-AMPLITUDE_TOLERANCE = 0.25
 
 
 def position_unit(dof: str) -> str:
@@ -268,18 +265,9 @@ def _check_segment(seg: HysteresisSegment, k: int) -> tuple[float, float]:
     """Raise :class:`SignalError` for a segment that cannot be analysed; return its window."""
     r = seg.record
     where = f"{r.source}: segment {seg.frequency_hz:g} Hz, {seg.amplitude:g}"
-    f = number(seg.frequency_hz, f"{where}: frequency [Hz]", lo=MIN_FREQUENCY_HZ,
-               hi=MAX_FREQUENCY_HZ, error=SignalError)  # fmt: skip
-    number(seg.amplitude, f"{where}: amplitude", lo=0, lo_open=True, error=SignalError)
-    start = number(seg.start_s, f"{where}: start_s", error=SignalError)
-    end = number(seg.end_s, f"{where}: end_s", error=SignalError)
-    if not (r.t[0] - 1e-6 <= start < end <= r.t[-1] + 1e-6):
-        raise SignalError(f"{where}: the window {start:g}-{end:g} s must be non-empty and lie "
-                          f"within the record ({r.t[0]:g}-{r.t[-1]:g} s)")  # fmt: skip
-    periods = (end - start) * f
-    if round(periods) < 1 or abs(periods - round(periods)) > WHOLE_PERIODS_TOLERANCE:
-        raise SignalError(f"{where}: the window {start:g}-{end:g} s holds {periods:.3f} periods "
-                          "of the sine; it must hold a whole number (1 or more)")  # fmt: skip
+    _, start, end = checked_window(where, seg.frequency_hz, seg.amplitude,
+                                   (seg.start_s, seg.end_s), (float(r.t[0]), float(r.t[-1])),
+                                   (MIN_FREQUENCY_HZ, MAX_FREQUENCY_HZ))  # fmt: skip
     sel = (r.t >= start - 1e-9) & (r.t < end - 1e-9)
     got = 0.5 * float(np.ptp(r.commanded[sel, k]))
     if abs(got / seg.amplitude - 1) > AMPLITUDE_TOLERANCE:

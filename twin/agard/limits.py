@@ -44,6 +44,7 @@ from scipy.signal import savgol_filter
 
 from twin.agard.df import joined_sources
 from twin.agard.positions import PositionRecord
+from twin.agard.segments import window_in
 from twin.agard.session import Session
 from twin.chain.filter import PlatformFilter
 from twin.checks import number
@@ -493,13 +494,7 @@ def analyse_limits(
         unknown = set(counts) - set(KINDS)
         if unknown:
             raise SignalError(f"limit counts are of {', '.join(KINDS)}; got {sorted(unknown)}")
-    lo, hi = float(m.t[0]), float(m.t[-1])
-    if window is not None:
-        if len(window) != 2:
-            raise SignalError(f"a limits window is (start, end) in seconds; got {window!r}")
-        lo = number(window[0], "limits window start [s]", lo=lo, hi=hi, error=SignalError)
-        hi = number(window[1], "limits window end [s]", lo=lo, lo_open=True, hi=hi,
-                    error=SignalError)  # fmt: skip
+    lo, hi = window_in(window, (float(m.t[0]), float(m.t[-1])), "limits")
     # clear of the post-processing's start and end transients (App. C.2.3's FIR)
     lo, hi = max(lo, float(m.t[0]) + EDGE_S), min(hi, float(m.t[-1]) - EDGE_S)
     sel = (m.t >= lo - 1e-9) & (m.t <= hi + 1e-9)

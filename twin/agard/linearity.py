@@ -42,6 +42,7 @@ from numpy.typing import NDArray
 from scipy.stats import norm
 
 from twin.agard.df import joined_sources
+from twin.agard.segments import AMPLITUDE_TOLERANCE, checked_window
 from twin.agard.session import Session
 from twin.checks import number
 from twin.errors import SignalError, SignalLimitError
@@ -63,11 +64,6 @@ DEFAULT_LADDER = (1.0, 0.1, 0.01)
 DEFAULT_TOPS = (3.0, 2.0, 1.0, 0.5, 0.2, 0.1, 0.05, 0.02, 0.01, 0.005, 0.002, 0.001)
 #: Shortest measurement window of a run [s] (whole periods, rounded up).
 WINDOW_S = 10.0
-#: Largest relative difference between the stated amplitude of a segment and the commanded
-#: acceleration's amplitude at its frequency over its window.
-AMPLITUDE_TOLERANCE = 0.25
-#: Largest distance of a segment's periods from a whole number (leakage otherwise).
-WHOLE_PERIODS_TOLERANCE = 0.01
 #: Default confidence level of the intervals.
 LEVEL = 0.95
 
@@ -306,24 +302,17 @@ def _finite(x: float) -> float | None:
 def check_segment(seg: LinearitySegment, k: int) -> None:
     """Raise :class:`SignalError` for a segment that cannot be analysed.
 
-    The window must lie in the measurement and hold a whole number of periods (within
-    :data:`WHOLE_PERIODS_TOLERANCE`); the commanded acceleration's amplitude at the frequency
-    over the window must be the stated one within :data:`AMPLITUDE_TOLERANCE`.
+    The window must lie in the measurement and hold a whole number of periods
+    (:func:`~twin.agard.segments.checked_window`); the commanded acceleration's amplitude at
+    the frequency over the window must be the stated one within
+    :data:`~twin.agard.segments.AMPLITUDE_TOLERANCE`.
     """
     m = seg.measurement
     where = f"{m.source}: segment {seg.frequency_hz:g} Hz, {seg.amplitude:g}"
-    f = number(seg.frequency_hz, f"{where}: frequency [Hz]", lo=0, lo_open=True,
-               error=SignalError)  # fmt: skip
-    number(seg.amplitude, f"{where}: amplitude", lo=0, lo_open=True, error=SignalError)
-    start = number(seg.start_s, f"{where}: start_s", error=SignalError)
-    end = number(seg.end_s, f"{where}: end_s", error=SignalError)
-    if not (m.t[0] - 1e-6 <= start < end <= m.t[-1] + 1e-6):
-        raise SignalError(f"{where}: the window {start:g}-{end:g} s must be non-empty and lie "
-                          f"within the measurement ({m.t[0]:g}-{m.t[-1]:g} s)")  # fmt: skip
-    periods = (end - start) * f
-    if round(periods) < 1 or abs(periods - round(periods)) > WHOLE_PERIODS_TOLERANCE:
-        raise SignalError(f"{where}: the window {start:g}-{end:g} s holds {periods:.3f} periods "
-                          "of the sine; it must hold a whole number (1 or more)")  # fmt: skip
+    span = (float(m.t[0]), float(m.t[-1]))
+    f, start, end = checked_window(
+        where, seg.frequency_hz, seg.amplitude, (seg.start_s, seg.end_s), span
+    )
     got = abs(fourier_coefficients(m.t, m.commanded[:, k], [f], (start, end))[0])
     if abs(got / seg.amplitude - 1) > AMPLITUDE_TOLERANCE:
         raise SignalError(

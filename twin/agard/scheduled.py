@@ -161,44 +161,6 @@ def _limits(
     return limits.LimitsResult(segs[0].dof, levels, computed, m.source)
 
 
-def _span(segs: list[Segment]) -> tuple[float, float]:
-    return min(s.window[0] for s in segs), max(s.window[1] for s in segs)
-
-
-def _bump(m: Measurement, segs: list[Segment], positions: object = None) -> bump.BumpResult:
-    """Return the turn-around bumps of one DOF: every reversal from its first to its last."""
-    lo, hi = _span(segs)  # widened: the platform turns round after its filter and delay
-    window = (max(lo - BUMP_MARGIN_S, float(m.t[0])), _settled(m, segs[-1], hi, BUMP_MARGIN_S))
-    return bump.analyse_bump(m, segs[0].dof, window=window)
-
-
-def _settled(m: Measurement, seg: Segment, end: float, most_s: float) -> float:
-    """Return ``end`` widened by up to ``most_s`` while the platform rests after ``seg``."""
-    if seg.move.kind == "constant_acceleration" or not np.isfinite(seg.rest_until_s):
-        return min(end + most_s, float(m.t[-1]))
-    return min(max(end, min(end + most_s, seg.rest_until_s)), float(m.t[-1]))
-
-
-def _limits(
-    m: Measurement, segs: list[Segment], positions: PositionRecord | None
-) -> limits.LimitsResult:
-    """Return the limits one DOF's point-to-point moves reached, and what stopped each.
-
-    Without the limiter's counts per move (a recorded run has none), what stopped a move is
-    found from its shortfall against the commands (:data:`twin.agard.limits.SHORTFALL`).
-    """
-    if positions is None:
-        raise NotInRun("the run has no position record (actuators.csv: leg lengths)")
-    pose = positions.on(m.t)
-    levels = tuple(
-        limits.analyse_limits(m, pose, segs[0].dof,
-                              window=(s.window[0], _settled(m, s, s.window[1], LIMITS_SETTLE_S)))
-        for s in segs
-    )  # fmt: skip
-    computed = limits.dof_limits(m.config.platform, segs[0].dof)
-    return limits.LimitsResult(segs[0].dof, levels, computed, m.source)
-
-
 class NotInRun(Exception):
     """The run holds a test's moves, but not what the test needs from them (the reason)."""
 

@@ -14,6 +14,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from twin.checks import number
+from twin.errors import SignalError
 from twin.frames import dof_index
 from twin.schedule.moves import Move, Schedule
 
@@ -22,6 +24,10 @@ FloatArray = NDArray[np.float64]
 WHOLE_PERIODS = 1e-3
 #: Least periods of the lowest frequency a sine window must hold.
 MIN_PERIODS = 1
+#: Largest distance of a given window's periods from a whole number (leakage otherwise).
+WHOLE_PERIODS_TOLERANCE = 0.01
+#: Largest relative difference between a segment's stated amplitude and the commanded one.
+AMPLITUDE_TOLERANCE = 0.25
 
 
 @dataclass(frozen=True)
@@ -60,6 +66,60 @@ class Segment:
     def k(self) -> int:
         """The driven DOF's index."""
         return dof_index(self.dof)
+
+
+def window_in(
+    window: Sequence[object] | None, span: tuple[float, float], test: str
+) -> tuple[float, float]:
+    """Return a user's analysis window (start, end) checked to lie in ``span``; None: ``span``.
+
+    Raises
+    ------
+    SignalError
+        Naming the ``test``: not two numbers, or not an interval inside ``span``.
+
+    """
+    if window is None:
+        return span
+    if len(window) != 2:
+        raise SignalError(f"a {test} window is (start, end) in seconds; got {window!r}")
+    lo = number(window[0], f"{test} window start [s]", lo=span[0], hi=span[1], error=SignalError)
+    hi = number(window[1], f"{test} window end [s]", lo=lo, lo_open=True, hi=span[1],
+                error=SignalError)  # fmt: skip
+    return lo, hi
+
+
+def checked_window(
+    where: str,
+    frequency_hz: object,
+    amplitude: object,
+    window: tuple[object, object],
+    span: tuple[float, float],
+    f_range: tuple[float, float] = (0.0, np.inf),
+) -> tuple[float, float, float]:
+    """Return (frequency, start, end) of a one-sine segment given by a user, checked.
+
+    Raises
+    ------
+    SignalError
+        Naming ``where``: a frequency outside ``f_range`` (its low end open at 0), an amplitude
+        that is not positive, a window outside ``span`` (what was measured) or one that does not
+        hold a whole number of periods (1 or more, within :data:`WHOLE_PERIODS_TOLERANCE`).
+
+    """
+    f = number(frequency_hz, f"{where}: frequency [Hz]", lo=f_range[0], hi=f_range[1],
+               lo_open=f_range[0] == 0, error=SignalError)  # fmt: skip
+    number(amplitude, f"{where}: amplitude", lo=0, lo_open=True, error=SignalError)
+    start = number(window[0], f"{where}: start_s", error=SignalError)
+    end = number(window[1], f"{where}: end_s", error=SignalError)
+    if not (span[0] - 1e-6 <= start < end <= span[1] + 1e-6):
+        raise SignalError(f"{where}: the window {start:g}-{end:g} s must be non-empty and lie "
+                          f"within what was measured ({span[0]:g}-{span[1]:g} s)")  # fmt: skip
+    periods = (end - start) * f
+    if round(periods) < 1 or abs(periods - round(periods)) > WHOLE_PERIODS_TOLERANCE:
+        raise SignalError(f"{where}: the window {start:g}-{end:g} s holds {periods:.3f} periods "
+                          "of the sine; it must hold a whole number (1 or more)")  # fmt: skip
+    return f, start, end
 
 
 def sine_window(move: Move, offset_s: float = 0.0) -> tuple[float, float] | None:
