@@ -152,6 +152,7 @@ class DofReport:
                 "held_out": self.noise.held_out,
             },
             "sets_tried": self.selection.table[:12],
+            "singles_tried": [r for r in self.selection.table if len(r["effects"]) == 1],  # type: ignore[arg-type]
             "at_bound": list(self.selection.at_bound),
         }
 
