@@ -4,7 +4,11 @@ from __future__ import annotations
 
 import pytest
 
+from twin.chain.config import motion_system
+from twin.chain.extensions import Extension
 from twin.diagnose.detect import _both, _delay_text, _gain_text, _threshold
+from twin.diagnose.diagnosis import diagnose
+from twin.diagnose.hidden import record_runs
 
 
 def test_a_bound_near_no_effect_is_found_and_shown_with_meaningful_digits():
@@ -31,3 +35,27 @@ def test_a_bound_near_no_effect_is_found_and_shown_with_meaningful_digits():
     # sizes well away from no effect read as before
     assert [_delay_text(v) for v in (0.027, -0.0015, 0.15)] == ["+27 ms", "-1.5 ms", "+150 ms"]
     assert [_gain_text(v) for v in (0.9, 1.25)] == ["0.900", "1.250"]
+
+
+@pytest.fixture(scope="module")
+def heave_backlash_threshold(tmp_path_factory):
+    """The smallest play a clean MPI heave pair of runs could show (stated by the diagnosis)."""
+    mpi = motion_system("mpi")
+    runs = record_runs(mpi, mpi, "heave", tmp_path_factory.mktemp("clean"), 5)
+    d = diagnose(runs, seed=5)
+    entry = d.dofs["heave"].detectable["backlash"]
+    assert "backlash above" in entry["statement"] and "mm of play" in entry["statement"]
+    return mpi, entry["value"]
+
+
+@pytest.mark.parametrize(("factor", "named"), [(0.3, False), (3.0, True)])
+def test_the_stated_backlash_threshold_means_what_it_says(
+    heave_backlash_threshold, tmp_path, factor, named
+):
+    """A play at 0.3 x the stated threshold is not named; at 3 x it is (the same runs' design,
+    another seed)."""
+    mpi, play = heave_backlash_threshold
+    ext = Extension("backlash", {"play": factor * play}, ("heave",))
+    runs = record_runs(mpi.replace(extensions=(ext,)), mpi, "heave", tmp_path, 6)
+    found = {f.extension.effect for f in diagnose(runs, seed=6).findings}
+    assert ("backlash" in found) is named, found

@@ -393,6 +393,18 @@ def _trajectory(cmd: FloatArray, path: Path) -> Trajectory:
     return tr
 
 
+def write_commands(path: str | Path, commands: Trajectory) -> Path:
+    """Write a ``commands.csv`` on its own (e.g. a designed run for a platform to play).
+
+    The file :func:`read_commands` reads (and ``twin simulate --signal`` takes).
+    """
+    p = Path(path)
+    with open(p, "w", encoding=ENCODING, newline="") as fh:
+        fh.write(",".join(HEADERS["commands.csv"]) + "\n")
+        _write_rows(fh, commands.t0 + np.arange(commands.n) / commands.rate_hz, commands.values)
+    return p
+
+
 def _write_rows(fh: TextIO, t: FloatArray, values: FloatArray, block: int = 8192) -> None:
     """Write rows of ``%.10g`` numbers, as ``np.savetxt`` would, one block at a time.
 

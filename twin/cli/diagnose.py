@@ -121,12 +121,8 @@ def _cmd_each(args: argparse.Namespace) -> int:
 
 
 def _cmd_diagnose(args: argparse.Namespace) -> int:
-    from twin.diagnose.candidates import describe_bound
     from twin.diagnose.diagnosis import check_options, diagnose
-    from twin.diagnose.physical import below_text
     from twin.diagnose.report import write_report
-    from twin.diagnose.select import BIC_MARGIN
-    from twin.diagnose.sensor_side import side_text
 
     with common.options_named({"max_hz": "--max-hz", "imu_noise": "--imu-noise"}):
         check_options(args.max_hz, args.imu_noise)  # before any work, also of a batch
@@ -145,61 +141,10 @@ def _cmd_diagnose(args: argparse.Namespace) -> int:
     if args.json:
         print(json.dumps(d.to_dict(), indent=2))
         return 0
-    for note in d.notes:
-        print(f"note: {note}")
-    for b in d.at_bound:
-        print(f"at the bound: {describe_bound(b)}")
-    if not d.findings and not d.at_bound:
-        print("no finding: the runs agree with the nominal model within their noise; they "
-              "could have shown:")  # fmt: skip
-        for line in d.statements():
-            print(f"  {line}")
-    elif not d.findings:
-        print("no finding within the search bounds")
-    for i, f in enumerate(d.findings, 1):
-        g = f.gain
-        if "chi2_per_line_before" in g and "df_error_db_before" not in g:
-            held = (f"line error {g['chi2_per_line_before']:.2f} -> "
-                    f"{g['chi2_per_line_after']:.2f} chi2/line, every channel")  # fmt: skip
-        elif "chi2_per_line_before" in g:
-            held = (
-                f"line error {g['chi2_per_line_before']:.2f} -> {g['chi2_per_line_after']:.2f}"
-                f" chi2/line, DF error {g['df_error_db_before']:.2f} -> "
-                f"{g['df_error_db_after']:.2f} dB, {g['df_error_deg_before']:.1f} -> "
-                f"{g['df_error_deg_after']:.1f} deg, VAF {g['vaf_before']:.1f} -> "
-                f"{g['vaf_after']:.1f} %"
-            )
-        else:
-            held = (f"log-likelihood per bin {g['loglik_per_bin_before']:.3f} -> "
-                    f"{g['loglik_per_bin_after']:.3f}")  # fmt: skip
-        print(f"{i}. {f.extension.describe()}  (BIC +{f.delta_bic:.0f}; held out: {held})")
-        side = f.evidence.get("side")
-        if side is not None and side["verdict"] == "undecided":
-            print(f"   {side_text(side)}")
-        if f.evidence.get("preference"):
-            print(f"   {f.evidence['preference']}")
-        for alt in f.evidence.get("alternatives") or []:
-            print(
-                f"   as likely (within BIC {BIC_MARGIN:g}): {' + '.join(alt['effects'])} "
-                f"({below_text(alt['delta_bic_below_named'])})"
-            )
-    if d.physical is not None:
-        p = d.physical
-        if args.model != "full":
-            print("note: --physics diagnoses on the full model (the chain's effects too)")
-        if not p.chain_supported:
-            print(f"not named: {p.chain['describe']} (BIC {p.chain['delta_bic']:+.1f} on every "
-                  f"channel, the leg logs included where the runs have them; below "
-                  f"{BIC_MARGIN:g})")  # fmt: skip
-        elif p.preferred and p.chain is not None:
-            print(f"replaced by the physical cause: {p.chain['describe']} (BIC "
-                  f"{p.chain['delta_bic']:+.1f} on every channel)")  # fmt: skip
-        for e in p.table:
-            if e["at_bound"] and e["delta_bic"] > BIC_MARGIN:
-                print(f"at the bound (physical, not named): {e['describe']} (BIC "
-                      f"{e['delta_bic']:+.1f})")  # fmt: skip
-        for what, gain in p.weak():
-            print(f"weak support, not named: {what} (BIC {gain:+.1f})")
+    for line in d.summary_lines():
+        print(line)
+    if d.physical is not None and args.model != "full":
+        print("note: --physics diagnoses on the full model (the chain's effects too)")
     for dof, r in d.dofs.items():
         print(f"{dof}: IMU noise x{r.noise.fit.to_json()['imu_noise_scale']:.2f} of the data "
               "sheet (a nuisance, not a cause)")  # fmt: skip

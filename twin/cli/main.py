@@ -135,6 +135,9 @@ def build_parser() -> argparse.ArgumentParser:
     from twin.cli.diagnose import add_parser as add_diagnose
 
     add_diagnose(sub)
+    from twin.cli.design import add_parser as add_design
+
+    add_design(sub)
     from twin.cli.ingest import add_parser as add_import
 
     add_import(sub)

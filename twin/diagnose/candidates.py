@@ -238,6 +238,9 @@ def search_space(effect: str, case: Case, dof: str, channels: Sequence[Channel])
         return Space(
             ("play",), (np.geomspace(1e-3, 0.3, 7) * travel,), ((1e-4 * travel, 0.5 * travel),)
         )
+    if effect == "platform_lag":  # the platform reading of a sensor filter's cut-off range
+        return Space(("lag_s",), (1 / (2 * np.pi * np.geomspace(0.5, 40.0, 51)),),
+                     ((1 / (2 * np.pi * 50.0), 1 / (2 * np.pi * 0.2)),))  # fmt: skip
     if effect == "noise":
         return Space(("scale",), (np.array([1.0]),), ((0.0, 100.0),))
     raise SignalError(f"unknown effect {effect!r}; expected one of {', '.join(EFFECTS)}")
@@ -358,14 +361,24 @@ def at_bounds(fit: SetFit, model: Model, evidence: Sequence[Lines]) -> list[dict
     channels = list({id(x.channel): x.channel for x in evidence}.values())
     out: list[dict[str, object]] = []
     for ext in fit.extensions:
-        space = search_space(ext.effect, model.case, model.dof, channels)
-        for name, (lo, hi) in zip(space.names, space.bounds, strict=True):
-            u, ends = _searched(name, ext.value(name)), (_searched(name, lo), _searched(name, hi))
-            for side, end in zip(("lower", "upper"), ends, strict=True):
-                if abs(u - end) <= AT_BOUND_SHARE * (ends[1] - ends[0]):
-                    out.append({"effect": ext.effect, "dofs": [model.dof], "parameter": name,
-                                "value": ext.value(name), "bound": side, "set": list(fit.effects),
-                                "search": [float(lo), float(hi)]})  # fmt: skip
+        for entry in extension_at_bounds(ext, model.case, model.dof, channels):
+            out.append({**entry, "set": list(fit.effects)})
+    return out
+
+
+def extension_at_bounds(
+    ext: Extension, case: Case, dof: str, channels: Sequence[Channel]
+) -> list[dict[str, object]]:
+    """Return the parameters of one fitted extension at an end of their search range."""
+    out: list[dict[str, object]] = []
+    space = search_space(ext.effect, case, dof, channels)
+    for name, (lo, hi) in zip(space.names, space.bounds, strict=True):
+        u, ends = _searched(name, ext.value(name)), (_searched(name, lo), _searched(name, hi))
+        for side, end in zip(("lower", "upper"), ends, strict=True):
+            if abs(u - end) <= AT_BOUND_SHARE * (ends[1] - ends[0]):
+                out.append({"effect": ext.effect, "dofs": [dof], "parameter": name,
+                            "value": ext.value(name), "bound": side,
+                            "search": [float(lo), float(hi)]})  # fmt: skip
     return out
 
 

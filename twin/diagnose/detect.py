@@ -24,11 +24,12 @@ import numpy as np
 from scipy import optimize
 
 from twin.chain.extensions import DOF_CHANNEL, Extension
-from twin.diagnose.candidates import Model, make_extension, numeric_names
+from twin.diagnose.candidates import Model, make_extension, numeric_names, search_space
 from twin.diagnose.evidence import Lines
 from twin.diagnose.nuisance import off_line
 from twin.diagnose.residuals import TAPER_CORRELATION, Segment
 from twin.diagnose.select import BIC_MARGIN
+from twin.frames import dof_index
 
 
 def _on_top(model: Model, exts: Sequence[Extension]) -> Model:
@@ -172,8 +173,8 @@ def smallest_detectable(
     Returns a dict of entries ``{"parameter", "values" or "value", "statement"}``: delay and
     gain on both sides of "no effect"; lead upwards; platform filter, sensor filter and
     resonance (damping 0.3) by the highest break/cut-off/mode frequency that would still show;
-    motion noise on both sides where the configuration has it. Backlash is not stated (each
-    play is a simulation; its fit reports its own uncertainty).
+    platform lag upwards; backlash by the smallest play (on its search grid, interpolated:
+    :func:`_smallest_play`); motion noise on both sides where the configuration has it.
     """
     dof = base.dof
 
@@ -225,6 +226,15 @@ def smallest_detectable(
             if f is not None
             else f"no {effect.replace('_', ' ')} above 0.1 Hz would have been found",
         }
+    lag = _threshold(excess_of("platform_lag", "lag_s"), 0.0, 0.3)
+    out["platform_lag"] = {
+        "parameter": "lag_s",
+        "value": lag,
+        "statement": "no platform lag up to 300 ms would have been found"
+        if lag is None
+        else f"a platform lag above {_lead_text(lag)} would have been found",
+    }
+    out["backlash"] = _smallest_play(base, evidence)
     if segments and any(s.source_psd[0].any() for s in segments):
 
         def nx(scale: float) -> float:
@@ -237,6 +247,38 @@ def smallest_detectable(
             "statement": _both("motion noise scale", lo_n, hi_n, _scale_text),
         }
     return out
+
+
+def _smallest_play(base: Model, evidence: Sequence[Lines]) -> dict[str, object]:
+    """Return the smallest backlash play the runs would have shown (its entry).
+
+    Each play is a simulation: the expected evidence is taken at the plays of the backlash's
+    search grid (simulated side by side, or already by its fit) and the crossing of the
+    margin interpolated between them in log(play).
+    """
+    channels = list({id(x.channel): x.channel for x in evidence}.values())
+    grid = search_space("backlash", base.case, base.dof, channels).grids[0]
+    base.prefetch([float(p) for p in grid], channels)
+    excess = np.array([
+        expected_delta_bic(base, [make_extension("backlash", ["play"], [p], base.dof)],
+                           evidence) - BIC_MARGIN
+        for p in grid
+    ])  # fmt: skip
+    above = np.flatnonzero(excess >= 0)
+    unit = "mm" if dof_index(base.dof) < 3 else "mrad"
+    if above.size == 0:
+        play, statement = None, (f"no backlash up to {grid[-1] * 1e3:.3g} {unit} of play "
+                                 "would have been found")  # fmt: skip
+    else:
+        i = int(above[0])
+        if i == 0:
+            play = float(grid[0])
+        else:  # linear in log(play) between the last grid play below the margin and the first above
+            u0, u1, e0, e1 = np.log(grid[i - 1]), np.log(grid[i]), excess[i - 1], excess[i]
+            play = float(np.exp(u0 + (u1 - u0) * (-e0) / (e1 - e0)))
+        statement = f"a backlash above {play * 1e3:.3g} {unit} of play would have been found"
+    return {"parameter": "play", "value": play, "statement": statement,
+            "grid": [float(p) for p in grid]}  # fmt: skip
 
 
 def _highest_frequency(excess, top: float, bottom: float = 0.1) -> float | None:

@@ -40,8 +40,14 @@ from twin.diagnose.residuals import (
     residual_bands,
     segment,
 )
-from twin.diagnose.select import BIC_MARGIN, Finding, Selection, name_causes
-from twin.diagnose.sensor_side import decide_side
+from twin.diagnose.select import (
+    BIC_MARGIN,
+    Finding,
+    Selection,
+    describe_alternative,
+    name_causes,
+)
+from twin.diagnose.sensor_side import decide_side, side_text
 from twin.errors import SignalError, UsageError
 from twin.jsonable import plain
 from twin.plotting import finish, pyplot
@@ -146,8 +152,30 @@ class DofReport:
                 "held_out": self.noise.held_out,
             },
             "sets_tried": self.selection.table[:12],
+            "singles_tried": [r for r in self.selection.table if len(r["effects"]) == 1],  # type: ignore[arg-type]
             "at_bound": list(self.selection.at_bound),
         }
+
+
+def held_text(g: dict[str, object]) -> str:
+    """Return a finding's held-out gain (before -> after) in words."""
+    if "chi2_per_line_before" in g and "df_error_db_before" not in g:
+        return (
+            f"line error {g['chi2_per_line_before']:.2f} -> "
+            f"{g['chi2_per_line_after']:.2f} chi2/line, every channel"
+        )
+    if "chi2_per_line_before" in g:
+        return (
+            f"line error {g['chi2_per_line_before']:.2f} -> {g['chi2_per_line_after']:.2f}"
+            f" chi2/line, DF error {g['df_error_db_before']:.2f} -> "
+            f"{g['df_error_db_after']:.2f} dB, {g['df_error_deg_before']:.1f} -> "
+            f"{g['df_error_deg_after']:.1f} deg, VAF {g['vaf_before']:.1f} -> "
+            f"{g['vaf_after']:.1f} %"
+        )
+    return (
+        f"log-likelihood per bin {g['loglik_per_bin_before']:.3f} -> "
+        f"{g['loglik_per_bin_after']:.3f}"
+    )
 
 
 @dataclass(eq=False)
@@ -225,6 +253,71 @@ class Diagnosis:
             extensions=(*merged_config(cfg, causes).extensions, *exts),  # type: ignore[arg-type]
             description=f"{cfg.name} extended by twin diagnose of {', '.join(self.runs)}",
         )
+
+    def summary_lines(self) -> list[str]:
+        """Return the findings as the terminal shows them (and the recording's text)."""
+        out: list[str] = []
+        for note in self.notes:
+            out.append(f"note: {note}")
+        for b in self.at_bound:
+            out.append(f"at the bound: {describe_bound(b)}")
+        if not self.findings and not self.at_bound:
+            out.append(
+                "no finding: the runs agree with the nominal model within their noise; they "
+                "could have shown:"
+            )
+            for line in self.statements():
+                out.append(f"  {line}")
+        elif not self.findings:
+            out.append("no finding within the search bounds")
+        for i, f in enumerate(self.findings, 1):
+            held = held_text(f.gain)
+            if f.ambiguous:
+                out.append(
+                    f"{i}. the runs cannot tell these apart (within BIC {BIC_MARGIN:g}); none is "
+                    "named as the cause:"
+                )
+                out.append(
+                    f"   - {f.extension.describe()}  (BIC +{f.delta_bic:.0f}; held out: {held})"
+                )
+                for alt in f.evidence.get("alternatives") or []:
+                    out.append(f"   - {describe_alternative(alt)}")
+            else:
+                out.append(
+                    f"{i}. {f.extension.describe()}  (BIC +{f.delta_bic:.0f}; held out: {held})"
+                )
+            side = f.evidence.get("side")
+            if side is not None and side["verdict"] == "undecided":
+                out.append(f"   {side_text(side)}")
+            if f.evidence.get("preference"):
+                out.append(f"   {f.evidence['preference']}")
+            if not f.ambiguous:  # physical rivals listed on the finding without the flag
+                for alt in f.evidence.get("alternatives") or []:
+                    out.append(
+                        f"   as likely (within BIC {BIC_MARGIN:g}): {describe_alternative(alt)}"
+                    )
+        if self.physical is not None:
+            p = self.physical
+            if not p.chain_supported:
+                out.append(
+                    f"not named: {p.chain['describe']} (BIC {p.chain['delta_bic']:+.1f} on every "
+                    f"channel, the leg logs included where the runs have them; below "
+                    f"{BIC_MARGIN:g})"
+                )
+            elif p.preferred and p.chain is not None:
+                out.append(
+                    f"replaced by the physical cause: {p.chain['describe']} (BIC "
+                    f"{p.chain['delta_bic']:+.1f} on every channel)"
+                )
+            for e in p.table:
+                if e["at_bound"] and e["delta_bic"] > BIC_MARGIN:
+                    out.append(
+                        f"at the bound (physical, not named): {e['describe']} (BIC "
+                        f"{e['delta_bic']:+.1f})"
+                    )
+            for what, gain in p.weak():
+                out.append(f"weak support, not named: {what} (BIC {gain:+.1f})")
+        return out
 
     def statements(self) -> list[str]:
         """Return what the runs could have shown, per DOF and effect (what "no finding" means)."""

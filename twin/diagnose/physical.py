@@ -242,11 +242,6 @@ def _alternative(describe: str, delta_bic: float, named: float) -> dict[str, obj
             "delta_bic_below_named": named - delta_bic}  # fmt: skip
 
 
-def below_text(below: float) -> str:
-    """Return how far an alternative's BIC lies below the named one's, in words."""
-    return f"BIC {abs(below):.1f} {'lower' if below >= 0 else 'higher'}"
-
-
 def _bic(chi2_0: float, chi2_1: float, p: int, n: int) -> float:
     return 2.0 * (chi2_0 - chi2_1) - p * np.log(n)
 

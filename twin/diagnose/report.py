@@ -12,8 +12,9 @@ import numpy as np
 
 from twin.diagnose.candidates import describe_bound
 from twin.diagnose.diagnosis import Diagnosis, DofReport
-from twin.diagnose.physical import SOURCE_TEXT, PhysicalResult, below_text
+from twin.diagnose.physical import SOURCE_TEXT, PhysicalResult
 from twin.diagnose.residual_figure import plot_residual
+from twin.diagnose.select import describe_alternative
 from twin.diagnose.sensor_side import side_text
 from twin.lifecycle import replacing_dir
 from twin.plotting import pyplot
@@ -84,8 +85,9 @@ def summary(d: Diagnosis) -> str:
             a, b = g.get(f"{key}_before", nan), g.get(f"{key}_after", nan)
             return f"{a:{fmt}} → {b:{fmt}}"
 
+        one_of = "**ambiguous**, one of several explanations: " if f.ambiguous else ""
         out += [
-            f"{i}. **{f.extension.effect}** in {', '.join(f.extension.dofs)}: {pars} "
+            f"{i}. {one_of}**{f.extension.effect}** in {', '.join(f.extension.dofs)}: {pars} "
             f"(BIC improvement {f.evidence['delta_bic']:.1f})",
         ]
         if "chi2_per_line_before" in g and "df_error_db_before" not in g:
@@ -107,9 +109,12 @@ def summary(d: Diagnosis) -> str:
             out.append(f"   - {side_text(f.evidence['side'])}")
         alts = f.evidence.get("alternatives") or []
         if alts:
-            out.append("   - within the margin: " + "; ".join(
-                f"{' + '.join(a['effects'])} ({below_text(a['delta_bic_below_named'])})"
-                for a in alts))  # fmt: skip
+            out.append(
+                "   - as well supported (within the margin), so none is named as the cause: "
+                if f.ambiguous
+                else "   - within the margin: "
+            )
+            out[-1] += "; ".join(describe_alternative(a) for a in alts)
     out.append("")
     if d.at_bound:
         out += ["## At the bound (not findings)", ""]

@@ -81,6 +81,14 @@ class Finding:
     gain: dict[str, object] = field(default_factory=dict)
 
     @property
+    def ambiguous(self) -> bool:
+        """Whether other explanations fit the runs as well (within the margin).
+
+        Then this is one of several, not *the* cause (:attr:`evidence` ``alternatives``).
+        """
+        return bool(self.evidence.get("ambiguous"))
+
+    @property
     def delta_bic(self) -> float:
         """BIC improvement that named it."""
         return float(self.evidence["delta_bic"])  # type: ignore[arg-type]
@@ -92,6 +100,8 @@ class Finding:
             "effect": e["effect"],
             "parameters": e["parameters"],
             "dofs": e["dofs"],
+            "ambiguous": self.ambiguous,
+            "alternatives": self.evidence.get("alternatives") or [],
             "evidence": self.evidence,
             "gain": self.gain,
         }
@@ -114,6 +124,8 @@ class Selection:
     at_bound : tuple of dict
         Effects of the selected set whose fitted parameters lie at a bound of their search
         (:func:`twin.diagnose.candidates.at_bounds`): reported, never named.
+    fits : dict of tuple of str to SetFit
+        Every set fitted, by its sorted effects.
 
     """
 
@@ -122,6 +134,7 @@ class Selection:
     table: list[dict[str, object]]
     observations: int
     at_bound: tuple[dict[str, object], ...] = ()
+    fits: dict[tuple[str, ...], SetFit] = field(default_factory=dict, repr=False)
 
 
 def bic_gain(chi2_0: float, chi2_1: float, extra_parameters: int, n: int) -> float:
@@ -214,6 +227,7 @@ def select(
             "effects": list(k),
             "chi2": fits[k].chi2,
             "delta_bic": gain_of(k),
+            "nameable": named_ok(k),
             "parameters": {
                 e.effect: {p: e.value(p) for p in numeric_names(e.effect)}
                 for e in fits[k].extensions
@@ -223,21 +237,56 @@ def select(
     ]
     if not chosen:
         return Selection(None, {}, table, n)
-    return Selection(fits[chosen], needed(chosen), table, n)
+    return Selection(fits[chosen], needed(chosen), table, n, fits=fits)
 
 
 def alternatives(sel: Selection, limit: int = 3) -> list[dict[str, object]]:
-    """Other sets whose BIC is within the margin of the named one (what it trades off with)."""
+    """Other explanations whose BIC is within the margin of the named set.
+
+    An alternative is a set that could be named on its own (it beats the nominal model by the
+    margin and needs every member) and is neither the named set with effects added (those
+    explain nothing more) nor one of its parts (those the named set beat by the margin).
+    Each comes with its fitted parameters, its BIC improvement and how far below the named
+    set's it lies.
+    """
     if sel.fit is None:
         return []
-    chosen = sorted(sel.fit.effects)
-    top = next(r["delta_bic"] for r in sel.table if r["effects"] == chosen)
+    chosen = set(sel.fit.effects)
+    top = next(r["delta_bic"] for r in sel.table if set(r["effects"]) == chosen)  # type: ignore[arg-type]
     out = [
-        {"effects": r["effects"], "delta_bic_below_named": float(top - r["delta_bic"])}  # type: ignore[operator]
+        {
+            "effects": r["effects"],
+            "parameters": r["parameters"],
+            "delta_bic": float(r["delta_bic"]),  # type: ignore[arg-type]
+            "delta_bic_below_named": float(top - r["delta_bic"]),  # type: ignore[operator]
+        }
         for r in sel.table
-        if r["effects"] != chosen and top - r["delta_bic"] < BIC_MARGIN  # type: ignore[operator]
+        if r.get("nameable")
+        and top - r["delta_bic"] < BIC_MARGIN  # type: ignore[operator]
+        and not chosen <= set(r["effects"])  # type: ignore[arg-type]
+        and not set(r["effects"]) <= chosen  # type: ignore[arg-type]
     ]
     return out[:limit]
+
+
+def below_text(below: float) -> str:
+    """Return how far an alternative's BIC lies below the named one's, in words."""
+    return f"BIC {abs(below):.1f} {'lower' if below >= 0 else 'higher'}"
+
+
+def describe_alternative(alt: dict[str, object]) -> str:
+    """Return an alternative in words: effects, parameters, BIC and held-out line error."""
+    params: dict = alt.get("parameters") or {}  # type: ignore[assignment]
+    parts = []
+    for e in alt["effects"]:  # type: ignore[attr-defined]
+        p = params.get(e) or {}
+        parts.append(e + (" " + ", ".join(f"{k} {v:.4g}" for k, v in p.items()) if p else ""))
+    text = f"{' + '.join(parts)} ({below_text(alt['delta_bic_below_named'])}"  # type: ignore[arg-type]
+    held: dict = alt.get("held_out") or {}  # type: ignore[assignment]
+    if held:
+        text += (f"; held-out line error {held['chi2_per_line_before']:.2f} -> "
+                 f"{held['chi2_per_line_after']:.2f} chi2/line")  # fmt: skip
+    return text + ")"
 
 
 # --- the held-out gate -------------------------------------------------------------------------
@@ -319,6 +368,44 @@ def held_out(
     return out
 
 
+def rival_explanations(
+    sel: Selection, base: Model, evidence: Sequence[Lines],
+    folds_: list[tuple[list[Lines], list[Lines]]],
+) -> list[dict[str, object]]:  # fmt: skip
+    """Return the alternatives (:func:`alternatives`) that pass the named set's gates too.
+
+    An alternative must not sit at a bound of its search and must lower the held-out line
+    error as the named set does (each with its held-out figures).
+    """
+    out = []
+    for alt in alternatives(sel):
+        key = tuple(sorted(alt["effects"]))  # type: ignore[call-overload]
+        if key in sel.fits and at_bounds(sel.fits[key], base, evidence):
+            continue
+        start = {e: list(p.values()) for e, p in alt["parameters"].items()}  # type: ignore[union-attr]
+        held = held_out_set(base, key, start, folds_)
+        if held["chi2_per_line_after"] < held["chi2_per_line_before"]:
+            out.append({**alt, "held_out": held})
+    return out
+
+
+def held_out_set(
+    model: Model, effects: Sequence[str], start: dict[str, list[float]],
+    folds_: list[tuple[list[Lines], list[Lines]]],
+) -> dict[str, float]:  # fmt: skip
+    """Held-out chi2 per line of the nominal model and of a set refitted on each fold."""
+    before, after = [], []
+    for fit_on, test_on in folds_:
+        with_ = fit_set(tuple(sorted(effects)), model, fit_on, start, coarse=True)
+        m1 = model
+        for x in with_.extensions:
+            m1 = m1.with_(x)
+        before += [_scores(model, x) for x in test_on]
+        after += [_scores(m1, x) for x in test_on]
+    return {"chi2_per_line_before": _mean(before)["chi2_per_line"],
+            "chi2_per_line_after": _mean(after)["chi2_per_line"]}  # fmt: skip
+
+
 def name_causes(
     case: Case,
     dof: str,
@@ -362,6 +449,7 @@ def name_causes(
     model = base
     for x in fit.extensions:
         model = model.with_(x)
+    rivals = rival_explanations(sel, base, evidence, fold_list) if fit is sel.fit else []
     findings = []
     for ext in fit.extensions:
         e = ext.effect
@@ -378,7 +466,8 @@ def name_causes(
                     "observations": int(sel.observations),
                     "parameter_std": fit.std.get(e, {}),
                     "correlation": fit.correlation,
-                    "alternatives": alternatives(sel),
+                    "alternatives": rivals,
+                    "ambiguous": bool(rivals),
                     "dropped_by_held_out_gate": dropped,
                     "window_s": [list(c.window) for c in case.of(dof)],
                     "lines_hz": sorted({float(f) for c in case.of(dof) for f in c.lines_hz}),

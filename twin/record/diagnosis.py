@@ -7,7 +7,8 @@ Every run: the describing-function ratios measured / nominal and measured / exte
 excited lines with their 95 % bounds (``<dof>/ratio/gain|phase/measured_over_nominal`` ...,
 suffixed ``_run<k>`` when there are several runs), and the extended model's own ratio to the
 nominal as a line, against ``frequency_mHz``; the report's two figures as images
-(``<dof>/ratio/figure``, ``<dof>/residual_figure``).
+(``<dof>/ratio/figure``, ``<dof>/residual_figure``). The findings as the terminal shows them,
+ambiguous ones with every alternative, as a text document (``findings``).
 """
 
 from __future__ import annotations
@@ -37,6 +38,7 @@ def diagnosis_blueprint(dofs: tuple[str, ...]) -> rrb.Blueprint:
             name=f"{dof}: time",
         )  # fmt: skip
         tabs += [time, response_views(f"/{dof}/ratio", f"{dof}: measured / model")]
+    tabs.insert(0, rrb.TextDocumentView(origin="/findings", name="findings"))
     return rrb.Blueprint(rrb.Tabs(*tabs), collapse_panels=True)
 
 
@@ -48,6 +50,8 @@ def record_diagnosis(d, path: str | Path) -> Path:
     dofs = tuple(d.dofs)
     with Recording("twin diagnose", diagnosis_blueprint(dofs), rrd=path) as recording:
         rec = recording.rec
+        text = "\n".join(d.summary_lines()) or "no finding"
+        rec.log("findings", rr.TextDocument(text), static=True)
         for dof, r in d.dofs.items():
             ch = d.case.of(dof)[0]
             unit = unit_of(dof)

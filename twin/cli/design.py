@@ -1,0 +1,91 @@
+"""``twin design DIAGNOSIS_DIR``: the next run, the one that tells the explanations apart."""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+from twin.cli import common
+from twin.frames import DOF_NAMES
+from twin.lifecycle import check_output_dir, replacing_dir
+
+#: ``--budget-s``: from a few periods to an hour.
+BUDGET_S = common.number(10, 3600)
+#: ``--finding``: which finding of the diagnosis (from 1).
+FINDING = common.count(1, 1000)
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    """Add ``twin design`` to the ``twin`` parser."""
+    p = sub.add_parser(
+        "design",
+        parents=[
+            common.out_parent(
+                "folder for design.json, commands.csv and schedule.toml "
+                "(default out/design-<diagnosis folder's name>)"
+            ),
+            common.json_parent("the design"),
+            common.quiet_parent(),
+        ],
+        help="design the run that tells a diagnosis' explanations apart",
+        description="Read a diagnosis folder (twin diagnose --out) whose finding is ambiguous "
+        "and choose the multisine in its DOF, within the platform's limits and a time budget, "
+        "that the alternatives explain most differently (each refitted to the others); or, "
+        "with --effect, the run that best shows an effect the runs could not. Writes the run "
+        "as a twin-run/1 commands.csv and a twin-schedule/1 TOML schedule, and the expected "
+        "evidence. Run it on the platform, import it, and give it to twin diagnose with the "
+        "old runs.",
+    )
+    p.add_argument("diagnosis", metavar="DIAGNOSIS_DIR", help="a folder twin diagnose wrote")
+    p.add_argument(
+        "--finding", type=FINDING, default=1, help="the ambiguous finding to resolve (default 1)"
+    )
+    p.add_argument(
+        "--effect",
+        help="instead: the effect to see below its smallest detectable "
+        "size (after 'no finding'; e.g. delay, backlash)",
+    )
+    p.add_argument(
+        "--dof",
+        choices=DOF_NAMES,
+        help="with --effect: the DOF (default the first the diagnosis analysed)",
+    )
+    p.add_argument(
+        "--budget-s",
+        type=BUDGET_S,
+        default=120.0,
+        help=f"longest run, s ({BUDGET_S.span}; default 120)",
+    )
+    p.set_defaults(func=_cmd_design)
+
+
+def _cmd_design(args: argparse.Namespace) -> int:
+    from twin.diagnose.design import design_from, write_design
+
+    out = Path(args.out or Path("out") / f"design-{Path(args.diagnosis).resolve().name}")
+    check_output_dir(out, "design.json")
+    result = design_from(
+        args.diagnosis,
+        args.finding - 1,
+        args.effect,
+        args.dof,
+        args.budget_s,
+        common.progress(args),
+    )
+    with replacing_dir(out, "design.json") as tmp:
+        write_design(result, tmp)
+    if args.json:
+        print(json.dumps(result.to_json(), indent=2))
+        return 0
+    for line in result.summary_lines():
+        print(line)
+    print(
+        f"wrote {out}/commands.csv (twin-run/1 commands), {out}/schedule.toml "
+        f"(twin-schedule/1) and {out}/design.json"
+    )
+    print(
+        "next: run it on the platform, import it (twin import), then twin diagnose the old "
+        "runs and the new one together"
+    )
+    return 0

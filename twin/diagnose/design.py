@@ -1,0 +1,621 @@
+"""Design the next run: the measurement that tells the alternatives of a diagnosis apart.
+
+When a diagnosis is ambiguous (several explanations within the selection margin:
+:mod:`twin.diagnose.select`), or found nothing and a user asks how to see a smaller effect,
+:func:`design_run` chooses one single-sine run in the finding's DOF: its frequency and
+acceleration amplitude (within the platform's limits: :func:`twin.signals.check_signal`) and
+its length (within a time budget), the one whose expected evidence between the closest two
+explanations is largest.
+
+The expected evidence of a run between explanations i and j, if i is true, is
+
+    E_ij = 2 |H_i(f) - H_j(f)|^2 A^2 / s(f)^2
+
+(the BIC difference the run adds with both at their fitted parameters: the Kullback-Leibler
+divergence of the two complex Gaussians, as :func:`twin.diagnose.detect.expected_delta_bic`;
+refitting j on the new run can absorb part of it, so it is an upper bound). H is each
+explanation's response at the line (analytic for linear effects; simulated, noise-free, when
+one of them has a backlash, whose describing function depends on the amplitude), A the
+acceleration amplitude and s the noise of a Fourier amplitude over the new window: measured
+in the diagnosed runs, off their lines, next to f, and scaled by sqrt(T_old / T_new).
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy import optimize
+
+from twin.chain.config import MotionSystem
+from twin.chain.extensions import Extension
+from twin.diagnose.candidates import (
+    make_extension,
+    numeric_names,
+    search_space,
+)
+from twin.diagnose.data import Case, Channel, load_case
+from twin.diagnose.select import BIC_MARGIN
+from twin.errors import DataError, SignalError, SignalLimitError
+from twin.frames import acceleration_unit, dof_index
+from twin.measurement.describing_function import fourier_coefficients
+from twin.progress import ProgressFn
+from twin.signals import (
+    DescribingSignal,
+    MultiSine,
+    base_frequency,
+    check_signal,
+    periodic_signal,
+    premeasurement_periods,
+    single_sine,
+)
+
+FloatArray = NDArray[np.float64]
+ComplexArray = NDArray[np.complex128]
+#: Frequencies tried [Hz] (multiples of 0.05 Hz: whole periods in a window of 20 s).
+FREQUENCIES_HZ = (0.1, 0.2, 0.3, 0.5, 0.7, 1.0, 1.5, 2.0, 3.0, 5.0, 7.0, 10.0, 12.0, 15.0, 20.0)
+#: Acceleration amplitudes tried, largest first [m/s^2 or rad/s^2]; the largest that the
+#: platform's limits allow at a frequency, and a third and a tenth of it.
+AMPLITUDES = (3.0, 2.0, 1.0, 0.5, 0.2, 0.1, 0.05)
+#: Neighbouring bins on each side of a frequency whose noise is measured.
+NOISE_BINS = 5
+#: Default time budget of the designed run [s].
+BUDGET_S = 120.0
+#: Lines of the designed multisine.
+LINES = 3
+#: Evidence below which two explanations count as responding alike at every line.
+SAME = 1e-6
+#: Factors tried on the lines' amplitudes, together, until the multisine fits the limits.
+SCALES = (1.0, 0.7, 0.5, 0.35, 0.25, 0.18, 0.12, 0.08, 0.05)
+
+
+@dataclass(frozen=True)
+class Explanation:
+    """One explanation of the runs: a set of effects with their fitted parameters.
+
+    ``primary``: one of those the runs cannot tell apart (the named set and its
+    alternatives); a rival is any other single effect the diagnosis fitted, which the designed
+    run must not leave able to mimic them (refitted: :class:`Mimic`).
+    """
+
+    label: str
+    extensions: tuple[Extension, ...]
+    primary: bool = True
+
+    def config(self, nominal: MotionSystem) -> MotionSystem:
+        """Return the nominal configuration extended by this explanation."""
+        return nominal.replace(extensions=(*nominal.extensions, *self.extensions))
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """One candidate run and the evidence it is expected to give."""
+
+    frequency_hz: float
+    amplitude: float
+    window_s: float
+    duration_s: float
+    evidence: dict[tuple[str, str], float]
+
+    @property
+    def weakest(self) -> float:
+        """The least expected evidence over the pairs that matter (see :func:`design_run`)."""
+        return min(self.evidence.values(), default=0.0)
+
+
+@dataclass(frozen=True)
+class DesignResult:
+    """The designed run, why, and what else was weighed."""
+
+    dof: str
+    platform: str
+    explanations: tuple[Explanation, ...]
+    best: Candidate
+    candidates: tuple[Candidate, ...]
+    signal: DescribingSignal
+    source: str
+    notes: tuple[str, ...] = field(default_factory=tuple)
+
+    @property
+    def decides(self) -> bool:
+        """Whether the run is expected to separate every pair by more than the margin."""
+        return self.best.weakest > BIC_MARGIN
+
+    def to_json(self) -> dict[str, object]:
+        """Return the design as JSON (``design.json``)."""
+        b = self.best
+        return {
+            "dof": self.dof,
+            "platform": self.platform,
+            "diagnosis": self.source,
+            "explanations": [
+                {"label": e.label, "extensions": [x.to_json() for x in e.extensions]}
+                for e in self.explanations
+            ],
+            "run": {
+                "signal": "multisine" if len(self.signal.frequencies_hz) > 1 else "single sine",
+                "frequencies_hz": [float(f) for f in self.signal.frequencies_hz],
+                "amplitudes": [float(a) for a in self.signal.amplitudes],  # type: ignore[union-attr]
+                "amplitude_unit": acceleration_unit(self.dof),
+                "window_s": b.window_s,
+                "duration_s": b.duration_s,
+            },
+            "expected_evidence": [
+                {"true": i, "other": j, "delta_bic": v} for (i, j), v in b.evidence.items()
+            ],
+            "decides": self.decides,
+            "margin": BIC_MARGIN,
+            "candidates": [
+                {
+                    "frequency_hz": c.frequency_hz,
+                    "amplitude": c.amplitude,
+                    "weakest_delta_bic": c.weakest,
+                }
+                for c in self.candidates
+            ],
+            "notes": list(self.notes),
+        }
+
+    def summary_lines(self) -> list[str]:
+        """Return the design as the terminal shows it."""
+        b, unit = self.best, acceleration_unit(self.dof)
+        sig = self.signal
+        lines = ", ".join(
+            f"{f:g} Hz {a:.3g} {unit}"
+            for f, a in zip(sig.frequencies_hz, sig.amplitudes, strict=True)
+        )  # type: ignore[arg-type]
+        out = [
+            f"run: {self.dof}, lines {lines}; {b.duration_s:.0f} s ({b.window_s:.0f} s measured)",
+            "expected evidence (BIC) of the old runs and this one, if one explanation is true, "
+            "against each other refitted to it:",
+        ]
+        for (i, j), v in b.evidence.items():
+            out.append(f"  if {i}: against {j} {v:.1f}")
+        out.append(
+            f"expected to decide (every pair above {BIC_MARGIN:g})"
+            if self.decides
+            else f"not expected to decide within the budget (weakest pair {b.weakest:.1f}, "
+            f"below {BIC_MARGIN:g}); the evidence grows with the measured time: about "
+            f"{b.window_s * BIC_MARGIN / max(b.weakest, 1e-9):.3g} s of it would be needed"
+        )
+        return [*out, *(f"note: {n}" for n in self.notes)]
+
+
+def explanations_of(doc: dict, finding: int = 0) -> tuple[str, list[Explanation]]:
+    """Return the DOF and the explanations of an ambiguous finding of a ``diagnosis.json``.
+
+    Raises
+    ------
+    DataError
+        No such finding, or one that is not ambiguous (nothing to tell apart).
+
+    """
+    findings = doc.get("findings") or []
+    if not 0 <= finding < len(findings):
+        raise DataError(f"the diagnosis has {len(findings)} finding(s); no finding {finding + 1}")
+    f = findings[finding]
+    alts = f.get("alternatives") or []
+    if not f.get("ambiguous") or not alts or not all("parameters" in a for a in alts):
+        raise DataError(
+            f"finding {finding + 1} ({f['effect']}) is not ambiguous: there is nothing to tell "
+            "apart (give --effect NAME to design a run that sees a smaller one)"
+        )
+    dof = f["dofs"][0]
+    named = Extension.from_json({k: f[k] for k in ("effect", "parameters", "dofs")})
+    out = [Explanation(named.describe(), (named,))]
+    for a in alts:
+        exts = tuple(
+            make_extension(e, list(a["parameters"][e]), list(a["parameters"][e].values()), dof)
+            for e in a["effects"]
+        )
+        out.append(Explanation(" + ".join(x.describe() for x in exts), exts))
+    have = {tuple(sorted(x.effect for x in e.extensions)) for e in out}
+    for r in doc["nominal"]["dofs"][dof].get("singles_tried", []):
+        (effect,) = r["effects"]
+        if (effect,) in have:
+            continue
+        ext = make_extension(
+            effect, list(r["parameters"][effect]), list(r["parameters"][effect].values()), dof
+        )
+        out.append(Explanation(ext.describe(), (ext,), primary=False))
+    return dof, out
+
+
+def detection_explanations(doc: dict, dof: str, effect: str) -> list[Explanation]:
+    """Return "nothing" and ``effect`` at the size the runs could just not show (no finding).
+
+    Raises
+    ------
+    DataError
+        For a DOF the diagnosis did not analyse, or an effect without a stated size.
+
+    """
+    dofs = doc["nominal"]["dofs"]
+    if dof not in dofs:
+        raise DataError(f"the diagnosis analysed {', '.join(dofs)}; not {dof}")
+    entry = dofs[dof]["smallest_detectable"].get(effect)
+    if entry is None:
+        raise DataError(
+            f"no smallest detectable size of {effect!r} in {dof}; stated for "
+            f"{', '.join(dofs[dof]['smallest_detectable'])}"
+        )
+    values = entry.get("values", [entry.get("value")])
+    size = next((v for v in reversed(values) if v is not None), None)
+    if size is None:
+        raise DataError(f"{effect} in {dof}: no size in its searched range would have shown")
+    ext = make_extension(effect, [entry["parameter"]], [size], dof)
+    return [Explanation("no effect", ()), Explanation(ext.describe(), (ext,))]
+
+
+def measured_noise(
+    case: Case, dof: str, frequencies: Sequence[float], channels: Sequence[Channel]
+) -> tuple[FloatArray, float]:
+    """Return the noise of a Fourier amplitude at each frequency, and the window it holds for.
+
+    From each of ``channels`` (diagnosed runs of ``dof``): the residual measured - nominal
+    twin, at the :data:`NOISE_BINS` bins on each side of the frequency that are not lines of
+    the run (or their 2nd and 3rd harmonics); the root mean square over the runs, for the
+    shortest window.
+
+    Raises
+    ------
+    DataError
+        No run of ``dof``.
+
+    """
+    if not channels:
+        raise DataError(f"the diagnosed runs do not drive {dof}")
+    power, windows = np.zeros(len(frequencies)), []
+    for ch in channels:
+        t0, t1 = ch.window
+        df = 1.0 / (t1 - t0)
+        lines = np.concatenate([ch.lines_hz * m for m in (1, 2, 3)])
+        resid = ch.measured - ch.nominal
+        for i, f in enumerate(frequencies):
+            k = np.round(f / df) + np.arange(-NOISE_BINS, NOISE_BINS + 1)
+            bins = k[k > 0] * df
+            bins = bins[np.min(np.abs(bins[:, None] - lines[None, :]), axis=1) > 0.5 * df]
+            bins = bins[np.abs(bins - f) > 0.5 * df]
+            c = fourier_coefficients(ch.t, resid, bins, ch.window)
+            power[i] += float(np.mean(np.abs(c) ** 2))
+        windows.append(t1 - t0)
+    return np.sqrt(power / len(channels)), min(windows)
+
+
+def _largest_amplitude(platform: str, dof: str, f: float) -> float | None:
+    for a in AMPLITUDES:
+        try:
+            check_signal(single_sine(dof, f, a).commands, platform)
+        except SignalLimitError:
+            continue
+        return a
+    return None
+
+
+def _multisine(
+    platform: str, dof: str, lines: Sequence[tuple[float, float]], budget_s: float
+) -> DescribingSignal | None:
+    """Return the multisine of ``lines`` (frequency, largest single amplitude) within limits.
+
+    The amplitudes are scaled down together by the first of :data:`SCALES` whose signal the
+    platform's limits allow, and the window is the longest whole number of base periods
+    the budget leaves after the fades and the settling (None: none fits).
+    """
+    f = np.array([x[0] for x in lines])
+    a = np.array([x[1] for x in lines])
+    f_min = float(f.min())
+    overhead = 2.0 / f_min + premeasurement_periods(f_min) / f_min
+    period = 1.0 / base_frequency(f)
+    window = np.floor((budget_s - overhead) / period) * period
+    if window < period - 1e-9:
+        return None
+    for scale in SCALES:
+        sig = periodic_signal(
+            MultiSine(f, a * scale), dof, window_s=window, label="designed multisine"
+        )
+        try:
+            check_signal(sig.commands, platform)
+        except SignalLimitError:
+            continue
+        return sig
+    return None
+
+
+@dataclass(frozen=True)
+class LineSet:
+    """Lines a set of runs measures: frequency, acceleration amplitude, noise of the amplitude."""
+
+    f: FloatArray
+    amplitude: FloatArray
+    noise: FloatArray
+
+    def __add__(self, other: LineSet) -> LineSet:
+        return LineSet(
+            *(
+                np.concatenate([a, b])
+                for a, b in zip(
+                    (self.f, self.amplitude, self.noise),
+                    (other.f, other.amplitude, other.noise),
+                    strict=True,
+                )
+            )
+        )
+
+    def evidence(self, hi: ComplexArray, hj: ComplexArray) -> float:
+        """Return 2 sum |H_i - H_j|^2 A^2 / s^2: the BIC difference if i is true."""
+        return float(2 * np.sum(np.abs(hi - hj) ** 2 * self.amplitude**2 / self.noise**2))
+
+
+def old_lines(case: Case, dof: str) -> LineSet:
+    """Return the lines the diagnosed runs measured (their noise off the lines, next to them)."""
+    parts = []
+    for ch in case.of(dof):
+        f = np.asarray(ch.lines_hz, dtype=float)
+        u = fourier_coefficients(ch.t, ch.commands.at(ch.t, 2)[:, dof_index(dof)], f, ch.window)
+        noise, _ = measured_noise(case, dof, f, [ch])
+        parts.append(LineSet(f, np.abs(u), noise))
+    out = parts[0]
+    for p in parts[1:]:
+        out = out + p
+    return out
+
+
+class Mimic:
+    """Refits one explanation so that its lines match another's (the rival at its best)."""
+
+    def __init__(self, case: Case, dof: str, expl: Explanation) -> None:
+        self.nominal, self.k, self.expl = case.clean, dof_index(dof), expl
+        channels = case.of(dof)
+        self.slots: list[tuple[str, list[str], list[float], list[tuple[float, float]]]] = []
+        for ext in expl.extensions:
+            names = numeric_names(ext.effect)
+            space = search_space(ext.effect, case, dof, channels)
+            self.slots.append(
+                (ext.effect, list(names), [ext.value(n) for n in names], list(space.bounds))
+            )
+        self.dof = dof
+
+    @property
+    def start(self) -> FloatArray:
+        """Return the parameters the diagnosis fitted, in slot order."""
+        return np.array([v for _, _, values, _ in self.slots for v in values])
+
+    def response(self, theta: FloatArray, f: FloatArray) -> ComplexArray:
+        """Return the explanation's response at ``f`` with parameters ``theta``."""
+        exts, i = [], 0
+        for effect, names, _, _ in self.slots:
+            exts.append(make_extension(effect, names, theta[i : i + len(names)], self.dof))
+            i += len(names)
+        cfg = self.nominal.replace(extensions=(*self.nominal.extensions, *exts))
+        return cfg.frequency_response(f)[:, self.k]
+
+    def fit(self, target: ComplexArray, lines: LineSet) -> FloatArray:
+        """Return the parameters whose response is nearest ``target`` at ``lines``."""
+        lo = np.array([b[0] for *_, bounds in self.slots for b in bounds])
+        hi = np.array([b[1] for *_, bounds in self.slots for b in bounds])
+        w = lines.amplitude / lines.noise
+
+        def residual(theta: FloatArray) -> FloatArray:
+            r = (self.response(theta, lines.f) - target) * w
+            return np.concatenate([r.real, r.imag])
+
+        x0 = np.clip(self.start, lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo))
+        return optimize.least_squares(residual, x0, bounds=(lo, hi), max_nfev=200).x
+
+    def evidence(self, target: ComplexArray, lines: LineSet) -> float:
+        """Return the least evidence against this explanation when ``target`` is true."""
+        return lines.evidence(target, self.response(self.fit(target, lines), lines.f))
+
+
+def design_run(
+    case: Case,
+    expls: Sequence[Explanation],
+    dof: str,
+    budget_s: float = BUDGET_S,
+    max_hz: float = np.inf,
+    progress: ProgressFn | None = None,
+    source: str = "",
+) -> DesignResult:
+    """Choose the multisine within ``budget_s`` that best tells ``expls`` apart.
+
+    For every ordered pair (i true, j another explanation, i one of the ambiguous ones), j
+    is refitted to i's lines over the diagnosed runs' lines and every frequency of
+    :data:`FREQUENCIES_HZ` within the band (:class:`Mimic`): what j can still not mimic at a
+    frequency is that line's evidence. The run's :data:`LINES` lines are chosen one by one,
+    each the one that most raises the weakest pair's evidence; the multisine's amplitudes are
+    scaled together to the platform's limits and every pair refitted again on the old and
+    the new lines. Pairs whose responses are the same at every frequency (a sensor filter and
+    a platform lag) cannot be told apart by any run's lines: they are left to the noise.
+
+    Raises
+    ------
+    SignalError
+        For a budget too short for any frequency's fades, settling and one period.
+
+    """
+    nominal = case.clean
+    platform = nominal.platform
+    freqs = np.array([f for f in FREQUENCIES_HZ if f <= max_hz])
+    noise, t_old = measured_noise(case, dof, freqs, case.of(dof))
+    tops, keep = [], []
+    for f in freqs:
+        top = _largest_amplitude(platform, dof, float(f))
+        if top is not None and _multisine(platform, dof, [(float(f), top)], budget_s):
+            tops.append(top)
+            keep.append(True)
+        else:
+            keep.append(False)
+    freqs, noise = freqs[keep], noise[keep]
+    if not freqs.size:
+        raise SignalError(
+            f"a budget of {budget_s:g} s is too short for any sine in {dof} "
+            "(fades, settling and one period), or none fits the limits"
+        )
+    window = budget_s / 2  # for ranking; the run's own window is used for its evidence
+    band = LineSet(freqs, np.array(tops), noise * np.sqrt(t_old / window))
+    past = old_lines(case, dof)
+    mimics = {id(e): Mimic(case, dof, e) for e in expls}
+
+    def response(e: Explanation, f: FloatArray) -> ComplexArray:
+        return mimics[id(e)].response(mimics[id(e)].start, f)
+
+    def nonlinear(e: Explanation) -> bool:
+        return any(x.effect == "backlash" for x in e.extensions)
+
+    pairs = [
+        (i, j)
+        for i in expls
+        for j in expls
+        if i is not j and i.primary and not nonlinear(i) and not nonlinear(j)
+    ]
+    per_line, same = {}, []
+    everything = past + band
+    for n, (i, j) in enumerate(pairs):
+        if progress:
+            progress("design: refitting each explanation to the others", n, len(pairs))
+        theta = mimics[id(j)].fit(response(i, everything.f), everything)
+        d = response(i, band.f) - mimics[id(j)].response(theta, band.f)
+        e = 2 * np.abs(d) ** 2 * band.amplitude**2 / band.noise**2
+        if e.max() < SAME:
+            same.append((i, j))
+        else:
+            per_line[i.label, j.label] = e
+    chosen: list[int] = []
+    for _ in range(min(LINES, freqs.size)):
+        best = max(
+            (k for k in range(freqs.size) if k not in chosen),
+            key=lambda k: min((v[[*chosen, k]].sum() for v in per_line.values()), default=0.0),
+        )
+        chosen.append(best)
+    sig = _multisine(platform, dof, [(float(freqs[k]), tops[k]) for k in sorted(chosen)], budget_s)
+    if sig is None:
+        k = chosen[0]
+        sig = _multisine(platform, dof, [(float(freqs[k]), tops[k])], budget_s)
+    assert sig is not None
+    w_new = sig.window[1] - sig.window[0]
+    new = LineSet(
+        sig.frequencies_hz,
+        np.asarray(sig.amplitudes),
+        np.interp(np.log(sig.frequencies_hz), np.log(freqs), noise) * np.sqrt(t_old / w_new),
+    )
+    both = past + new
+    evidence = {
+        (i.label, j.label): mimics[id(j)].evidence(response(i, both.f), both)
+        for i, j in pairs
+        if (i, j) not in same
+    }
+    run = Candidate(
+        float(sig.frequencies_hz.min()),
+        float(np.max(sig.amplitudes)),
+        float(w_new),
+        sig.commands.duration,
+        evidence,
+    )
+    notes = [
+        f"{i.label} and {j.label} respond alike at every frequency: no run's lines tell "
+        "them apart, the measured noise does (a run at rest, at the IMU's full rate)"
+        for i, j in same
+        if i.primary and j.primary and expls.index(i) < expls.index(j)
+    ]
+    skipped = [e.label for e in expls if nonlinear(e)]
+    if skipped:
+        notes.append(
+            f"not weighed (a backlash: each amplitude is a simulation): {'; '.join(skipped)}"
+        )
+    singles = tuple(
+        Candidate(float(f), float(a), window, 0.0, {k: float(v[n]) for k, v in per_line.items()})
+        for n, (f, a) in enumerate(zip(freqs, tops, strict=True))
+    )
+    return DesignResult(dof, platform, tuple(expls), run, singles, sig, source, tuple(notes))
+
+
+def design_from(
+    folder: str | Path,
+    finding: int = 0,
+    effect: str | None = None,
+    dof: str | None = None,
+    budget_s: float = BUDGET_S,
+    progress: ProgressFn | None = None,
+) -> DesignResult:
+    """Design the next run of a diagnosis folder (``twin diagnose --out``'s).
+
+    Parameters
+    ----------
+    folder : str or Path
+        Holds ``diagnosis.json``; its runs must still be where it says.
+    finding : int
+        The ambiguous finding to resolve (0: the first).
+    effect : str, optional
+        Instead: design the run that best shows ``effect`` at the size the runs could just
+        not show.
+    dof : str, optional
+        With ``effect``: the DOF (default the first the diagnosis analysed).
+    budget_s : float
+        Longest run [s].
+    progress : callable, optional
+        Called with what is being done.
+
+    Raises
+    ------
+    DataError
+        A folder without ``diagnosis.json``, a finding that is not ambiguous, an effect
+        without a stated size.
+
+    """
+    from twin.checks import read_json
+
+    path = Path(folder) / "diagnosis.json"
+    if not path.exists():
+        raise DataError(f"{folder}: no diagnosis.json; give a folder twin diagnose wrote")
+    doc = read_json(path, "a diagnosis.json written by twin diagnose")
+    nominal = MotionSystem.from_meta(doc["nominal"]["platform"], doc["nominal"]["platform_config"])  # type: ignore[index]
+    if effect is not None:
+        dof = dof or next(iter(doc["nominal"]["dofs"]))  # type: ignore[index]
+        expls = detection_explanations(doc, dof, effect)  # type: ignore[arg-type]
+    else:
+        dof, expls = explanations_of(doc, finding)  # type: ignore[arg-type]
+    case = load_case(
+        doc["nominal"]["runs"],
+        nominal,
+        doc["nominal"]["model"],
+        dofs=[dof],  # type: ignore[index]
+        realisations=2,
+        progress=progress,
+    )
+    band = doc["nominal"].get("band_hz") or [None, None]  # type: ignore[union-attr]
+    max_hz = float(band[1]) if band[1] is not None else np.inf
+    return design_run(case, expls, dof, budget_s, max_hz, progress, str(path))
+
+
+def write_design(result: DesignResult, out: Path) -> None:
+    """Write ``design.json``, ``commands.csv`` (twin-run/1) and ``schedule.toml`` into ``out``."""
+    from twin.runs import write_commands
+
+    (out / "design.json").write_text(
+        json.dumps(result.to_json(), indent=2) + "\n", encoding="utf-8"
+    )
+    write_commands(out / "commands.csv", result.signal.commands)
+    sig = result.signal
+    f = [float(x) for x in sig.frequencies_hz]
+    position = [float(a) / (2 * np.pi * x) ** 2 for a, x in zip(sig.amplitudes, f, strict=True)]  # type: ignore[arg-type]
+    schedule = "\n".join(
+        [
+            'schedule = "twin-schedule/1"',
+            f'name = "designed run in {result.dof}"',
+            "",
+            "[[move]]",
+            'kind = "sines"',
+            f'dof = "{result.dof}"',
+            f"frequencies_hz = {f!r}",
+            f"amplitudes = {position!r}",
+            f"phases_deg = {[180.0] * len(f)!r}",
+            f"fade_s = {1.0 / min(f)!r}",
+            f"duration_s = {sig.commands.duration!r}",
+            "",
+        ]
+    )
+    (out / "schedule.toml").write_text(schedule, encoding="utf-8")
