@@ -39,7 +39,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("diagnosis", metavar="DIAGNOSIS_DIR", help="a folder twin diagnose wrote")
     p.add_argument(
-        "--finding", type=FINDING, default=1, help="the ambiguous finding to resolve (default 1)"
+        "--finding",
+        type=FINDING,
+        default=1,
+        help=f"the ambiguous finding to resolve ({FINDING.span}; default 1)",
     )
     p.add_argument(
         "--effect",
