@@ -79,6 +79,7 @@ def test_tilt_kept_shows_as_coupling(reduced_nominal):
     assert r.cells["pitch"]["surge"].above_noise
 
 
+@pytest.mark.slow
 def test_full_model_nominal_coupling_is_small():
     """The full MuJoCo SRS: the thesis found its parasitic motion negligible (§5.5). Stated
     bound: every off-diagonal coupling is at noise level (the ADIS16355's floor at 0.3 m/s^2

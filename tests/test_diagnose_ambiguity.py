@@ -64,6 +64,7 @@ def test_an_ambiguous_finding_is_said_so_everywhere(delay_behind_filter):
     assert any("cannot tell these apart" in x and "none is named as the cause" in x for x in lines)
 
 
+@pytest.mark.slow
 def test_a_clear_cause_is_not_ambiguous(tmp_path):
     ext = Extension("gain", {"gain": 0.8}, ("pitch",))
     d = _diagnosis(tmp_path, ext, "pitch", (1, 2), 4)

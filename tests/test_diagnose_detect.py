@@ -48,6 +48,7 @@ def heave_backlash_threshold(tmp_path_factory):
     return mpi, entry["value"]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("factor", "named"), [(0.3, False), (3.0, True)])
 def test_the_stated_backlash_threshold_means_what_it_says(
     heave_backlash_threshold, tmp_path, factor, named
