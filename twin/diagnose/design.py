@@ -466,11 +466,20 @@ def design_run(
     def nonlinear(e: Explanation) -> bool:
         return any(x.effect == "backlash" for x in e.extensions)
 
+    def effects(e: Explanation) -> set[str]:
+        return {x.effect for x in e.extensions}
+
+    # i true, j refitted to it; j holding all of i's effects mimics it exactly (the BIC's
+    # penalty on its extra parameters decides those, not any run's lines)
     pairs = [
         (i, j)
         for i in expls
         for j in expls
-        if i is not j and i.primary and not nonlinear(i) and not nonlinear(j)
+        if i is not j
+        and i.primary
+        and not nonlinear(i)
+        and not nonlinear(j)
+        and not effects(i) <= effects(j)
     ]
     per_line, same = {}, []
     everything = past + band
