@@ -202,14 +202,16 @@ def smallest_detectable(
         "values": [lo_g, hi_g],
         "statement": _both("gain", lo_g, hi_g, _gain_text),
     }
-    lead = _threshold(excess_of("lead", "time_constant_s"), 0.0, 0.3)
-    out["lead"] = {
-        "parameter": "time_constant_s",
-        "value": lead,
-        "statement": "no lead up to 300 ms would have been found"
-        if lead is None
-        else f"a lead above {_lead_text(lead)} would have been found",
-    }
+    for effect, name, what in (("lead", "time_constant_s", "lead"),
+                               ("platform_lag", "lag_s", "platform lag")):  # fmt: skip
+        size = _threshold(excess_of(effect, name), 0.0, 0.3)
+        out[effect] = {
+            "parameter": name,
+            "value": size,
+            "statement": f"no {what} up to 300 ms would have been found"
+            if size is None
+            else f"a {what} above {_lead_text(size)} would have been found",
+        }
     for effect, name, extra, what in (
         ("platform_filter", "break_hz", None, "a platform filter (2nd order) breaking"),
         ("sensor_filter", "cutoff_hz", {"channels": (DOF_CHANNEL[dof],)},
@@ -226,14 +228,6 @@ def smallest_detectable(
             if f is not None
             else f"no {effect.replace('_', ' ')} above 0.1 Hz would have been found",
         }
-    lag = _threshold(excess_of("platform_lag", "lag_s"), 0.0, 0.3)
-    out["platform_lag"] = {
-        "parameter": "lag_s",
-        "value": lag,
-        "statement": "no platform lag up to 300 ms would have been found"
-        if lag is None
-        else f"a platform lag above {_lead_text(lag)} would have been found",
-    }
     out["backlash"] = _smallest_play(base, evidence)
     if segments and any(s.source_psd[0].any() for s in segments):
 
