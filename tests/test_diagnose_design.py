@@ -93,3 +93,14 @@ def test_the_designed_run_separates_what_it_predicts(diagnosed, tmp_path):
         assert effects not in still and effects != named, (j, still)
     # and the delay itself is among what the runs now support
     assert named == "delay" or "delay" in still
+
+
+def test_design_refuses_what_it_cannot_design_in_one_line(diagnosed, tmp_path, capsys):
+    root, _ = diagnosed
+    assert main(["design", str(root / "diag"), "--finding", "9", "--out", str(tmp_path / "a")]) == 2
+    err = capsys.readouterr().err
+    assert "no finding 9" in err and err.count("\n") == 1
+    (tmp_path / "empty").mkdir()
+    assert main(["design", str(tmp_path / "empty"), "--out", str(tmp_path / "b")]) == 2
+    assert "no diagnosis.json" in capsys.readouterr().err
+    assert not (tmp_path / "a").exists() and not (tmp_path / "b").exists()
