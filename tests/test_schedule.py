@@ -294,8 +294,25 @@ BAD_TOML = [
     ),
     (
         'schedule = "twin-schedule/1"\n[[move]]\nkind = "constant_speed"\ndof = "heave"\n'
-        'speed = 1\nduration_s = 1\n[[move]]\nkind = "still"\nduration_s = 1\n',
-        "speed jumps",
+        "speed = 1\nduration_s = 1\n",
+        "heave speed 1, but the platform rests in the start",
+    ),
+    (
+        'schedule = "twin-schedule/1"\n[[move]]\nkind = "constant_acceleration"\n'
+        'dof = "heave"\nacceleration = 1\nv_start = 0\nv_end = 0.5\n[[move]]\n'
+        'kind = "still"\nduration_s = 1\n',
+        "speed jumps from 0.5 to 0",
+    ),
+    (
+        'schedule = "twin-schedule/1"\n[[move]]\nkind = "still"\nduration_s = 1\n[[move]]\n'
+        'kind = "constant_speed"\ndof = "heave"\nspeed = 0.2\nduration_s = 1\nstart_s = 2\n',
+        "rests in the pause before it",
+    ),
+    (
+        'schedule = "twin-schedule/1"\n[[move]]\nkind = "still"\nduration_s = 1\n[[move]]\n'
+        'kind = "sines"\ndof = "heave"\nfrequencies_hz = [1.0]\namplitudes = [0.01]\n'
+        "phases_deg = [90.0]\nfade_s = 0\nduration_s = 2\n",
+        "a jump of 0.01",
     ),
     ("schedule = [", "not valid TOML"),
 ]

@@ -230,6 +230,31 @@ def faded_sines(
     return np.where(inside, y, 0.0)
 
 
+def faded_sines_rate(
+    t: ArrayLike,
+    omega: ArrayLike,
+    gain: ArrayLike,
+    phase: ArrayLike,
+    t_fade: float,
+    t_total: float,
+) -> FloatArray:
+    """Return the time derivative of :func:`faded_sines` (same arguments), exactly."""
+    tt = np.asarray(t, dtype=float)
+    w, g, p = (np.atleast_1d(np.asarray(x, dtype=float)) for x in (omega, gain, phase))
+    arg = np.multiply.outer(tt, w) + p
+    y, dy = np.sin(arg) @ g, np.cos(arg) @ (g * w)
+    inside = (tt >= 0) & (tt <= t_total)
+    if t_fade <= 0:
+        return np.where(inside, dy, 0.0)
+    edge = np.minimum(tt, t_total - tt)
+    ramp = np.clip(edge / t_fade, 0.0, 1.0)
+    fading = (edge >= 0) & (edge < t_fade)
+    slope = np.where(fading, np.where(tt < t_total - tt, 1.0, -1.0) / t_fade, 0.0)
+    window = 0.5 - 0.5 * np.cos(np.pi * ramp)
+    rate = window * dy + 0.5 * np.pi * np.sin(np.pi * ramp) * slope * y
+    return np.where(inside, rate, 0.0)
+
+
 def _check_positive(value: float, name: str) -> None:
     if not np.isfinite(value) or value <= 0:
         raise SignalError(f"{name} must be a positive finite number; got {value}")

@@ -399,7 +399,7 @@ def write_commands(path: str | Path, commands: Trajectory) -> Path:
     The file :func:`read_commands` reads (and ``twin simulate --signal`` takes).
     """
     p = Path(path)
-    with open(p, "w", encoding=ENCODING, newline="") as fh:
+    with open(p, "w", encoding="utf-8", newline="") as fh:
         fh.write(",".join(HEADERS["commands.csv"]) + "\n")
         _write_rows(fh, commands.t0 + np.arange(commands.n) / commands.rate_hz, commands.values)
     return p

@@ -202,9 +202,14 @@ class LinearityResult:
 
     @property
     def linear(self) -> NDArray[np.bool_]:
-        """Whether each point's gain and phase change lie within their confidence intervals."""
-        return (np.abs(self.gain_change) <= self.gain_change_ci) & (
-            np.abs(self.phase_change_deg) <= self.phase_change_ci_deg
+        """Whether each point's gain and phase change lie within their confidence intervals.
+
+        A reference point is linear by definition (its change is zero, to rounding).
+        """
+        is_reference = self.reference == np.arange(self.frequencies_hz.size)
+        return is_reference | (
+            (np.abs(self.gain_change) <= self.gain_change_ci)
+            & (np.abs(self.phase_change_deg) <= self.phase_change_ci_deg)
         )
 
     def to_dict(self) -> dict[str, object]:

@@ -130,7 +130,7 @@ def _span(segs: list[Segment]) -> tuple[float, float]:
 def _bump(m: Measurement, segs: list[Segment], positions: object = None) -> bump.BumpResult:
     """Return the turn-around bumps of one DOF: every reversal from its first to its last."""
     lo, hi = _span(segs)  # widened: the platform turns round after its filter and delay
-    window = (max(lo - BUMP_MARGIN_S, float(m.t[0])), _settled(m, segs[-1], hi, BUMP_MARGIN_S))
+    window = (max(lo, float(m.t[0])), _settled(m, segs[-1], hi, BUMP_MARGIN_S))
     return bump.analyse_bump(m, segs[0].dof, window=window)
 
 
@@ -165,8 +165,9 @@ class NotInRun(Exception):
     """The run holds a test's moves, but not what the test needs from them (the reason)."""
 
 
-#: Time a bump series' window reaches beyond its reversal moves [s]: the turn-around comes
-#: after the platform filter's lag and the delay, and is measured up to 0.75 s after it.
+#: Time a bump series' window reaches beyond its last reversal move [s]: the turn-around
+#: comes after the platform filter's lag and the delay, and is measured up to 0.75 s after it
+#: (the window starts with the first reversal move: no other move's speed change is in it).
 BUMP_MARGIN_S = 1.5
 #: Most a limits move's window reaches into the rest after it: the platform arrives late [s].
 LIMITS_SETTLE_S = 2.0
@@ -182,7 +183,7 @@ ANALYSES: dict[str, Analysis] = {
     "parasitic": Analysis("df", "sine moves in one DOF at a time", _parasitic, per_dof=False),
     "hysteresis": Analysis(
         "hysteresis",
-        f"a single sine below {HYSTERESIS_HZ:g} Hz in one DOF, and a position record",
+        f"a single sine at or below {HYSTERESIS_HZ:g} Hz in one DOF, and a position record",
         _hysteresis,
     ),
     "bump": Analysis("bump", "a constant acceleration through a speed reversal in one DOF", _bump),

@@ -96,9 +96,15 @@ class Session(CloseOrAbort):
         return self._measure(sig.commands, name, {"signal": sig}, check_limits=check_limits)
 
     def measure_schedule(self, schedule: Schedule) -> Measurement:
-        """Run a whole test schedule as one run; return its measurement (with the schedule)."""
+        """Run a whole test schedule as one run; return its measurement (with the schedule).
+
+        A schedule with system-limits moves runs through the actuator limiter (limited and
+        counted, as ``twin agard limits`` runs); any other is checked against the platform's
+        limits first and refused if it would break one.
+        """
+        limits = "limits" in schedule.tests()
         return self._measure(schedule.commands(), schedule.slug, {"schedule": schedule},
-                             progress=True)  # fmt: skip
+                             progress=True, check_limits=not limits)  # fmt: skip
 
     def _measure(
         self,

@@ -283,6 +283,14 @@ def _analyse(args: argparse.Namespace):
         raise UsageError(f"{args.target}: a {args.test} test takes several sines; give the "
                          "schedule the run was made with (--schedule FILE)")  # fmt: skip
     m = from_run(args.target)
+    kind = m.meta.get("signal", {}).get("kind")
+    if args.test in ("bump", "limits") and kind != args.test:
+        from twin.errors import UsageError
+
+        raise UsageError(f"{args.target}: a {args.test} test analyses a {args.test} run (twin "
+                         f"agard {args.test} CONFIG --out DIR writes them) or a schedule's "
+                         f"moves (--schedule FILE); this run's signal is "
+                         f"{kind or 'not stated in its meta.json'}")  # fmt: skip
     if args.test == "parasitic":
         return parasitic.analyse_parasitic(m, args.dof), m.config
     if args.test == "bump":

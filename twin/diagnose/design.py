@@ -2,10 +2,10 @@
 
 When a diagnosis is ambiguous (several explanations within the selection margin:
 :mod:`twin.diagnose.select`), or found nothing and a user asks how to see a smaller effect,
-:func:`design_run` chooses one single-sine run in the finding's DOF: its frequency and
-acceleration amplitude (within the platform's limits: :func:`twin.signals.check_signal`) and
-its length (within a time budget), the one whose expected evidence between the closest two
-explanations is largest.
+:func:`design_run` chooses one run in the finding's DOF: a multisine of a few lines, their
+frequencies and acceleration amplitudes (within the platform's limits:
+:func:`twin.signals.check_signal`) and its length (within a time budget), the one whose
+expected evidence between the closest two explanations is largest.
 
 The expected evidence of a run between explanations i and j, if i is true, is
 
@@ -34,6 +34,7 @@ from scipy import optimize
 from twin.chain.config import MotionSystem
 from twin.chain.extensions import Extension
 from twin.diagnose.candidates import (
+    extension_at_bounds,
     make_extension,
     numeric_names,
     search_space,
@@ -63,6 +64,16 @@ FREQUENCIES_HZ = (0.1, 0.2, 0.3, 0.5, 0.7, 1.0, 1.5, 2.0, 3.0, 5.0, 7.0, 10.0, 1
 AMPLITUDES = (3.0, 2.0, 1.0, 0.5, 0.2, 0.1, 0.05)
 #: Neighbouring bins on each side of a frequency whose noise is measured.
 NOISE_BINS = 5
+#: Effects whose response is linear (a transfer function): what the design can weigh.
+LINEAR_EFFECTS = (
+    "delay",
+    "gain",
+    "platform_filter",
+    "resonance",
+    "lead",
+    "sensor_filter",
+    "platform_lag",
+)
 #: Default time budget of the designed run [s].
 BUDGET_S = 120.0
 #: Lines of the designed multisine.
@@ -195,6 +206,12 @@ def explanations_of(doc: dict, finding: int = 0) -> tuple[str, list[Explanation]
 
     """
     findings = doc.get("findings") or []
+    if not findings:
+        raise DataError(
+            "the diagnosis found nothing to tell apart; give --effect NAME (one of "
+            f"{', '.join(LINEAR_EFFECTS)}) to design the run that would show it "
+            "below the size these runs could"
+        )
     if not 0 <= finding < len(findings):
         raise DataError(f"the diagnosis has {len(findings)} finding(s); no finding {finding + 1}")
     f = findings[finding]
@@ -205,8 +222,19 @@ def explanations_of(doc: dict, finding: int = 0) -> tuple[str, list[Explanation]
             "apart (give --effect NAME to design a run that sees a smaller one)"
         )
     dof = f["dofs"][0]
-    named = Extension.from_json({k: f[k] for k in ("effect", "parameters", "dofs")})
-    out = [Explanation(named.describe(), (named,))]
+    members = set(f["evidence"].get("set") or [f["effect"]])
+    together = [f] + [
+        g
+        for g in findings
+        if g is not f
+        and g["dofs"] == f["dofs"]
+        and g["effect"] in members
+        and set(g["evidence"].get("set") or [g["effect"]]) == members
+    ]  # the named set whole: each member is a finding of its own
+    named = tuple(
+        Extension.from_json({k: g[k] for k in ("effect", "parameters", "dofs")}) for g in together
+    )
+    out = [Explanation(" + ".join(x.describe() for x in named), named)]
     for a in alts:
         exts = tuple(
             make_extension(e, list(a["parameters"][e]), list(a["parameters"][e].values()), dof)
@@ -234,6 +262,12 @@ def detection_explanations(doc: dict, dof: str, effect: str) -> list[Explanation
         For a DOF the diagnosis did not analyse, or an effect without a stated size.
 
     """
+    if effect not in LINEAR_EFFECTS:
+        raise DataError(
+            f"--effect {effect}: the design weighs linear effects only "
+            f"({', '.join(LINEAR_EFFECTS)}); a backlash's response depends on the "
+            "amplitude (each one a simulation)"
+        )
     dofs = doc["nominal"]["dofs"]
     if dof not in dofs:
         raise DataError(f"the diagnosis analysed {', '.join(dofs)}; not {dof}")
@@ -369,7 +403,8 @@ class Mimic:
 
     def __init__(self, case: Case, dof: str, expl: Explanation) -> None:
         self.nominal, self.k, self.expl = case.clean, dof_index(dof), expl
-        channels = case.of(dof)
+        self.case, self.channels = case, case.of(dof)
+        channels = self.channels
         self.slots: list[tuple[str, list[str], list[float], list[tuple[float, float]]]] = []
         for ext in expl.extensions:
             names = numeric_names(ext.effect)
@@ -406,9 +441,24 @@ class Mimic:
         x0 = np.clip(self.start, lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo))
         return optimize.least_squares(residual, x0, bounds=(lo, hi), max_nfev=200).x
 
-    def evidence(self, target: ComplexArray, lines: LineSet) -> float:
-        """Return the least evidence against this explanation when ``target`` is true."""
-        return lines.evidence(target, self.response(self.fit(target, lines), lines.f))
+    def at_bound(self, theta: FloatArray) -> bool:
+        """Return whether a refit lies at an end of a parameter's search (no explanation)."""
+        exts, i = [], 0
+        for effect, names, _, _ in self.slots:
+            exts.append(make_extension(effect, names, theta[i : i + len(names)], self.dof))
+            i += len(names)
+        return any(extension_at_bounds(x, self.case, self.dof, self.channels) for x in exts)
+
+    def evidence(self, target: ComplexArray, lines: LineSet) -> float | None:
+        """Return the least evidence against this explanation when ``target`` is true.
+
+        None where the best mimic lies at the bound of its search: then it is no explanation
+        (the diagnosis reports such a fit at the bound and never names it).
+        """
+        theta = self.fit(target, lines)
+        if self.at_bound(theta):
+            return None
+        return lines.evidence(target, self.response(theta, lines.f))
 
 
 def design_run(
@@ -487,6 +537,8 @@ def design_run(
         if progress:
             progress("design: refitting each explanation to the others", n, len(pairs))
         theta = mimics[id(j)].fit(response(i, everything.f), everything)
+        if mimics[id(j)].at_bound(theta):
+            continue  # j mimics i only at the edge of what it can be: not an explanation
         d = response(i, band.f) - mimics[id(j)].response(theta, band.f)
         e = 2 * np.abs(d) ** 2 * band.amplitude**2 / band.noise**2
         if e.max() < SAME:
@@ -512,11 +564,12 @@ def design_run(
         np.interp(np.log(sig.frequencies_hz), np.log(freqs), noise) * np.sqrt(t_old / w_new),
     )
     both = past + new
-    evidence = {
-        (i.label, j.label): mimics[id(j)].evidence(response(i, both.f), both)
-        for i, j in pairs
-        if (i, j) not in same
-    }
+    evidence = {}
+    for i, j in pairs:
+        if (i, j) not in same:
+            v = mimics[id(j)].evidence(response(i, both.f), both)
+            if v is not None:
+                evidence[i.label, j.label] = v
     run = Candidate(
         float(sig.frequencies_hz.min()),
         float(np.max(sig.amplitudes)),
@@ -588,7 +641,7 @@ def design_from(
     else:
         dof, expls = explanations_of(doc, finding)  # type: ignore[arg-type]
     case = load_case(
-        doc["nominal"]["runs"],
+        _run_paths(doc["nominal"], path),
         nominal,
         doc["nominal"]["model"],
         dofs=[dof],  # type: ignore[index]
@@ -598,6 +651,19 @@ def design_from(
     band = doc["nominal"].get("band_hz") or [None, None]  # type: ignore[union-attr]
     max_hz = float(band[1]) if band[1] is not None else np.inf
     return design_run(case, expls, dof, budget_s, max_hz, progress, str(path))
+
+
+def _run_paths(nominal: dict, path: Path) -> list[str]:
+    """Return the diagnosed runs' folders (absolute where the diagnosis wrote them so)."""
+    runs = nominal.get("run_paths") or nominal["runs"]
+    missing = [r for r in runs if not Path(r).is_dir()]
+    if missing:
+        raise DataError(
+            f"{path}: the diagnosed run {missing[0]} is not there (it must be to "
+            "measure its noise); run twin design where twin diagnose ran, or move "
+            "the runs back"
+        )
+    return list(runs)
 
 
 def write_design(result: DesignResult, out: Path) -> None:

@@ -270,15 +270,34 @@ class Diagnosis:
                 out.append(f"  {line}")
         elif not self.findings:
             out.append("no finding within the search bounds")
+        shown: list[tuple[object, ...]] = []
         for i, f in enumerate(self.findings, 1):
             held = held_text(f.gain)
             if f.ambiguous:
+                key = (tuple(f.extension.dofs), tuple(f.evidence.get("set") or ()))
+                if key in shown:  # another member of an ambiguous set: listed with it
+                    continue
+                shown.append(key)
+                members = [
+                    g
+                    for g in self.findings
+                    if g.ambiguous
+                    and (tuple(g.extension.dofs), tuple(g.evidence.get("set") or ())) == key
+                ]
+                vs = f.evidence.get("held_out_against_nominal") or {}
+                held = (
+                    f"line error {vs['chi2_per_line_before']:.2f} -> "
+                    f"{vs['chi2_per_line_after']:.2f} chi2/line"
+                    if vs
+                    else held
+                )
                 out.append(
                     f"{i}. the runs cannot tell these apart (within BIC {BIC_MARGIN:g}); none is "
                     "named as the cause:"
                 )
                 out.append(
-                    f"   - {f.extension.describe()}  (BIC +{f.delta_bic:.0f}; held out: {held})"
+                    f"   - {' + '.join(g.extension.describe() for g in members)}  (BIC "
+                    f"+{f.delta_bic:.0f}; held-out {held})"
                 )
                 for alt in f.evidence.get("alternatives") or []:
                     out.append(f"   - {describe_alternative(alt)}")
@@ -339,6 +358,7 @@ class Diagnosis:
                 "platform_config": self.case.config.to_meta(),
                 "model": self.case.model,
                 "runs": self.runs,
+                "run_paths": [str(Path(r).resolve()) for r in self.runs],
                 "validation_runs": self.validation,
                 "notes": self.notes,
                 "band_hz": [None, self.max_hz],

@@ -52,6 +52,8 @@ from twin.diagnose.evidence import Lines, lines, measured_line_sd
 from twin.progress import ProgressFn
 
 FloatArray = NDArray[np.float64]
+#: Most alternatives an ambiguous finding lists (the closest first).
+MAX_ALTERNATIVES = 3
 #: Evidence needed to name a cause [BIC units].
 BIC_MARGIN = 10.0
 #: Sets whose BIC is within this of the best are equally supported: the one with the fewest
@@ -240,7 +242,7 @@ def select(
     return Selection(fits[chosen], needed(chosen), table, n, fits=fits)
 
 
-def alternatives(sel: Selection, limit: int = 3) -> list[dict[str, object]]:
+def alternatives(sel: Selection, limit: int | None = 3) -> list[dict[str, object]]:
     """Other explanations whose BIC is within the margin of the named set.
 
     An alternative is a set that could be named on its own (it beats the nominal model by the
@@ -266,7 +268,7 @@ def alternatives(sel: Selection, limit: int = 3) -> list[dict[str, object]]:
         and not chosen <= set(r["effects"])  # type: ignore[arg-type]
         and not set(r["effects"]) <= chosen  # type: ignore[arg-type]
     ]
-    return out[:limit]
+    return out if limit is None else out[:limit]
 
 
 def below_text(below: float) -> str:
@@ -378,7 +380,7 @@ def rival_explanations(
     error as the named set does (each with its held-out figures).
     """
     out = []
-    for alt in alternatives(sel):
+    for alt in alternatives(sel, limit=None):
         key = tuple(sorted(alt["effects"]))  # type: ignore[call-overload]
         if key in sel.fits and at_bounds(sel.fits[key], base, evidence):
             continue
@@ -386,6 +388,8 @@ def rival_explanations(
         held = held_out_set(base, key, start, folds_)
         if held["chi2_per_line_after"] < held["chi2_per_line_before"]:
             out.append({**alt, "held_out": held})
+        if len(out) == MAX_ALTERNATIVES:
+            break
     return out
 
 
@@ -450,6 +454,8 @@ def name_causes(
     for x in fit.extensions:
         model = model.with_(x)
     rivals = rival_explanations(sel, base, evidence, fold_list) if fit is sel.fit else []
+    # an ambiguous set is compared with its alternatives as they are: each against the nominal
+    against_nominal = held_out_set(base, fit.effects, _start(fit), fold_list) if rivals else {}
     findings = []
     for ext in fit.extensions:
         e = ext.effect
@@ -468,6 +474,7 @@ def name_causes(
                     "correlation": fit.correlation,
                     "alternatives": rivals,
                     "ambiguous": bool(rivals),
+                    "held_out_against_nominal": against_nominal,
                     "dropped_by_held_out_gate": dropped,
                     "window_s": [list(c.window) for c in case.of(dof)],
                     "lines_hz": sorted({float(f) for c in case.of(dof) for f in c.lines_hz}),
