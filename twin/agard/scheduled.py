@@ -191,6 +191,9 @@ ANALYSES: dict[str, Analysis] = {
 }
 #: Tests no schedule move serves (they need the twin's own signals: ``twin agard TEST``).
 NOT_FROM_SCHEDULES = {
+    "noise": "needs the half-Hertz sines of §3.3.1 at six amplitudes (twin agard noise); "
+    "still moves are not analysed",
+    "snr": "needs the noise test's sines (twin agard snr)",
     "threshold": "needs the acceleration steps of §3.3.4 (twin agard threshold)",
     "omct": "needs the OMCT's twelve sines (twin agard omct)",
 }
