@@ -18,6 +18,30 @@ can be told apart at all); otherwise it is drawn again (the count is returned). 
 (``noise``) exists only where the configuration has it (the MPI's heave), so it is drawn only
 there, 1.3-10 times larger or smaller; with the IMU's noise level unknown it is told from the
 IMU's only by its shape below 1 Hz, so the rule admits it large or behind a quiet IMU.
+
+With ``nuisance=True`` (opt-in: without it every draw is as before, bit for bit) what is
+nominal varies too, as on a real platform (a generator that varies only the hidden effect
+flatters the diagnosis); the diagnosis is still told the nominal configuration only. Drawn per
+draw from a stream of its own (seeded by the draw's seed, so the platform, DOF, effects and
+IMU of an attempt are those the draw without nuisances gives), see :class:`Nuisance` and
+:data:`NUISANCE_RANGES`:
+
+- the motion-noise level (Eq 5.10), where the configuration has one (the MPI's heave),
+  0.5-2 times (log-uniform): §5.4.4 fits Eq 5.10 to the *mean* of the measured spectra and
+  §3.4.1 shows the noise ratio changing with the input amplitude; the thesis gives no spread,
+  so this factor of 2 either way is an assumption;
+- the platform filter's break frequency (Eq 5.1), where the configuration has a filter,
+  +-10 % (uniform): the thesis gives no tolerance; it validates the filter by Bode plots only
+  ("very similar to the analytic response", §5.5.2, Fig 5.7; "follows the analytical model
+  well", §5.6.2.1, Fig 5.9), and +-10 % at f_b is 0.8 dB and 5.5 deg, about what such a
+  plot, read by eye, shows;
+- the signal's amplitudes, 0.5-1.2 times Table 5.2's (as :mod:`twin.diagnose.hidden_physics`);
+- the run length: the measurement window holds one or two base periods (20 or 40 s; Table
+  5.2's lines are multiples of 0.05 Hz, so 20 s is the shortest window the design allows).
+
+The drawing rule is then judged on the runs as they are recorded (amplitudes and window) and,
+for motion noise, on its level times the nuisance factor; the break frequency's variation is
+not part of it (the diagnosis is not told it).
 """
 
 from __future__ import annotations
@@ -43,7 +67,7 @@ from twin.errors import SignalError
 from twin.frames import DOF_NAMES
 from twin.measurement.measure import from_imu
 from twin.run_folder import execute, run_meta, signal_meta
-from twin.signals import describing_signal
+from twin.signals import WINDOW_S, DescribingSignal, describing_signal, periodic_signal, table_5_2
 
 #: The effects the generator hides: the chain's vocabulary as the diagnosis fits it to the
 #: lines (``platform_lag``, the platform-side reading of a ``sensor_filter``, is drawn by the
@@ -60,6 +84,105 @@ PLATFORMS = ("mpi", "srs")
 DOFS = DOF_NAMES
 #: Range of the drawn IMU noise, in multiples of the data sheet's (log-uniform).
 IMU_NOISE = (0.3, 3.0)
+#: Key of the nuisances' random stream (``SeedSequence([seed, NUISANCE_STREAM])``).
+NUISANCE_STREAM = 7
+
+
+@dataclass(frozen=True)
+class NuisanceRanges:
+    """Ranges the nominal's nuisance parts are drawn from (see the module docstring).
+
+    Attributes
+    ----------
+    motion_noise : (float, float)
+        Factor on the configuration's motion noise (log-uniform).
+    filter_break : float
+        Relative spread of the platform filter's break frequency (uniform, +-).
+    amplitude : (float, float)
+        Factor on the signals' amplitudes (uniform).
+    periods : tuple of int
+        Measurement windows, in base periods of 20 s (one drawn, equally likely).
+
+    """
+
+    motion_noise: tuple[float, float] = (0.5, 2.0)
+    filter_break: float = 0.10
+    amplitude: tuple[float, float] = (0.5, 1.2)
+    periods: tuple[int, ...] = (1, 2)
+
+
+#: The ranges :func:`draw` and :func:`clean` use with ``nuisance=True``.
+NUISANCE_RANGES = NuisanceRanges()
+
+
+@dataclass(frozen=True)
+class Nuisance:
+    """How a draw's truth differs from the nominal besides its hidden effects.
+
+    Attributes
+    ----------
+    motion_noise : float
+        Factor on the motion noise (1: the configuration has none, or the nominal level).
+    filter_break : float
+        Factor on the platform filter's break frequency (1: no filter, or the nominal).
+    amplitude : float
+        Factor on the Table 5.2 amplitudes.
+    periods : int
+        Measurement window in base periods of :data:`twin.signals.WINDOW_S`.
+
+    """
+
+    motion_noise: float = 1.0
+    filter_break: float = 1.0
+    amplitude: float = 1.0
+    periods: int = 1
+
+    @property
+    def window_s(self) -> float:
+        """The measurement window [s]."""
+        return WINDOW_S * self.periods
+
+    def describe(self) -> str:
+        """One line: the nuisances."""
+        return (
+            f"motion noise x{self.motion_noise:.2f}, break x{self.filter_break:.3f}, "
+            f"amplitude x{self.amplitude:.2f}, window {self.window_s:g} s"
+        )
+
+
+def draw_nuisance(
+    seed: int, attempt: int, config: MotionSystem, ranges: NuisanceRanges = NUISANCE_RANGES
+) -> Nuisance:
+    """Draw the nuisances of one attempt of a draw (a stream of their own; see the module).
+
+    Parameters
+    ----------
+    seed : int
+        The draw's seed.
+    attempt : int
+        The attempt (0 for the first; each redraw draws the nuisances anew).
+    config : MotionSystem
+        The nominal configuration: motion noise and break frequency vary only where it has them.
+    ranges : NuisanceRanges
+        The ranges.
+
+    Returns
+    -------
+    Nuisance
+
+    """
+    rng = np.random.default_rng(np.random.SeedSequence([seed, NUISANCE_STREAM, attempt]))
+    lo, hi = ranges.motion_noise
+    noise = float(np.exp(rng.uniform(np.log(lo), np.log(hi))))
+    brk = float(rng.uniform(1 - ranges.filter_break, 1 + ranges.filter_break))
+    amplitude = float(rng.uniform(*ranges.amplitude))
+    periods = int(rng.choice(ranges.periods))
+    return Nuisance(
+        noise if config.noise else 1.0,
+        brk if config.filter_break_hz is not None else 1.0,
+        amplitude,
+        periods,
+    )
 
 
 @dataclass(frozen=True)
@@ -80,6 +203,8 @@ class Hidden:
         The recording IMU's noise over the data sheet's.
     redraws : int
         Draws rejected by the detectability rule.
+    nuisance : Nuisance or None
+        How the nominal's nuisance parts differ in the truth (None: they do not).
 
     """
 
@@ -89,6 +214,7 @@ class Hidden:
     extensions: tuple[Extension, ...] = ()
     imu_noise: float = 1.0
     redraws: int = 0
+    nuisance: Nuisance | None = None
 
     @property
     def extension(self) -> Extension | None:
@@ -97,8 +223,24 @@ class Hidden:
 
     @property
     def truth(self) -> MotionSystem:
-        """The configuration the runs are simulated with (nominal + effects)."""
-        return self.config.replace(extensions=(*self.config.extensions, *self.extensions))
+        """The configuration the runs are simulated with (nominal + nuisances + effects)."""
+        return _truth(self.config, self.extensions, self.nuisance)
+
+    @property
+    def effects(self) -> tuple[str, ...]:
+        """The hidden effects' names."""
+        return tuple(e.effect for e in self.extensions)
+
+    def signal(self, number: int) -> DescribingSignal:
+        """Return Table 5.2 run ``number`` as recorded (the nuisances' amplitude and window)."""
+        return hidden_signal(number, self.dof, self.nuisance)
+
+    def describe(self) -> str:
+        """One line: the draw."""
+        what = " + ".join(e.describe() for e in self.extensions) or "clean"
+        text = f"seed {self.seed}: {self.config.name} {self.dof}, {what}; IMU noise "
+        text += f"x{self.imu_noise:.2f}"
+        return text + (f"; {self.nuisance.describe()}" if self.nuisance is not None else "")
 
     @property
     def imu(self) -> ImuSpec:
@@ -141,6 +283,36 @@ def _parameters(effect: str, rng: np.random.Generator, config: MotionSystem, dof
     raise SignalError(f"unknown effect {effect!r}")
 
 
+def _truth(
+    config: MotionSystem, exts: tuple[Extension, ...], nuisance: Nuisance | None
+) -> MotionSystem:
+    """Return the nominal with the nuisances and the hidden effects."""
+    base = (*config.extensions,)
+    if nuisance is None:
+        return config.replace(extensions=(*base, *exts))
+    changes: dict[str, object] = {}
+    if config.filter_break_hz is not None and nuisance.filter_break != 1.0:
+        changes["filter_break_hz"] = config.filter_break_hz * nuisance.filter_break
+    if config.noise and nuisance.motion_noise != 1.0:
+        base = (*base, Extension("noise", {"scale": nuisance.motion_noise}, ("heave",)))
+    return config.replace(extensions=(*base, *exts), **changes)
+
+
+def hidden_signal(number: int, dof: str, nuisance: Nuisance | None = None) -> DescribingSignal:
+    """Return Table 5.2 signal ``number`` for ``dof`` with a draw's amplitude and window.
+
+    Without nuisances it is :func:`twin.signals.describing_signal` with the pre-measurement of
+    Eq 3.3, as the generator has always recorded.
+    """
+    if nuisance is None:
+        return describing_signal(number, dof, settle_s=None)
+    if nuisance.periods == 1:
+        return describing_signal(number, dof, settle_s=None, scale=nuisance.amplitude)
+    ms = table_5_2(number, dof)
+    ms = type(ms)(ms.frequencies_hz, ms.amplitudes * nuisance.amplitude)
+    return periodic_signal(ms, dof, 100.0, None, nuisance.window_s, f"Table 5.2 signal {number}")
+
+
 def _imu_noise(rng: np.random.Generator, imu_noise: tuple[float, float] | float) -> float:
     if isinstance(imu_noise, int | float):
         return float(imu_noise)
@@ -152,14 +324,36 @@ def clean(
     seed: int,
     imu_noise: tuple[float, float] | float = 1.0,
     dofs: Sequence[str] = ("heave", "pitch"),
+    nuisance: bool = False,
+    nuisance_ranges: NuisanceRanges = NUISANCE_RANGES,
 ) -> Hidden:
     """Draw a platform, a DOF and an IMU from ``seed`` with no effect (the nominal model holds).
 
-    ``imu_noise``: a range to draw the IMU's noise factor from, or the factor.
+    Parameters
+    ----------
+    seed : int
+        Everything follows from it.
+    imu_noise : (float, float) or float
+        A range to draw the IMU's noise factor from, or the factor.
+    dofs : sequence of str
+        DOFs to draw from.
+    nuisance : bool
+        Draw the nominal's nuisance parts too (see the module docstring); off: as before.
+    nuisance_ranges : NuisanceRanges
+        Their ranges.
+
+    Returns
+    -------
+    Hidden
+
     """
     rng = np.random.default_rng(seed)
     platform, dof = str(rng.choice(PLATFORMS)), str(rng.choice(list(dofs)))
-    return Hidden(seed, motion_system(platform), dof, (), _imu_noise(rng, imu_noise))
+    config = motion_system(platform)
+    noise = _imu_noise(rng, imu_noise)
+    if not nuisance:
+        return Hidden(seed, config, dof, (), noise)
+    return Hidden(seed, config, dof, (), noise, 0, draw_nuisance(seed, 0, config, nuisance_ranges))
 
 
 def _motion_noise(config: MotionSystem, dof: str) -> bool:
@@ -174,6 +368,8 @@ def draw(
     count: int = 1,
     max_redraws: int = 60,
     imu_known: bool = False,
+    nuisance: bool = False,
+    nuisance_ranges: NuisanceRanges = NUISANCE_RANGES,
 ) -> Hidden:
     """Draw detectable hidden effects from ``seed``.
 
@@ -194,6 +390,20 @@ def draw(
     imu_known : bool
         Judge the detectability of motion noise as a diagnosis told the IMU's noise would
         (else the IMU's noise level is a fitted nuisance, and only the shapes tell them apart).
+    nuisance : bool
+        Draw the nominal's nuisance parts too (see the module docstring); off (the default),
+        every draw is as it always was.
+    nuisance_ranges : NuisanceRanges
+        Their ranges.
+
+    Returns
+    -------
+    Hidden
+
+    Raises
+    ------
+    SignalError
+        When no draw in ``max_redraws`` passes the drawing rule.
 
     """
     rng = np.random.default_rng(seed)
@@ -210,13 +420,14 @@ def draw(
         noise = _imu_noise(rng, imu_noise)
         if "noise" in chosen and not _motion_noise(config, dof):
             continue
-        if _detectable(config, dof, exts, noise, seed, imu_known):
-            return Hidden(seed, config, dof, exts, noise, attempt)
+        nui = draw_nuisance(seed, attempt, config, nuisance_ranges) if nuisance else None
+        if _detectable(config, dof, exts, noise, seed, imu_known, nui):
+            return Hidden(seed, config, dof, exts, noise, attempt, nui)
     what = " + ".join(kinds) if kinds else "effect"
     raise SignalError(f"seed {seed}: no detectable {what} in {max_redraws} draws")
 
 
-_CHANNELS: dict[tuple[str, str, int], list[Channel]] = {}
+_CHANNELS: dict[tuple[object, ...], list[Channel]] = {}
 
 
 def _detectable(
@@ -226,14 +437,16 @@ def _detectable(
     imu_noise: float,
     seed: int,
     imu_known: bool = False,
+    nuisance: Nuisance | None = None,
 ) -> bool:
     """Return whether a draw passes the drawing rule of the module docstring."""
     imu = nominal_imu({}, config.platform)
-    key = (config.name, dof, seed)
-    if key not in _CHANNELS:  # the nominal runs depend on platform, DOF and seed only
+    runs = None if nuisance is None else (nuisance.amplitude, nuisance.periods)
+    key = (config.name, dof, seed) if runs is None else (config.name, dof, seed, runs)
+    if key not in _CHANNELS:  # the nominal runs depend on platform, DOF, seed (and the runs)
         if any(k[2] != seed for k in _CHANNELS):
             _CHANNELS.clear()
-        _CHANNELS[key] = [_channel(config, dof, number, imu, seed) for number in (1, 2)]
+        _CHANNELS[key] = [_channel(config, dof, number, imu, seed, nuisance) for number in (1, 2)]
     channels = _CHANNELS[key]
     case = Case(config, "reduced", imu, channels, seed)
     base = Model(case, dof)
@@ -244,7 +457,8 @@ def _detectable(
         others = [x for x in dynamic if x is not e]
         if e.effect == "noise":
             segs = [segment(c).scaled(power) for c in channels]
-            evidence_ = expected_noise_delta_bic(e.value("scale"), segs, imu_known)
+            scale = e.value("scale") * (nuisance.motion_noise if nuisance else 1.0)
+            evidence_ = expected_noise_delta_bic(scale, segs, imu_known)
             if evidence_ < DETECTABLE_FACTOR * BIC_MARGIN:
                 return False
             continue
@@ -290,9 +504,16 @@ def _distinguishable(base: Model, exts: list[Extension], evidence: list[Lines]) 
     return True
 
 
-def _channel(config: MotionSystem, dof: str, number: int, imu: ImuSpec, seed: int) -> Channel:
+def _channel(
+    config: MotionSystem,
+    dof: str,
+    number: int,
+    imu: ImuSpec,
+    seed: int,
+    nuisance: Nuisance | None = None,
+) -> Channel:
     """Return the nominal prediction and noise of one Table 5.2 run (no file written)."""
-    sig = describing_signal(number, dof, settle_s=None)
+    sig = hidden_signal(number, dof, nuisance)
     sim = prepare(clean_config(config), sig.commands, "reduced", seed, imu.ideal()).collect()
     meta = {"signal": signal_meta(sig)}
     m = from_imu(sig.commands, sim.imu, f"nominal-{number}", config, meta)
@@ -309,7 +530,7 @@ def record(
     """Simulate the runs of a hidden case and write them (meta names the nominal only)."""
     return record_runs(
         hidden.truth, hidden.config, hidden.dof, out, hidden.seed, model, signals,
-        with_signal_meta, hidden.imu,
+        with_signal_meta, hidden.imu, hidden.nuisance,
     )  # fmt: skip
 
 
@@ -323,6 +544,7 @@ def record_runs(
     signals: tuple[int, ...] = (1, 2),
     with_signal_meta: bool = True,
     imu: ImuSpec | None = None,
+    nuisance: Nuisance | None = None,
 ) -> list[Path]:
     """Simulate Table 5.2 multi-sines through ``truth``; write run folders that name ``nominal``.
 
@@ -344,12 +566,20 @@ def record_runs(
         Write the signal design into ``meta.json`` (without it the diagnosis infers it).
     imu : ImuSpec, optional
         The recording IMU (the platform's nominal one by default).
+    nuisance : Nuisance, optional
+        The runs' amplitude factor and window (its motion noise and break frequency are
+        ``truth``'s business); None: Table 5.2 as it is, 20 s.
+
+    Returns
+    -------
+    list of Path
+        The run folders.
 
     """
     out = Path(out)
     folders = []
     for number in signals:
-        sig = describing_signal(number, dof, settle_s=None)
+        sig = hidden_signal(number, dof, nuisance)
         run = prepare(truth, sig.commands, model, 7919 * seed + number, imu)
         meta = run_meta(
             run, f"hidden-effect run, seed {seed}", nominal, sig if with_signal_meta else None
@@ -358,3 +588,91 @@ def record_runs(
         execute(run, meta, folder, overwrite=True)
         folders.append(folder)
     return folders
+
+
+#: What :func:`judged` returns.
+VERDICTS = ("right", "ambiguous", "wrong", "none")
+
+
+def judged(hidden: Hidden, diagnosis: object) -> str:
+    """Judge a diagnosis of a drawn case against its truth.
+
+    Motion noise (``noise``) findings are left out unless motion noise is among the hidden
+    effects (with nuisances on, the nominal's own motion-noise level varies: naming it is not a
+    wrong cause). The first finding left is the one a user acts on.
+
+    Parameters
+    ----------
+    hidden : Hidden
+        The draw.
+    diagnosis : Diagnosis
+        Its diagnosis (anything with ``findings``: a list of objects with ``extension``,
+        ``ambiguous`` and ``evidence`` as :class:`twin.diagnose.select.Finding` has).
+
+    Returns
+    -------
+    str
+        One of :data:`VERDICTS`. With hidden effects: ``right`` (the first finding is not
+        ambiguous, names a true effect, and every true effect is named), ``ambiguous`` (the
+        first finding is ambiguous and every true effect is among the named set or its
+        ``alternatives``), ``wrong`` (the first finding is not a true effect and not ambiguous,
+        or ambiguous without the truth among its explanations), ``none`` (no finding; also a
+        pair of which one effect is named first and the other is not named anywhere: nothing
+        false is presented). A clean draw: ``right`` when no dynamic cause is named, else
+        ``wrong``.
+
+    """
+    truth = set(hidden.effects)
+    findings = [
+        f for f in getattr(diagnosis, "findings", diagnosis)  # a list of findings will do too
+        if "noise" in truth or f.extension.effect != "noise"
+    ]  # fmt: skip
+    if not truth:
+        return "wrong" if findings else "right"
+    if not findings:
+        return "none"
+    top = findings[0]
+    named = {f.extension.effect for f in findings} | set(top.evidence.get("set") or ())
+    if top.ambiguous:
+        covered = set(named)
+        for alt in top.evidence.get("alternatives") or []:
+            covered |= set(alt.get("effects") or ())
+        if truth <= covered:
+            return "ambiguous"
+        return "none" if top.extension.effect in truth else "wrong"
+    if top.extension.effect not in truth:
+        return "wrong"
+    return "right" if truth <= named else "none"
+
+
+def truth_delta_bic(hidden: Hidden, diagnosis: object) -> tuple[float | None, float]:
+    """Return the BIC improvement of the true set of effects and of the named set.
+
+    Read from the selection table of the driven DOF (every single effect and pair the diagnosis
+    fitted, against the nominal model); the named set is the first finding's ``set`` (0 when
+    nothing is named). The true set's is None where the table has no row for it (motion noise,
+    or more effects than were fitted together).
+
+    Parameters
+    ----------
+    hidden : Hidden
+        The draw.
+    diagnosis : Diagnosis
+        Its diagnosis.
+
+    Returns
+    -------
+    (float or None, float)
+        BIC improvement of the true set and of the named set.
+
+    """
+    report = diagnosis.dofs.get(hidden.dof)  # type: ignore[attr-defined]
+    table = report.selection.table if report is not None else []
+    rows = {tuple(sorted(r["effects"])): float(r["delta_bic"]) for r in table}
+    true = rows.get(tuple(sorted(e for e in hidden.effects)))
+    chain = [f for f in diagnosis.findings if f.extension.effect != "noise"]  # type: ignore[attr-defined]
+    named = 0.0
+    if chain:
+        key = tuple(sorted(chain[0].evidence.get("set") or (chain[0].extension.effect,)))
+        named = rows.get(key, float(chain[0].evidence.get("delta_bic", 0.0)))
+    return true, named
