@@ -218,16 +218,9 @@ def faded_sines(
         Length of the move [s].
 
     """
-    tt = np.asarray(t, dtype=float)
-    w, g, p = (np.atleast_1d(np.asarray(x, dtype=float)) for x in (omega, gain, phase))
-    if not (w.shape == g.shape == p.shape) or w.ndim != 1:
-        raise SignalError("omg, gain and phi0 must be lists of equal length")
-    y = np.sin(np.multiply.outer(tt, w) + p) @ g
-    inside = (tt >= 0) & (tt <= t_total)
-    if t_fade > 0:
-        ramp = np.clip(np.minimum(tt, t_total - tt) / t_fade, 0.0, 1.0)
-        y = y * (0.5 - 0.5 * np.cos(np.pi * ramp))
-    return np.where(inside, y, 0.0)
+    tt, y, _ = _sines(t, omega, gain, phase)
+    window, _ = _fade(tt, t_fade, t_total)
+    return window * y
 
 
 def faded_sines_rate(
@@ -239,20 +232,35 @@ def faded_sines_rate(
     t_total: float,
 ) -> FloatArray:
     """Return the time derivative of :func:`faded_sines` (same arguments), exactly."""
+    tt, y, dy = _sines(t, omega, gain, phase)
+    window, rate = _fade(tt, t_fade, t_total)
+    return window * dy + rate * y
+
+
+def _sines(
+    t: ArrayLike, omega: ArrayLike, gain: ArrayLike, phase: ArrayLike
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """Return the times, the sum of sines and its derivative."""
     tt = np.asarray(t, dtype=float)
     w, g, p = (np.atleast_1d(np.asarray(x, dtype=float)) for x in (omega, gain, phase))
+    if not (w.shape == g.shape == p.shape) or w.ndim != 1:
+        raise SignalError("omg, gain and phi0 must be lists of equal length")
     arg = np.multiply.outer(tt, w) + p
-    y, dy = np.sin(arg) @ g, np.cos(arg) @ (g * w)
+    return tt, np.sin(arg) @ g, np.cos(arg) @ (g * w)
+
+
+def _fade(tt: FloatArray, t_fade: float, t_total: float) -> tuple[FloatArray, FloatArray]:
+    """Return the raised-cosine window (0 outside [0, ``t_total``]) and its derivative."""
     inside = (tt >= 0) & (tt <= t_total)
     if t_fade <= 0:
-        return np.where(inside, dy, 0.0)
+        return inside.astype(float), np.zeros_like(tt)
     edge = np.minimum(tt, t_total - tt)
     ramp = np.clip(edge / t_fade, 0.0, 1.0)
-    fading = (edge >= 0) & (edge < t_fade)
-    slope = np.where(fading, np.where(tt < t_total - tt, 1.0, -1.0) / t_fade, 0.0)
-    window = 0.5 - 0.5 * np.cos(np.pi * ramp)
-    rate = window * dy + 0.5 * np.pi * np.sin(np.pi * ramp) * slope * y
-    return np.where(inside, rate, 0.0)
+    slope = np.where((edge >= 0) & (edge < t_fade),
+                     np.where(tt < t_total - tt, 1.0, -1.0) / t_fade, 0.0)  # fmt: skip
+    window = np.where(inside, 0.5 - 0.5 * np.cos(np.pi * ramp), 0.0)
+    rate = np.where(inside, 0.5 * np.pi * np.sin(np.pi * ramp) * slope, 0.0)
+    return window, rate
 
 
 def _check_positive(value: float, name: str) -> None:
