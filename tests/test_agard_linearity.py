@@ -107,15 +107,15 @@ def test_without_play_the_gain_and_phase_do_not_change_beyond_their_intervals():
 
 
 def test_default_schedule_is_three_amplitudes_a_decade_apart_scaled_to_the_limits():
-    todo, skipped = schedule("mpi", "heave")
+    points, skipped = schedule("mpi", "heave")
     assert not skipped
-    freqs = sorted({f for f, _ in todo})
+    freqs = sorted({f for f, _ in points})
     assert freqs == [0.2, 0.5, 1.0, 2.0, 5.0]
     for f in freqs:
-        amps = sorted((a for g, a in todo if g == f), reverse=True)
+        amps = sorted((a for g, a in points if g == f), reverse=True)
         assert amps == pytest.approx([amps[0], amps[0] / 10, amps[0] / 100])
         assert amps[0] <= 3.0
-    top = {f: max(a for g, a in todo if g == f) for f in freqs}
+    top = {f: max(a for g, a in points if g == f) for f in freqs}
     assert top[0.2] < top[1.0]  # stroke-limited at low frequency
 
 

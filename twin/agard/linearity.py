@@ -434,20 +434,20 @@ def schedule(
         raise SignalError("the linearity test needs at least one frequency and one amplitude")
     fs = sorted({number(f, "linearity frequency [Hz]", lo=0, lo_open=True, hi=50.0,
                         error=SignalError) for f in freqs})  # fmt: skip
-    todo, skipped = [], []
+    points, skipped = [], []
     for f in fs:
         if amplitudes is not None:
             amps = sorted({number(a, f"linearity amplitude [{acceleration_unit(dof)}]", lo=0,
                                   lo_open=True, hi=100.0, error=SignalError)
                            for a in amplitudes}, reverse=True)  # fmt: skip
-            todo += [(f, a) for a in amps]
+            points += [(f, a) for a in amps]
             continue
         top = fitting_amplitude(platform, dof, f)
         if isinstance(top, str):
             skipped.append(SkippedPoint(f, DEFAULT_TOPS[-1], top))
         else:
-            todo += [(f, top * r) for r in DEFAULT_LADDER]
-    return todo, skipped
+            points += [(f, top * r) for r in DEFAULT_LADDER]
+    return points, skipped
 
 
 def run_linearity(
@@ -475,10 +475,10 @@ def run_linearity(
         Shortest measurement window of each run [s] (whole periods).
 
     """
-    todo, skipped = schedule(session.bench.config.platform, dof, frequencies_hz, amplitudes)
-    session.expect(len(todo), f"linearity {dof}")
+    points, skipped = schedule(session.bench.config.platform, dof, frequencies_hz, amplitudes)
+    session.expect(len(points), f"linearity {dof}")
     segments = []
-    for f, a in todo:
+    for f, a in points:
         m = session.measure_sine(dof, f, a, window_s, f"sine-{dof}-{f:g}Hz-{a:g}")
         if isinstance(m, str):
             skipped.append(SkippedPoint(f, a, m))
