@@ -33,6 +33,7 @@ from twin.errors import SignalError
 from twin.frames import DOF_NAMES, dof_index
 from twin.measurement.describing_function import (
     ResponseMixin,
+    dense_frequencies,
     describing_function,
     fit_delay,
     fourier_coefficients,
@@ -239,11 +240,6 @@ class DfResult(ResponseMixin):
         ax_g.legend(fontsize=8)
         ax_g.set_title(f"describing function, {self.dof}: {self.source}", fontsize=9)
         return finish(fig, path)
-
-
-def dense_frequencies(f: FloatArray) -> FloatArray:
-    """Return 400 log-spaced frequencies over the lines, at least 0.05-10 Hz (model curves)."""
-    return np.geomspace(min(f.min(), 0.05), max(f.max(), 10.0), 400)
 
 
 def draw_bode(

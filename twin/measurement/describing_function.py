@@ -51,6 +51,11 @@ class ResponseMixin:
         return phase_deg(self.response)
 
 
+def dense_frequencies(f: FloatArray) -> FloatArray:
+    """Return 400 log-spaced frequencies over the lines, at least 0.05-10 Hz (model curves)."""
+    return np.geomspace(min(f.min(), 0.05), max(f.max(), 10.0), 400)
+
+
 def fourier_coefficients(
     t: ArrayLike, x: ArrayLike, frequencies_hz: ArrayLike, window: tuple[float, float]
 ) -> ComplexArray:

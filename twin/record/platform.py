@@ -36,7 +36,8 @@ from scipy.spatial.transform import Rotation
 
 from twin.chain.imu import ImuRecord
 from twin.chain.response import PlatformResponse
-from twin.frames import DOF_NAMES, MJ_FROM_THESIS, rotation_matrix
+from twin.frames import DOF_NAMES, MJ_FROM_THESIS, dof_index, rotation_matrix
+from twin.measurement.describing_function import dense_frequencies
 from twin.platform.facts import PLATFORMS
 from twin.platform.geometry import Geometry
 from twin.platform.kinematics import leg_vectors
@@ -294,9 +295,6 @@ class Recorder:
         and any extension; ``config``, the result's own analytic model otherwise) as a line,
         and the paper figure of both (:func:`twin.agard.df.DfResult.plot`).
         """
-        from twin.agard.df import dense_frequencies
-        from twin.frames import dof_index
-
         dof, f = result.dof, result.frequencies_hz
         low, high, dphase = result.bounds_95()
         curves = [Curve("measured", f, 20 * np.log10(result.gain), result.phase_deg,
