@@ -135,7 +135,7 @@ def constant_acceleration(
         If no ramp length in [0, T/2] gives ``v1`` (the parameters disagree).
 
     """
-    _check_positive(duration_s, "Ttotal")
+    _check_positive(duration_s, "the duration")
     dv, t_total = v1 - v0, float(duration_s)
     den = ai - (a0 + a1) / 2
     tau = 0.0 if abs(den) < 1e-12 else (ai * t_total - dv) / den
@@ -155,7 +155,8 @@ def constant_acceleration(
 def _end_speed_message(ai: float, v0: float, v1: float, t_total: float) -> str:
     return (
         f"constant acceleration {ai:g} for {t_total:g} s cannot take speed {v0:g} to {v1:g} "
-        "(v1 - v0 must be about ai x Ttotal, less the jerk ramps at both ends)"
+        "(the change of speed must be about the acceleration times the duration, less the "
+        "jerk ramps at both ends)"
     )
 
 
@@ -172,10 +173,14 @@ def point_to_point(distance: float, vmax: float, amax: float, jmax: float) -> Je
         For a limit that is not positive and finite, or a negative distance.
 
     """
-    for value, name in ((vmax, "vmx"), (amax, "amx"), (jmax, "jmx")):
+    for value, name in (
+        (vmax, "the speed limit"),
+        (amax, "the acceleration limit"),
+        (jmax, "the jerk limit"),
+    ):
         _check_positive(value, name)
     if not np.isfinite(distance) or distance < 0:
-        raise SignalError(f"dist must be a finite distance >= 0; got {distance}")
+        raise SignalError(f"the distance must be finite and >= 0; got {distance}")
     if distance == 0:
         return JerkProfile(np.zeros(0), np.zeros(0))
 
