@@ -48,6 +48,7 @@ from numpy.typing import NDArray
 from twin.chain.extensions import Extension
 from twin.diagnose.candidates import DYNAMIC, Model, SetFit, at_bounds, fit_set, numeric_names
 from twin.diagnose.data import Case
+from twin.diagnose.equivalence import same_response
 from twin.diagnose.evidence import Lines, lines, measured_line_sd
 from twin.progress import ProgressFn
 
@@ -104,6 +105,7 @@ class Finding:
             "dofs": e["dofs"],
             "ambiguous": self.ambiguous,
             "alternatives": self.evidence.get("alternatives") or [],
+            "same_response": self.evidence.get("same_response") or [],
             "evidence": self.evidence,
             "gain": self.gain,
         }
@@ -271,6 +273,26 @@ def alternatives(sel: Selection, limit: int | None = 3) -> list[dict[str, object
     return out if limit is None else out[:limit]
 
 
+def same_response_text(f: Finding) -> str | None:
+    """Return the sets with the named set's very response, in words (None: there are none)."""
+    same = f.evidence.get("same_response") or []
+    if not same:
+        return None
+    parts = []
+    for alt in same:  # type: ignore[union-attr]
+        eq = alt["same_response"]
+        parts.append(
+            " + ".join(
+                e + " " + ", ".join(f"{k} {v:.4g}" for k, v in eq["parameters"][e].items())
+                for e in eq["effects"]
+            )
+        )
+    return (
+        "the same response, with more parameters (no run tells them apart; the fewer "
+        "parameters are named): " + "; ".join(parts)
+    )
+
+
 def below_text(below: float) -> str:
     """Return how far an alternative's BIC lies below the named one's, in words."""
     return f"BIC {abs(below):.1f} {'lower' if below >= 0 else 'higher'}"
@@ -372,18 +394,29 @@ def held_out(
 
 def rival_explanations(
     sel: Selection, base: Model, evidence: Sequence[Lines],
-    folds_: list[tuple[list[Lines], list[Lines]]],
+    folds_: list[tuple[list[Lines], list[Lines]]], same: list[dict[str, object]],
 ) -> list[dict[str, object]]:  # fmt: skip
     """Return the alternatives (:func:`alternatives`) that pass the named set's gates too.
 
     An alternative must not sit at a bound of its search and must lower the held-out line
-    error as the named set does (each with its held-out figures).
+    error as the named set does (each with its held-out figures). One with as many parameters
+    or more whose response, refitted, is the named set's
+    (:func:`twin.diagnose.equivalence.same_response`) is no rival: it is set aside in
+    ``same``, the list given, with its refitted parameters.
     """
     out = []
+    channels = list({id(x.channel): x.channel for x in evidence}.values())
+    named = sel.fit.extensions if sel.fit is not None else ()
     for alt in alternatives(sel, limit=None):
         key = tuple(sorted(alt["effects"]))  # type: ignore[call-overload]
         if key in sel.fits and at_bounds(sel.fits[key], base, evidence):
             continue
+        params: dict = alt["parameters"]  # type: ignore[assignment]
+        if sum(len(numeric_names(e)) for e in key) >= sel.fit.parameters:  # type: ignore[union-attr]
+            eq = same_response(named, key, params, base.case, base.dof, channels)
+            if eq is not None:
+                same.append({**alt, "same_response": eq})
+                continue
         start = {e: list(p.values()) for e, p in alt["parameters"].items()}  # type: ignore[union-attr]
         held = held_out_set(base, key, start, folds_)
         if held["chi2_per_line_after"] < held["chi2_per_line_before"]:
@@ -453,7 +486,8 @@ def name_causes(
     model = base
     for x in fit.extensions:
         model = model.with_(x)
-    rivals = rival_explanations(sel, base, evidence, fold_list) if fit is sel.fit else []
+    same: list[dict[str, object]] = []
+    rivals = rival_explanations(sel, base, evidence, fold_list, same) if fit is sel.fit else []
     # an ambiguous set is compared with its alternatives as they are: each against the nominal
     against_nominal = held_out_set(base, fit.effects, _start(fit), fold_list) if rivals else {}
     findings = []
@@ -474,6 +508,7 @@ def name_causes(
                     "correlation": fit.correlation,
                     "alternatives": rivals,
                     "ambiguous": bool(rivals),
+                    "same_response": same,
                     "held_out_against_nominal": against_nominal,
                     "dropped_by_held_out_gate": dropped,
                     "window_s": [list(c.window) for c in case.of(dof)],

@@ -1,0 +1,84 @@
+"""Explanations with the same response are one explanation said with more parameters."""
+
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from twin.chain.config import motion_system
+from twin.chain.extensions import Extension
+from twin.diagnose.equivalence import SAME_RESPONSE, same_response
+
+
+def _case(platform: str) -> SimpleNamespace:
+    """What the refit reads of a case: the nominal configuration (clean and as given)."""
+    config = motion_system(platform)
+    return SimpleNamespace(clean=config, config=config)
+
+
+def _same(platform, named, effects, start):
+    return same_response(named, effects, start, _case(platform), "heave", [])  # type: ignore[arg-type]
+
+
+def test_a_resonance_damped_at_one_is_a_platform_filter_where_there_is_none():
+    """SRS (no Eq 5.1 filter): w^2/(s^2 + 2 w s + w^2) = 1/(1 + s/w)^2 exactly."""
+    named = [Extension("platform_filter", {"break_hz": 3.9}, ("heave",))]
+    start = {"resonance": {"frequency_hz": 3.0, "damping": 0.8}}  # off, as a fit on noise is
+    eq = _same("srs", named, ("resonance",), start)
+    assert eq is not None
+    assert eq["parameters"]["resonance"]["frequency_hz"] == pytest.approx(3.9, rel=1e-4)
+    assert eq["parameters"]["resonance"]["damping"] == pytest.approx(1.0, rel=1e-4)
+    assert eq["max_relative_difference"] < SAME_RESPONSE
+
+
+def test_a_lead_cancelling_a_pole_of_an_overdamped_resonance_is_a_first_order_filter():
+    """(1 + T s) w^2 / ((s + p1)(s + p2)) with T = 1/p1 is p2 / (s + p2): a sensor filter."""
+    named = [Extension("sensor_filter", {"cutoff_hz": 2.5, "channels": ("az",)}, ("heave",))]
+    start = {"lead": {"time_constant_s": 0.05}, "resonance": {"frequency_hz": 4.0, "damping": 1.3}}
+    eq = _same("srs", named, ("lead", "resonance"), start)
+    assert eq is not None
+    res = eq["parameters"]["resonance"]
+    w, z = 2 * np.pi * res["frequency_hz"], res["damping"]
+    poles = sorted([w * (z - np.sqrt(z * z - 1)), w * (z + np.sqrt(z * z - 1))])
+    lead = eq["parameters"]["lead"]["time_constant_s"]
+    # one pole cancelled by the lead, the other at the filter's cut-off
+    assert min(abs(lead * p - 1) for p in poles) < 1e-3
+    assert min(abs(p / (2 * np.pi * 2.5) - 1) for p in poles) < 1e-3
+
+
+@pytest.mark.parametrize(
+    ("platform", "named", "effects", "start"),
+    [
+        # the MPI's own 1 Hz filter moved to 0.785 Hz: a lead and a first-order filter come
+        # close over a band, but not everywhere
+        (
+            "mpi",
+            [Extension("platform_filter", {"break_hz": 0.785}, ("heave",))],
+            ("lead", "sensor_filter"),
+            {"lead": {"time_constant_s": 0.05}, "sensor_filter": {"cutoff_hz": 1.0}},
+        ),
+        # a delay is not a lead at every frequency
+        (
+            "srs",
+            [Extension("delay", {"extra_delay_s": 0.02}, ("heave",))],
+            ("lead",),
+            {"lead": {"time_constant_s": 0.0}},
+        ),
+        # a lightly damped resonance is not a critically damped filter
+        (
+            "srs",
+            [Extension("resonance", {"frequency_hz": 6.0, "damping": 0.2}, ("heave",))],
+            ("platform_filter",),
+            {"platform_filter": {"break_hz": 6.0}},
+        ),
+    ],
+)
+def test_rivals_that_differ_somewhere_are_not_the_same(platform, named, effects, start):
+    assert _same(platform, named, effects, start) is None
+
+
+def test_a_non_linear_set_is_never_compared():
+    named = [Extension("backlash", {"play": 0.01}, ("heave",))]
+    assert _same("srs", named, ("gain",), {"gain": {"gain": 0.9}}) is None

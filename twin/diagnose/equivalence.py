@@ -1,0 +1,123 @@
+"""Explanations with the same response: one a special case of another.
+
+Some sets of effects hold others as special cases of their parameters:
+
+- a ``resonance`` damped at 1 is a ``platform_filter`` where the configuration has none (both
+  a critically damped pair of poles, Eq 5.1's form);
+- a ``lead`` cancelling one pole of an overdamped ``resonance`` leaves a first-order lag: a
+  ``sensor_filter`` (or a ``platform_lag``) on the driven DOF's line;
+- a ``lead`` cancelling one of a ``platform_filter``'s poles (where the configuration has no
+  filter) does the same.
+
+When an alternative, refitted to the named set's response over every frequency a run could
+use, matches it to within :data:`SAME_RESPONSE`, no run of any design tells them apart: only
+the BIC's count of parameters ranks them, and the alternative is the named response said with
+more parameters, not a rival cause. The diagnosis then reports it beside the finding as the
+same response (:func:`same_response`), and :mod:`twin.diagnose.design` does not design for it.
+
+Responses are compared as the factor the effects multiply the nominal line response by
+(:meth:`twin.chain.extensions.Extension.response`), the same for every channel of the DOF.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy import optimize
+
+from twin.chain.extensions import LINEAR, Extension
+from twin.diagnose.candidates import make_extension, numeric_names, search_space
+from twin.diagnose.data import Case, Channel
+
+FloatArray = NDArray[np.float64]
+ComplexArray = NDArray[np.complex128]
+
+#: Largest relative difference of two responses that no run can see [-] (0.1 %: at a line
+#: with a signal-to-noise ratio of 100 the evidence would be 2 x 0.1^2 = 0.02).
+SAME_RESPONSE = 1e-3
+#: Frequencies the responses are compared at [Hz]: every frequency a run of the design uses
+#: (:data:`twin.diagnose.design.FREQUENCIES_HZ`) and beyond.
+FREQUENCIES_HZ = np.geomspace(0.05, 50.0, 120)
+
+
+def relative_response(
+    extensions: Sequence[Extension], f: FloatArray, nominal_break_hz: float | None
+) -> ComplexArray:
+    """Return the factor a set of linear extensions multiplies a DOF's response by at ``f``."""
+    out = np.ones(np.shape(f), dtype=complex)
+    for ext in extensions:
+        out = out * ext.response(f, nominal_break_hz)
+    return out
+
+
+def same_response(
+    named: Sequence[Extension],
+    effects: Sequence[str],
+    parameters: Mapping[str, Mapping[str, float]],
+    case: Case,
+    dof: str,
+    channels: Sequence[Channel],
+) -> dict[str, object] | None:
+    """Return the alternative refitted to the named set's response, if it is the same.
+
+    Parameters
+    ----------
+    named : sequence of Extension
+        The named set, at its fitted parameters.
+    effects : sequence of str
+        The alternative's effects.
+    parameters : mapping
+        The alternative's fitted parameters (effect -> name -> value): where the refit starts.
+    case, dof, channels
+        What is diagnosed (the alternative is refitted within its search's bounds,
+        :func:`twin.diagnose.candidates.search_space`).
+
+    Returns
+    -------
+    dict or None
+        ``effects``, ``parameters`` (refitted) and ``max_relative_difference`` where the
+        difference is at most :data:`SAME_RESPONSE` at every frequency of
+        :data:`FREQUENCIES_HZ`; None otherwise, or where a set is not linear.
+
+    """
+    if any(e.effect not in LINEAR for e in named) or any(e not in LINEAR for e in effects):
+        return None
+    nominal_break = case.clean.filter_break_hz
+    f = FREQUENCIES_HZ
+    target = relative_response(named, f, nominal_break)
+    slots, x0, lo, hi = [], [], [], []
+    for effect in effects:
+        names = list(numeric_names(effect))
+        bounds = search_space(effect, case, dof, channels).bounds
+        given = parameters.get(effect) or {}
+        for name, (b_lo, b_hi) in zip(names, bounds, strict=True):
+            width = b_hi - b_lo
+            x0.append(float(np.clip(given.get(name, (b_lo + b_hi) / 2), b_lo + 1e-9 * width,
+                                    b_hi - 1e-9 * width)))  # fmt: skip
+            lo.append(b_lo)
+            hi.append(b_hi)
+        slots.append((effect, names))
+
+    def extensions(theta: FloatArray) -> list[Extension]:
+        out, i = [], 0
+        for effect, names in slots:
+            out.append(make_extension(effect, names, theta[i : i + len(names)], dof))
+            i += len(names)
+        return out
+
+    def residual(theta: FloatArray) -> FloatArray:
+        r = relative_response(extensions(theta), f, nominal_break) / target - 1.0
+        return np.concatenate([r.real, r.imag])
+
+    fit = optimize.least_squares(residual, np.array(x0), bounds=(lo, hi), max_nfev=400)
+    exts = extensions(fit.x)
+    diff = float(np.max(np.abs(relative_response(exts, f, nominal_break) / target - 1.0)))
+    if diff > SAME_RESPONSE:
+        return None
+    return {
+        "effects": list(effects),
+        "parameters": {e.effect: {n: e.value(n) for n in numeric_names(e.effect)} for e in exts},
+        "max_relative_difference": diff,
+    }
