@@ -104,3 +104,59 @@ def test_design_refuses_what_it_cannot_design_in_one_line(diagnosed, tmp_path, c
     assert main(["design", str(tmp_path / "empty"), "--out", str(tmp_path / "b")]) == 2
     assert "no diagnosis.json" in capsys.readouterr().err
     assert not (tmp_path / "a").exists() and not (tmp_path / "b").exists()
+
+
+def test_the_closest_linear_sets_the_diagnosis_fitted_are_rivals_too():
+    """Sets that a new run could make nameable are weighed; those with backlash are not."""
+    from twin.diagnose.design import explanations_of
+
+    def row(effects, params, nameable=True):
+        return {"effects": effects, "parameters": params, "nameable": nameable, "delta_bic": 20.0}
+
+    delay = {"delay": {"extra_delay_s": 0.02}}
+    filt = {"sensor_filter": {"cutoff_hz": 7.5}}
+    pair = {
+        "platform_filter": {"break_hz": 0.9},
+        "resonance": {"frequency_hz": 8.0, "damping": 0.5},
+    }
+    doc = {
+        "findings": [
+            {
+                "effect": "delay",
+                "parameters": delay["delay"],
+                "dofs": ["heave"],
+                "ambiguous": True,
+                "alternatives": [{"effects": ["sensor_filter"], "parameters": filt}],
+                "evidence": {"set": ["delay"]},
+            }
+        ],
+        "nominal": {
+            "dofs": {
+                "heave": {
+                    "singles_tried": [
+                        row(["delay"], delay),
+                        row(["sensor_filter"], filt),
+                        row(["gain"], {"gain": {"gain": 0.95}}),
+                    ],
+                    "sets_tried": [
+                        row(["platform_filter", "resonance"], pair),
+                        row(["delay", "gain"], {**delay, "gain": {"gain": 1.0}}, nameable=False),
+                        row(
+                            ["backlash", "gain"],
+                            {"backlash": {"play": 0.001}, "gain": {"gain": 1.0}},
+                        ),
+                    ],
+                }
+            }
+        },
+    }
+    dof, expls = explanations_of(doc)
+    assert dof == "heave"
+    sets = {tuple(sorted(x.effect for x in e.extensions)): e.primary for e in expls}
+    assert sets == {
+        ("delay",): True,
+        ("sensor_filter",): True,
+        ("gain",): False,
+        ("platform_filter", "resonance"): False,
+        ("delay", "gain"): False,  # not nameable on the old runs; a new one may change that
+    }

@@ -40,6 +40,7 @@ from twin.diagnose.candidates import (
     search_space,
 )
 from twin.diagnose.data import Case, Channel, load_case
+from twin.diagnose.equivalence import SAME_RESPONSE
 from twin.diagnose.select import BIC_MARGIN
 from twin.errors import DataError, SignalError, SignalLimitError
 from twin.frames import acceleration_unit, dof_index
@@ -78,8 +79,9 @@ LINEAR_EFFECTS = (
 BUDGET_S = 120.0
 #: Lines of the designed multisine.
 LINES = 3
-#: Evidence below which two explanations count as responding alike at every line.
-SAME = 1e-6
+#: Expected evidence of a pair beyond which the design seeks no more for it (twice the
+#: margin: lines go to the pairs still below it, not to those already told apart).
+ENOUGH = 2 * BIC_MARGIN
 #: Factors tried on the lines' amplitudes, together, until the multisine fits the limits.
 SCALES = (1.0, 0.7, 0.5, 0.35, 0.25, 0.18, 0.12, 0.08, 0.05)
 
@@ -89,8 +91,9 @@ class Explanation:
     """One explanation of the runs: a set of effects with their fitted parameters.
 
     ``primary``: one of those the runs cannot tell apart (the named set and its
-    alternatives); a rival is any other single effect the diagnosis fitted, which the designed
-    run must not leave able to mimic them (refitted: :class:`Mimic`).
+    alternatives); a rival is any other single effect the diagnosis fitted, or any set of
+    linear effects among the closest it fitted (``sets_tried``), which the designed run must
+    not leave able to mimic them (refitted: :class:`Mimic`).
     """
 
     label: str
@@ -242,14 +245,18 @@ def explanations_of(doc: dict, finding: int = 0) -> tuple[str, list[Explanation]
         )
         out.append(Explanation(" + ".join(x.describe() for x in exts), exts))
     have = {tuple(sorted(x.effect for x in e.extensions)) for e in out}
-    for r in doc["nominal"]["dofs"][dof].get("singles_tried", []):
-        (effect,) = r["effects"]
-        if (effect,) in have:
+    tried = doc["nominal"]["dofs"][dof]
+    near = [  # the closest sets the diagnosis fitted: a new run may make any of them nameable
+        r for r in tried.get("sets_tried", []) if set(r["effects"]) <= set(LINEAR_EFFECTS)
+    ]  # fmt: skip
+    for r in [*tried.get("singles_tried", []), *near]:
+        if tuple(sorted(r["effects"])) in have:
             continue
-        ext = make_extension(
-            effect, list(r["parameters"][effect]), list(r["parameters"][effect].values()), dof
+        exts = tuple(
+            make_extension(e, list(r["parameters"][e]), list(r["parameters"][e].values()), dof)
+            for e in r["effects"]
         )
-        out.append(Explanation(ext.describe(), (ext,), primary=False))
+        out.append(Explanation(" + ".join(x.describe() for x in exts), exts, primary=False))
     return dof, out
 
 
@@ -541,16 +548,20 @@ def design_run(
             continue  # j mimics i only at the edge of what it can be: not an explanation
         d = response(i, band.f) - mimics[id(j)].response(theta, band.f)
         e = 2 * np.abs(d) ** 2 * band.amplitude**2 / band.noise**2
-        if e.max() < SAME:
+        if np.max(np.abs(d / response(i, band.f))) < SAME_RESPONSE:  # no run tells them apart
             same.append((i, j))
         else:
             per_line[i.label, j.label] = e
     chosen: list[int] = []
+
+    def score(lines_: list[int]) -> tuple[float, float]:
+        """Pairs brought past twice the margin count no more; then the weakest pair."""
+        sums = [float(v[lines_].sum()) for v in per_line.values()]
+        return (sum(min(x, ENOUGH) for x in sums), min(sums, default=0.0))
+
     for _ in range(min(LINES, freqs.size)):
-        best = max(
-            (k for k in range(freqs.size) if k not in chosen),
-            key=lambda k: min((v[[*chosen, k]].sum() for v in per_line.values()), default=0.0),
-        )
+        best = max((k for k in range(freqs.size) if k not in chosen),
+                   key=lambda k: score([*chosen, k]))  # fmt: skip
         chosen.append(best)
     sig = _multisine(platform, dof, [(float(freqs[k]), tops[k]) for k in sorted(chosen)], budget_s)
     if sig is None:
