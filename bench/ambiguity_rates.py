@@ -18,9 +18,18 @@ those whose first finding is a platform filter where only the nuisance moved the
 nuisance itself named: see the module docstring of :mod:`twin.diagnose.hidden` on how
 detectable a few per cent of break frequency is).
 
+With ``--design`` every draw whose first finding is ambiguous goes one step further, as a lab
+would: ``twin design`` on its diagnosis (:func:`twin.diagnose.design.design_from`, the
+default budget of 120 s), the designed run played through the same truth
+(:func:`twin.diagnose.hidden.play`; its own seed, the draw's IMU) and the old runs and the new
+one diagnosed together and judged again. Printed: how many of those draws are then named right
+(the true cause, unambiguously; target >= 90 %), still ambiguous, wrong or none, and whether
+the design expected to decide them.
+
 Usage: ``python bench/ambiguity_rates.py [DRAWS] [FIRST_SEED] [--pairs N] [--clean N]
-[--workers N] [--filter-spread X] [--json PATH]`` (defaults 3, 0; pairs and clean 2 x DRAWS;
-2 workers; the generator's +-10 % break spread).
+[--workers N] [--filter-spread X] [--design] [--only EARLIER_JSON] [--json PATH]`` (defaults
+3, 0; pairs and clean 2 x DRAWS; 2 workers; the generator's +-10 % break spread; ``--only``:
+of those draws, only the ones an earlier run's ``--json`` found ambiguous).
 """
 
 from __future__ import annotations
@@ -41,18 +50,23 @@ from dataclasses import replace  # noqa: E402
 from pathlib import Path  # noqa: E402
 
 from twin.chain.extensions import EFFECTS  # noqa: E402
+from twin.diagnose.design import design_from  # noqa: E402
+from twin.diagnose.diagnosis import Diagnosis, diagnose  # noqa: E402
 from twin.diagnose.hidden import (  # noqa: E402
     DOFS,
     DRAWN,
     NUISANCE_RANGES,
     VERDICTS,
+    Hidden,
     NuisanceRanges,
     clean,
     draw,
     judged,
+    play,
     record,
     truth_delta_bic,
 )
+from twin.diagnose.report import write_report  # noqa: E402
 from twin.diagnose.select import BIC_MARGIN  # noqa: E402
 
 try:
@@ -67,10 +81,30 @@ PAIR_SEEDS = 50_000
 CLEAN_SEEDS = 90_000
 
 
-def _job(kind: str, seed: int, ranges: NuisanceRanges, tmp: str) -> dict[str, object]:
-    """Draw, record, diagnose and judge one case; return its row (an ``error`` on failure)."""
-    from twin.diagnose.diagnosis import diagnose
+def _designed(h: Hidden, old: list[Path], d: Diagnosis, work: Path) -> dict[str, object]:
+    """Design the next run of an ambiguous diagnosis, play it through the truth, judge again."""
+    write_report(d, work / "diagnosis", figures=False, rrd=False)
+    plan = design_from(work / "diagnosis")
+    new = play(h.truth, h.config, plan.signal, work / "designed", 7919 * h.seed + 3, imu=h.imu)
+    again = diagnose([*old, new], seed=h.seed)
+    top = [f for f in again.findings if f.extension.effect != "noise" or "noise" in h.effects]
+    return {
+        "verdict": judged(h, again),
+        "decides": plan.decides,
+        "weakest": plan.best.weakest,
+        "lines_hz": [float(f) for f in plan.signal.frequencies_hz],
+        "duration_s": plan.signal.commands.duration,
+        "first": top[0].extension.describe() if top else None,
+        "alternatives": [a.get("effects") for a in (top[0].evidence.get("alternatives") or [])]
+        if top and top[0].ambiguous
+        else [],
+    }
 
+
+def _job(
+    kind: str, seed: int, ranges: NuisanceRanges, tmp: str, design: bool = False
+) -> dict[str, object]:
+    """Draw, record, diagnose and judge one case; return its row (an ``error`` on failure)."""
     row: dict[str, object] = {"kind": kind, "seed": seed}
     t0 = time.perf_counter()
     try:
@@ -83,7 +117,8 @@ def _job(kind: str, seed: int, ranges: NuisanceRanges, tmp: str) -> dict[str, ob
         row["draw"] = h.describe()
         row["effects"] = sorted(h.effects)
         row["nuisance_break"] = h.nuisance.filter_break if h.nuisance else 1.0
-        d = diagnose(record(h, Path(tmp) / f"{kind}-{seed}"), seed=h.seed)
+        old = record(h, Path(tmp) / f"{kind}-{seed}")
+        d = diagnose(old, seed=h.seed)
         verdict = judged(h, d)
         chain = [f for f in d.findings if f.extension.effect != "noise" or "noise" in h.effects]
         top = chain[0] if chain else None
@@ -103,6 +138,8 @@ def _job(kind: str, seed: int, ranges: NuisanceRanges, tmp: str) -> dict[str, ob
                 true_dbic is not None and h.effects != () and named_dbic - true_dbic < BIC_MARGIN
             ),
         }
+        if design and top is not None and top.ambiguous:
+            row["designed"] = _designed(h, old, d, Path(tmp) / f"{kind}-{seed}-design")
     except Exception as e:  # a failed draw is reported, the bench goes on
         row["error"] = f"{type(e).__name__}: {e}"
         row["traceback"] = traceback.format_exc(limit=3)
@@ -132,6 +169,11 @@ def _line(row: dict[str, object]) -> str:
     if row["verdict"] == "wrong" and row["truth_delta_bic"] is not None:
         text += (f" [truth dBIC {row['truth_delta_bic']:.1f} vs named "
                  f"{row['named_delta_bic']:.1f}]")  # fmt: skip
+    des = row.get("designed")
+    if des:
+        text += f"\n          designed run {des['lines_hz']} Hz: {des['verdict']} -> {des['first']}"  # type: ignore[index]
+        if des["alternatives"]:  # type: ignore[index]
+            text += " (ambiguous: " + "; ".join("+".join(a) for a in des["alternatives"]) + ")"  # type: ignore[index]
     return text + f" ({row['seconds']:.0f} s)"
 
 
@@ -175,6 +217,21 @@ def report(rows: list[dict[str, object]]) -> dict[str, object]:
           f"{len(nuisance_filter)}")  # fmt: skip
     ambiguous = sum(1 for r in done if r["verdict"] == "ambiguous")
     print(f"ambiguous: {ambiguous} of {len(done)}; errors: {summary['errors']}")
+    designed = [r["designed"] for r in done if "designed" in r]
+    if designed:
+        after = Counter(d["verdict"] for d in designed)  # type: ignore[index]
+        expected = sum(1 for d in designed if d["decides"])  # type: ignore[index]
+        right = after["right"] / len(designed)
+        summary |= {
+            "designed": len(designed),
+            "designed_counts": dict(after),
+            "designed_right_rate": right,
+            "designed_expected_to_decide": expected,
+        }
+        print(f"\nafter one designed run, of {len(designed)} draws whose first finding was "
+              "ambiguous: " + " / ".join(f"{after[v]} {v}" for v in VERDICTS)
+              + f"; named right {100 * right:.0f} % (target >= 90 %); the design expected "
+              f"to decide {expected}")  # fmt: skip
     return summary
 
 
@@ -187,19 +244,27 @@ def main() -> None:
     p.add_argument("--clean", type=int, default=None, help="clean draws (2 x DRAWS)")
     p.add_argument("--workers", type=int, default=2)
     p.add_argument("--filter-spread", type=float, default=NUISANCE_RANGES.filter_break)
+    p.add_argument("--design", action="store_true", help="design and play the next run of "
+                   "every ambiguous draw, and judge again")  # fmt: skip
+    p.add_argument("--only", type=Path, default=None, help="an earlier run's --json: draw "
+                   "again only its draws whose first finding was ambiguous")  # fmt: skip
     p.add_argument("--json", type=Path, default=None, help="write every row and the summary")
     a = p.parse_args()
     pairs = 2 * a.draws if a.pairs is None else a.pairs
     cleans = 2 * a.draws if a.clean is None else a.clean
     ranges = replace(NUISANCE_RANGES, filter_break=a.filter_spread)
     jobs = _jobs(a.draws, a.first, pairs, cleans)
+    if a.only is not None:
+        earlier = json.loads(a.only.read_text(encoding="utf-8"))["rows"]
+        keep = {(r["kind"], r["seed"]) for r in earlier if r.get("first_ambiguous")}
+        jobs = [j for j in jobs if j in keep]
     print(f"{len(jobs)} draws ({a.draws} per effect type, {pairs} pairs, {cleans} clean), "
           f"nuisances {ranges}, {a.workers} workers")  # fmt: skip
     tmp = tempfile.mkdtemp(prefix="ambiguity-rates-")
     rows = []
     t0 = time.perf_counter()
     with ProcessPoolExecutor(a.workers) as pool:
-        futures = [pool.submit(_job, kind, seed, ranges, tmp) for kind, seed in jobs]
+        futures = [pool.submit(_job, kind, seed, ranges, tmp, a.design) for kind, seed in jobs]
         done = as_completed(futures)
         bar = tqdm(done, total=len(futures), mininterval=5) if tqdm else done
         for fut in bar:

@@ -126,5 +126,34 @@ def _f(
 )
 def test_the_judge(truth, findings, verdict):
     """right / ambiguous / wrong / none on hand-built findings."""
-    h = SimpleNamespace(effects=truth, dof="heave")  # what the judge reads of a Hidden
+    h = SimpleNamespace(effects=truth, dof="heave", nuisance=None)  # what the judge reads
+    assert judged(h, SimpleNamespace(findings=findings)) == verdict  # type: ignore[arg-type]
+
+
+def _filter(break_hz: float, ambiguous: bool = False) -> SimpleNamespace:
+    f = _f("platform_filter", ambiguous, [("lead", "sensor_filter")] if ambiguous else [])
+    f.extension = SimpleNamespace(effect="platform_filter", value=lambda name: break_hz)
+    return f
+
+
+@pytest.mark.parametrize(
+    ("truth", "findings", "verdict"),
+    [
+        ((), [_filter(1.06)], "right"),  # the moved break itself: a real difference
+        ((), [_filter(1.06, ambiguous=True)], "ambiguous"),
+        ((), [_filter(1.5)], "wrong"),  # a filter, but not where the nuisance moved it
+        (("delay",), [_f("delay"), _filter(1.04)], "right"),
+        (("delay",), [_filter(1.04), _f("delay")], "right"),
+        (("delay",), [_filter(1.04)], "none"),  # the nuisance named, the effect missed
+        (("delay",), [_f("gain"), _filter(1.04)], "wrong"),
+    ],
+)
+def test_the_judge_counts_the_moved_filter(truth, findings, verdict):
+    """With the nuisances' break at 1.05 x the MPI's 1 Hz, a filter found there is true."""
+    h = SimpleNamespace(
+        effects=truth,
+        dof="heave",
+        nuisance=Nuisance(filter_break=1.05),
+        config=SimpleNamespace(filter_break_hz=1.0),
+    )
     assert judged(h, SimpleNamespace(findings=findings)) == verdict  # type: ignore[arg-type]

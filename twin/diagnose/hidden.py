@@ -577,17 +577,61 @@ def record_runs(
 
     """
     out = Path(out)
-    folders = []
-    for number in signals:
-        sig = hidden_signal(number, dof, nuisance)
-        run = prepare(truth, sig.commands, model, 7919 * seed + number, imu)
-        meta = run_meta(
-            run, f"hidden-effect run, seed {seed}", nominal, sig if with_signal_meta else None
+    return [
+        play(
+            truth, nominal, hidden_signal(number, dof, nuisance),
+            out / f"seed{seed}-{dof}-multisine{number}", 7919 * seed + number, model,
+            with_signal_meta, imu, f"hidden-effect run, seed {seed}",
         )
-        folder = out / f"seed{seed}-{dof}-multisine{number}"
-        execute(run, meta, folder, overwrite=True)
-        folders.append(folder)
-    return folders
+        for number in signals
+    ]  # fmt: skip
+
+
+def play(
+    truth: MotionSystem,
+    nominal: MotionSystem,
+    signal: DescribingSignal,
+    folder: str | Path,
+    seed: int,
+    model: str = "reduced",
+    with_signal_meta: bool = True,
+    imu: ImuSpec | None = None,
+    notes: str = "hidden-effect run",
+) -> Path:
+    """Play one signal through ``truth`` and write its run folder naming ``nominal``.
+
+    What a lab does with a designed run (:func:`twin.diagnose.design.design_run`): the
+    platform, whose truth the diagnosis does not know, runs the commands.
+
+    Parameters
+    ----------
+    truth, nominal : MotionSystem
+        What the run is simulated with, and what its ``meta.json`` says.
+    signal : DescribingSignal
+        The commands and their design.
+    folder : str or Path
+        Run folder to write (replaced if the twin wrote it).
+    seed : int
+        Seed of the run's noise and IMU.
+    model : str
+        Platform model of the truth.
+    with_signal_meta : bool
+        Write the signal design into ``meta.json``.
+    imu : ImuSpec, optional
+        The recording IMU (the platform's nominal one by default).
+    notes : str
+        ``meta.json``'s notes.
+
+    Returns
+    -------
+    Path
+        The run folder.
+
+    """
+    run = prepare(truth, signal.commands, model, seed, imu)
+    meta = run_meta(run, notes, nominal, signal if with_signal_meta else None)
+    execute(run, meta, Path(folder), overwrite=True)
+    return Path(folder)
 
 
 #: What :func:`judged` returns.
@@ -619,7 +663,9 @@ def judged(hidden: Hidden, diagnosis: object) -> str:
         or ambiguous without the truth among its explanations), ``none`` (no finding; also a
         pair of which one effect is named first and the other is not named anywhere: nothing
         false is presented). A clean draw: ``right`` when no dynamic cause is named, else
-        ``wrong``.
+        ``wrong``. Where the nuisances moved the platform filter's break, a finding of a
+        platform filter at the true break (within :data:`RELATIVE_TOLERANCE`) names a real
+        difference from the nominal: it counts as a true effect.
 
     """
     truth = set(hidden.effects)
@@ -627,6 +673,8 @@ def judged(hidden: Hidden, diagnosis: object) -> str:
         f for f in getattr(diagnosis, "findings", diagnosis)  # a list of findings will do too
         if "noise" in truth or f.extension.effect != "noise"
     ]  # fmt: skip
+    if any(_names_moved_filter(hidden, f.extension) for f in findings):
+        truth.add("platform_filter")
     if not truth:
         return "wrong" if findings else "right"
     if not findings:
@@ -643,6 +691,15 @@ def judged(hidden: Hidden, diagnosis: object) -> str:
     if top.extension.effect not in truth:
         return "wrong"
     return "right" if truth <= named else "none"
+
+
+def _names_moved_filter(hidden: Hidden, ext: Extension) -> bool:
+    """Whether ``ext`` is a platform filter at the break the draw's nuisances moved it to."""
+    moved = hidden.nuisance is not None and hidden.nuisance.filter_break != 1.0
+    if not moved or ext.effect != "platform_filter" or hidden.config.filter_break_hz is None:
+        return False
+    true_hz = hidden.config.filter_break_hz * hidden.nuisance.filter_break  # type: ignore[union-attr]
+    return abs(float(ext.value("break_hz")) / true_hz - 1) <= RELATIVE_TOLERANCE
 
 
 def truth_delta_bic(hidden: Hidden, diagnosis: object) -> tuple[float | None, float]:
