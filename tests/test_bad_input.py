@@ -244,11 +244,10 @@ def test_a_signal_says_what_is_allowed(capsys, tmp_path, run):
     missing = tmp_path / "my" / "commands.csv"
     allowed = f"no such file or folder; --signal takes {signal_help()}\n"
     _one_line(capsys, [*sim, str(missing)], f"twin: error: {missing}: {allowed}")
-    misnamed = tmp_path / "cmd.csv"
-    shutil.copy(run / "commands.csv", misnamed)
-    _one_line(capsys, [*sim, str(misnamed)], f"twin: error: {misnamed}: a commands file must be "
-              "named commands.csv, as in a twin-run/1 folder (t,x,y,z,roll,pitch,yaw; uniform "
-              "time at any rate); got 'cmd.csv'")  # fmt: skip
+    lab = tmp_path / "cmd.csv"  # any name; the header says the format
+    lab.write_text("time_ms,heave_mm\n0,0\n10,1\n", encoding="utf-8")
+    _one_line(capsys, [*sim, str(lab)], f"twin: error: {lab}: ", "; a lab's log in other "
+              "columns or units: twin import reads it")  # fmt: skip
     assert sorted(p.name for p in tmp_path.iterdir()) == ["cmd.csv"]
 
 

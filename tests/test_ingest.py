@@ -227,3 +227,29 @@ def test_cli_json(truth_run: Path, tmp_path: Path, capsys) -> None:
     assert doc["clock"]["how"] == "measured" and doc["mount"]["how"] == "given"
     assert read_run(out).meta["imu"]["position_m"] == list(MOUNT)
     assert main(args) == 2  # exists: not overwritten without --overwrite
+
+
+@pytest.fixture(scope="module")
+def weak_run(tmp_path_factory) -> Path:
+    """Heave lines at 10-15 Hz behind the MPI's 1 Hz filter: about 1 % of the command remains."""
+    from twin.diagnose.hidden import play
+    from twin.signals import MultiSine, periodic_signal
+
+    mpi = motion_system("mpi")
+    ms = MultiSine(np.array([10.0, 12.0, 15.0]), np.array([0.5, 0.5, 0.5]))  # within limits
+    sig = periodic_signal(ms, "heave", 100.0, None, 20.0, "lines above the filter")
+    return play(mpi, mpi, sig, tmp_path_factory.mktemp("weak") / "run", seed=2)
+
+
+@pytest.mark.parametrize(("epoch", "shared"), [(0.0, True), (EPOCH, False)])
+def test_a_response_too_weak_to_align(weak_run, tmp_path, epoch, shared) -> None:
+    """Too weak to align with the nominal twin: one clock where the times overlap, else refused."""
+    cmd, imu = lab_logs(weak_run, tmp_path, epoch=epoch, z_up=False)
+    if shared:
+        rep = import_run([cmd, imu], tmp_path / "run", platform="mpi")
+        assert (rep.clock.how, rep.clock.offset_s) == ("shared", 0.0)
+        assert "too weak against the noise to check it" in rep.clock.statement
+    else:  # nothing says the clocks are one: refused, nothing written
+        with pytest.raises(DataError, match="do not correlate"):
+            import_run([cmd, imu], tmp_path / "run", platform="mpi")
+        assert not (tmp_path / "run").exists()

@@ -367,18 +367,27 @@ def read_commands(path: str | Path) -> Trajectory:
     Raises
     ------
     RunFormatError
-        For a file that is missing, not named ``commands.csv`` (the name says the format, as
-        in a ``twin-run/1`` folder) or not a valid one.
+        For a file that is missing, not a ``.csv`` or not a valid ``twin-run/1`` commands file
+        (its header says the format; a lab's log in other columns or units goes through
+        ``twin import``). Any name will do (a designed run's ``commands.csv``, a lab's copy).
 
     """
     p = Path(path)
     if not p.is_file():
         raise RunFormatError(f"{p}: no such file; a commands file is a twin-run/1 commands.csv "
                              f"({COMMANDS_FILE})")  # fmt: skip
-    if p.name != "commands.csv":
-        raise RunFormatError(f"{p}: a commands file must be named commands.csv, as in a "
-                             f"twin-run/1 folder ({COMMANDS_FILE}); got {p.name!r}")  # fmt: skip
-    return _trajectory(_read_csv(p), p)
+    if p.suffix.lower() != ".csv":
+        raise RunFormatError(f"{p}: a commands file is a .csv as in a twin-run/1 folder "
+                             f"({COMMANDS_FILE}); got {p.name!r}")  # fmt: skip
+    try:
+        data, _ = read_number_table(p, HEADERS["commands.csv"])
+        uniform_rate(data[:, 0], str(p))
+    except RunFormatError as e:
+        raise RunFormatError(f"{e}; a lab's log in other columns or units: twin import "
+                             "reads it") from None  # fmt: skip
+    except SignalError as e:
+        raise RunFormatError(str(e)) from None
+    return _trajectory(data, p)
 
 
 def _trajectory(cmd: FloatArray, path: Path) -> Trajectory:

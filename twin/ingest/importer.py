@@ -394,8 +394,13 @@ def _overlap_guess(cmd: Regular, imu: Regular) -> bool:
 
 
 def _search(ref_t0: float, ref: FloatArray, other_t0: float, other: FloatArray,
-            shared: bool, what: str) -> float:  # fmt: skip
-    """Return the offset (other clock minus reference) that best aligns two 100 Hz series."""
+            shared: bool, what: str) -> float | None:  # fmt: skip
+    """Return the offset (other clock minus reference) that best aligns two 100 Hz series.
+
+    None where the files' times overlap (``shared``) but the series correlate too weakly to
+    check it (a run whose response is small against the noise, e.g. lines far above the
+    MPI's 1 Hz filter): one clock is then assumed.
+    """
     span = max(len(ref), len(other)) / ALIGN_RATE_HZ
     start = other_t0 - ref_t0  # offset if both clocks were one
     if shared:
@@ -404,6 +409,8 @@ def _search(ref_t0: float, ref: FloatArray, other_t0: float, other: FloatArray,
             return start + lag
     lag, peak = lag_s(ref, other, ALIGN_RATE_HZ, span)
     if not np.isfinite(lag) or peak < 0.1:
+        if shared:
+            return None
         raise DataError(f"cannot align the clocks: {what} do not correlate (peak {peak:.2f}); "
                         "give --clock-offset")  # fmt: skip
     return start + lag
@@ -461,18 +468,23 @@ def _clock(
         g_copy = _grid(reg.t[0], reg.t[-1])
         ref = commands.at(g_ref)[:, idx]
         other = interp_columns(g_copy, reg.t, reg.values[:, : len(idx)])
-        offset = _search(g_ref[0], ref, g_copy[0], other, shared_guess,
-                         "the commands and their copy in the IMU file")  # fmt: skip
-        how = "measured"
+        found = _search(g_ref[0], ref, g_copy[0], other, shared_guess,
+                        "the commands and their copy in the IMU file")  # fmt: skip
+        offset, how = (0.0, "shared") if found is None else (found, "measured")
     else:  # the measured response against the nominal twin's, each on its own clock
         g_ref = _grid(commands.t[0], commands.t[-1])
         ref = _nominal_prediction(config, commands, g_ref, imu.rate_hz)
         p = postprocess(ImuRecord(imu.t, imu.values[:, :3], imu.values[:, 3:]), ALIGN_RATE_HZ)
         measured = np.hstack([p.accel + np.array([0.0, 0.0, G]), p.angular_acceleration])
         use = _informative(ref)
-        offset = _search(g_ref[0], ref[:, use], p.t[0], measured[:, use], shared_guess,
-                         "the measured and the nominal twin's accelerations")  # fmt: skip
-        how = "estimated"
+        found = _search(g_ref[0], ref[:, use], p.t[0], measured[:, use], shared_guess,
+                        "the measured and the nominal twin's accelerations")  # fmt: skip
+        if found is None:
+            return Clock(0.0, "shared", True, 0.0, (
+                "the files' times overlap: one clock assumed; the response is too weak against "
+                "the noise to check it by aligning it with the nominal twin (give "
+                "--clock-offset if the clocks differ)"))  # fmt: skip
+        offset, how = found, "estimated"
     nominal_delay = float(np.max(config.delays_s))
     if how == "estimated" and shared_guess and -nominal_delay <= offset <= MAX_PLAUSIBLE_DELAY_S:
         extra, offset = offset, 0.0
