@@ -82,3 +82,31 @@ def test_rivals_that_differ_somewhere_are_not_the_same(platform, named, effects,
 def test_a_non_linear_set_is_never_compared():
     named = [Extension("backlash", {"play": 0.01}, ("heave",))]
     assert _same("srs", named, ("gain",), {"gain": {"gain": 0.9}}) is None
+
+
+def _gain(db_before, db_after, deg_before, deg_after):
+    return {
+        "df_error_db_before": db_before,
+        "df_error_db_after": db_after,
+        "df_error_deg_before": deg_before,
+        "df_error_deg_after": deg_after,
+    }
+
+
+def test_an_effect_beside_another_must_change_the_held_out_describing_function():
+    """A delay and a lead that cancel (0.05 dB, 0.1 deg together) are not named beside a lag."""
+    from twin.diagnose.select import MIN_DF_GAIN_DB, MIN_DF_GAIN_DEG, _negligible
+
+    gains = {
+        "platform_lag": _gain(0.83, 0.06, 1.9, 0.2),
+        "delay": _gain(0.11, 0.06, 0.3, 0.2),
+        "lead": _gain(0.08, 0.06, 0.4, 0.2),
+    }
+    delta = {"platform_lag": 1e5, "delay": 563.0, "lead": 281.0}
+    assert sorted(_negligible(gains, delta)) == ["delay", "lead"]
+    # the strongest member is what the runs show: never dropped as negligible, even alone
+    assert _negligible({"delay": _gain(0.11, 0.1, 0.3, 0.3)}, {"delay": 50.0}) == []
+    # either measure is enough to matter
+    gains["delay"] = _gain(0.07 + 1.5 * MIN_DF_GAIN_DB, 0.07, 0.3, 0.2)
+    gains["lead"] = _gain(0.08, 0.06, 0.2 + 1.5 * MIN_DF_GAIN_DEG, 0.2)
+    assert _negligible(gains, delta) == []

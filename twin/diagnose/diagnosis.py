@@ -46,6 +46,7 @@ from twin.diagnose.select import (
     Selection,
     describe_alternative,
     name_causes,
+    negligible_text,
     same_response_text,
 )
 from twin.diagnose.sensor_side import decide_side, side_text
@@ -306,11 +307,12 @@ class Diagnosis:
                 out.append(
                     f"{i}. {f.extension.describe()}  (BIC +{f.delta_bic:.0f}; held out: {held})"
                 )
-            same = same_response_text(f)
             key = ("same", tuple(f.extension.dofs), tuple(f.evidence.get("set") or ()))
-            if same is not None and key not in shown:  # once per named set
+            if key not in shown:  # once per named set
                 shown.append(key)
-                out.append(f"   {same}")
+                for text in (same_response_text(f), negligible_text(f)):
+                    if text is not None:
+                        out.append(f"   {text}")
             side = f.evidence.get("side")
             if side is not None and side["verdict"] == "undecided":
                 out.append(f"   {side_text(side)}")

@@ -14,7 +14,7 @@ from twin.diagnose.candidates import describe_bound
 from twin.diagnose.diagnosis import Diagnosis, DofReport
 from twin.diagnose.physical import SOURCE_TEXT, PhysicalResult
 from twin.diagnose.residual_figure import plot_residual
-from twin.diagnose.select import describe_alternative, same_response_text
+from twin.diagnose.select import describe_alternative, negligible_text, same_response_text
 from twin.diagnose.sensor_side import side_text
 from twin.lifecycle import replacing_dir
 from twin.plotting import pyplot
@@ -107,9 +107,9 @@ def summary(d: Diagnosis) -> str:
             out.append(f"   - {f.evidence['preference']}")
         if "side" in f.evidence:
             out.append(f"   - {side_text(f.evidence['side'])}")
-        same = same_response_text(f)
-        if same is not None:
-            out.append(f"   - {same}")
+        for text in (same_response_text(f), negligible_text(f)):
+            if text is not None:
+                out.append(f"   - {text}")
         alts = f.evidence.get("alternatives") or []
         if alts:
             out.append(
