@@ -79,6 +79,10 @@ LINEAR_EFFECTS = (
 BUDGET_S = 120.0
 #: Lines of the designed multisine.
 LINES = 3
+#: Least position amplitude of a line, in plays of an explanation's backlash: a line within the
+#: play moves nothing behind it (a run of such lines shows a platform at rest, which the run
+#: checks refuse as an IMU that does not follow its commands).
+BEYOND_PLAY = 3.0
 #: Expected evidence of a pair beyond which the design seeks no more for it (twice the
 #: margin: lines go to the pairs still below it, not to those already told apart).
 ENOUGH = 2 * BIC_MARGIN
@@ -498,9 +502,15 @@ def design_run(
     platform = nominal.platform
     freqs = np.array([f for f in FREQUENCIES_HZ if f <= max_hz])
     noise, t_old = measured_noise(case, dof, freqs, case.of(dof))
+    # a line that moves less than a few times the play of a backlash among the explanations
+    # to tell apart shows only that nothing moves (a rival's is not weighed: see below)
+    play = max((x.value("play") for e in expls if e.primary for x in e.extensions
+                if x.effect == "backlash"), default=0.0)  # fmt: skip
     tops, keep = [], []
     for f in freqs:
         top = _largest_amplitude(platform, dof, float(f))
+        if top is not None and top / (2 * np.pi * f) ** 2 < BEYOND_PLAY * play:
+            top = None
         if top is not None and _multisine(platform, dof, [(float(f), top)], budget_s):
             tops.append(top)
             keep.append(True)
@@ -511,6 +521,7 @@ def design_run(
         raise SignalError(
             f"a budget of {budget_s:g} s is too short for any sine in {dof} "
             "(fades, settling and one period), or none fits the limits"
+            + (f" with a motion beyond {BEYOND_PLAY:g} x the backlash's play" if play else "")
         )
     window = budget_s / 2  # for ranking; the run's own window is used for its evidence
     band = LineSet(freqs, np.array(tops), noise * np.sqrt(t_old / window))
