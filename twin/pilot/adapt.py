@@ -100,7 +100,7 @@ NOISE_RATIO = 0.01
 STARTS = ((3.0, 0.2, 0.6, 0.5), (2.0, 0.3, 0.8, 0.0))
 #: Cost given to unstable or remnant-dominated equalisations (relative to the start's).
 UNSTABLE_COST = 1e6
-#: Frequency grid of the Nyquist test [rad/s] (|L| >> 1 at its start, << 1 at its end).
+#: Frequency grid of the Nyquist test [rad/s] (``|L| >> 1`` at its start, ``<< 1`` at its end).
 STABILITY_GRID_RAD_S = np.geomspace(1e-2, 1e2, 3000)
 #: Frequency grid of the remnant and noise integrals [rad/s].
 GRID_RAD_S = np.geomspace(0.05, 200.0, 1500)

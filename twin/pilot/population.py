@@ -513,7 +513,7 @@ def signed_f(f: float, direction: str | None) -> float:
 
 
 def signed_log(f: ArrayLike) -> FloatArray:
-    """sign(F) log10(1 + |F|): F values from 0.1 to 500 of either sign on one axis."""
+    """``sign(F) log10(1 + |F|)``: F values from 0.1 to 500 of either sign on one axis."""
     a = np.asarray(f, dtype=float)
     return np.sign(a) * np.log10(1 + np.abs(a))
 
