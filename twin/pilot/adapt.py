@@ -15,7 +15,7 @@ thesis found both changed with the filter, Table 6.7) - to minimise
 for the motion system at hand, while its delays tau_v and tau_m stay its own (on request,
 ``adapted`` with ``"tau_v"``, the visual delay adapts too, traded against the visual remnant:
 :func:`visual_noise_ratio`; tau_m does not: behind the filter K_m is zero and tau_m means
-nothing, see the README's Chapter 6 figures): the
+nothing, see the docs' Chapter 6 pages): the
 optimal-control view of manual control (Kleinman, Baron and Levison 1970; McRuer's adjustment
 rules, McRuer and Jex 1967, as the outcome), restricted to the structure of Eq 6.5-6.7 as in
 Hess (1990) and Zaal et al. (2009). A stiffer, faster neuromuscular system passes more of the
