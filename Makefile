@@ -4,8 +4,9 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 NBSTAMP := $(VENV)/.installed-notebooks
+DOCSTAMP := $(VENV)/.installed-docs
 
-.PHONY: demo test test-all fuzz lint models bench clean
+.PHONY: demo test test-all fuzz lint models bench docs clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -16,6 +17,10 @@ $(STAMP): pyproject.toml
 $(NBSTAMP): $(STAMP)
 	$(BIN)/python -m pip install --quiet -e '.[dev,notebooks]'
 	touch $(NBSTAMP)
+
+$(DOCSTAMP): $(STAMP)
+	$(BIN)/python -m pip install --quiet -e '.[dev,docs]'
+	touch $(DOCSTAMP)
 
 demo: $(STAMP)
 	$(BIN)/twin agard demo --out out/demo
@@ -39,8 +44,15 @@ fuzz: $(STAMP)
 	$(BIN)/python -m pytest -q -n 0 -s -m "" tests/test_fuzz_inputs.py tests/test_fuzz_outputs.py
 
 lint: $(STAMP)
-	$(BIN)/ruff check twin tests bench
-	$(BIN)/ruff format --check twin tests bench
+	$(BIN)/ruff check twin tests bench docs
+	$(BIN)/ruff format --check twin tests bench docs
+
+# The docs site in docs/_build/html: the figures and notebooks first (docs/figures.py makes
+# only those whose sources changed; all of them: about 15 min on two cores), then Sphinx with
+# warnings as errors.
+docs: $(DOCSTAMP)
+	$(BIN)/python docs/figures.py
+	$(BIN)/python -m sphinx -W --keep-going -q -b html docs docs/_build/html
 
 models: $(STAMP)
 	$(BIN)/python -m twin.platform.build
@@ -55,4 +67,5 @@ bench: $(STAMP)
 	$(BIN)/python bench/diagnose_run.py
 
 clean:
-	rm -rf $(VENV) .pytest_cache .ruff_cache build *.egg-info
+	rm -rf $(VENV) .pytest_cache .ruff_cache build *.egg-info docs/_build docs/_figures \
+	  docs/notebooks docs/reference/generated docs/reference/_api_modules.rst

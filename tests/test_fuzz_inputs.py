@@ -15,7 +15,7 @@ run's IMU in other units, axes or order, off its clock, dead, reversed or resamp
 
 The fast suite tries :data:`FAST` examples per format (derandomised: the same examples every
 run); ``make test-all`` tries :data:`SLOW` per format and a full-length pilot run, and prints
-the counts (README, Reliability).
+the counts (docs, reliability).
 
 ``make fuzz`` also sends Ctrl-C to the process group of commands at work, at moments drawn
 from a generator seeded by the command's name (exit 130 and one line, nothing left), and

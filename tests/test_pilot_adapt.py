@@ -381,7 +381,7 @@ def test_nine_adaptive_subjects_predict_the_filter_effects_of_chapter_6():
     the thesis' direction for every filter effect of Tables 6.4-6.7, including the three that
     single populations miss most (var(u), the target crossover, zeta_nm); the thesis' target
     crossover effect is a plausible draw of the twin's populations (predictive p >= 0.05;
-    over 20 populations p = 0.33, README). And the default population (seed 0) meets the
+    over 20 populations p = 0.33, docs). And the default population (seed 0) meets the
     issue's acceptance at once."""
     from twin.pilot.design import ACCEPTANCE
     from twin.pilot.replication import run_populations
@@ -401,7 +401,7 @@ def test_nine_adaptive_subjects_predict_the_filter_effects_of_chapter_6():
     assert not missed, missed
     # the issue's acceptance at once, on what `twin pilot experiment --pilot adaptive` flies by
     # default (seed 0): one draw; over 20 populations it holds in 39 % (28-50 %) of
-    # nine-subject experiments, 43 % were the thesis' conclusions the truth (README)
+    # nine-subject experiments, 43 % were the thesis' conclusions the truth (docs)
     agree = results[0].agreement()
     assert results[0].seed == 0 and all(agree[m][f] for m, f in ACCEPTANCE), agree
     for e in rep.effects:

@@ -35,7 +35,7 @@ speed. The legs' servo (Eq 5.9) feeds back the leg velocity with a gain K_d far 
 the cabin's mass asks (MPI: 73 500 N s/m a leg against 250 kg), so a friction flip does not
 accelerate the cabin by 2 F_dof / M: the servo takes it up by a velocity error of
 2 F_dof / C_dof (C_dof = K_d sum_j J_jk^2, the servo's damping in the DOF; F_dof = F sum_j
-|J_jk|), and the platform *dwells*: its acceleration falls towards zero for about
+``|J_jk|``), and the platform *dwells*: its acceleration falls towards zero for about
 2 F_dof / (C_dof a) seconds. The bump's area is that velocity error and its depth is at most
 the commanded acceleration (tests/test_agard_bump.py checks both on the full model).
 
@@ -330,7 +330,7 @@ class BumpResult:
 
     @property
     def trend_exponent(self) -> float:
-        """Exponent p of |peak| ~ speed^p fitted over the speeds (nan with fewer than two)."""
+        """Exponent p of ``|peak| ~ speed^p`` fitted over the speeds (nan with fewer than two)."""
         rows = self.per_speed()
         if len(rows) < 2 or any(r["peak_abs"] <= 0 for r in rows):
             return float("nan")
@@ -371,7 +371,7 @@ class BumpResult:
         return "\n".join(lines)
 
     def plot(self, path: str | None = None):
-        """Acceleration around each reversal overlaid (over |commanded|), and |peak| vs speed."""
+        """Acceleration around each reversal (over ``|commanded|``), and ``|peak|`` vs speed."""
         plt = pyplot()
         fig, (ax_t, ax_v) = plt.subplots(1, 2, figsize=(10, 4))
         speeds = sorted({_rounded(r.speed) for r in self.reversals}, reverse=True)

@@ -82,7 +82,7 @@ class DofResponse:
 
     @property
     def gain_difference_db(self) -> FloatArray:
-        """20 log10 |H_full / H_reduced| [dB]."""
+        """``20 log10 |H_full / H_reduced|`` [dB]."""
         return 20 * np.log10(np.abs(self.full / self.reduced))
 
     @property
@@ -263,7 +263,7 @@ class Comparison:
     notes: list[str] = field(default_factory=list)
 
     def worst(self, max_hz: float = np.inf) -> dict[str, tuple[float, float]]:
-        """Largest |gain difference| [dB] and |phase difference| [deg] per DOF up to max_hz."""
+        """Largest absolute gain difference [dB] and phase difference [deg] per DOF up to max_hz."""
         out = {}
         for dof, r in self.dofs.items():
             sel = r.frequencies_hz <= max_hz + 1e-9

@@ -103,7 +103,7 @@ class DfResult(ResponseMixin):
 
     @property
     def snr_db(self) -> FloatArray:
-        """Signal-to-noise ratio at each frequency, 20 log10(|H| / noise) [dB]."""
+        """Signal-to-noise ratio at each frequency, ``20 log10(|H| / noise)`` [dB]."""
         with np.errstate(divide="ignore"):
             return 20 * np.log10(self.gain / self.noise)
 

@@ -94,7 +94,7 @@ class DofLimits:
         Stroke-limited excursion (``twin workspace``) [m or rad].
     velocity, acceleration : float
         The DOF's speed [m/s or rad/s] and acceleration at which the fastest leg reaches its
-        velocity and acceleration limit at neutral (leg limit / max_j |J_jk|).
+        velocity and acceleration limit at neutral (``leg limit / max_j |J_jk|``).
     velocity_range, acceleration_range : tuple of float
         The same limits' least and largest value over the DOF's excursion (the Jacobian
         changes with the pose; the other DOFs at neutral).

@@ -138,7 +138,7 @@ class LinearityResult:
 
     @property
     def gain(self) -> FloatArray:
-        """|H| at each point (ratio)."""
+        """``|H|`` at each point (ratio)."""
         return np.abs(self.response)
 
     @property

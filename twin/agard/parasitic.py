@@ -10,10 +10,10 @@ parasitic motion: "the amount of interaction between the various degrees of free
   when one is given, otherwise from the window's noise-only bins (those that are no multiple
   of the design's base frequency; for a single sine every bin between its harmonics), their
   mean power times the count of all bins;
-* the coupling at the driven lines, |cross describing function| = undriven acceleration /
-  commanded driven acceleration at the excited frequencies (Eq 3.6 applied to an undriven
-  output, as :func:`twin.agard.df.analyse_df`'s ``cross``): the largest over the lines and
-  the power-weighted mean ``sqrt(sum |Y|^2 / sum |U|^2)``, with the noise floor from the
+* the coupling at the driven lines, the cross describing function's magnitude = undriven
+  acceleration / commanded driven acceleration at the excited frequencies (Eq 3.6 applied to
+  an undriven output, as :func:`twin.agard.df.analyse_df`'s ``cross``): the largest over the
+  lines and the power-weighted mean ``sqrt(sum |Y|^2 / sum |U|^2)``, with the noise floor from the
   neighbouring non-excited bins (:func:`twin.measurement.describing_function.neighbour_noise`)
   on the same scale. A coupling less than :data:`ABOVE_NOISE_DB` above its floor is "at noise".
 
@@ -115,7 +115,7 @@ class Cell:
     noise_rms : float
         The channel's noise rms (rest record or noise-only bins; see the module docstring).
     coupling_max : float
-        Largest |Y / U| over the excited lines (SI ratio).
+        Largest ``|Y / U|`` over the excited lines (SI ratio).
     coupling_max_hz : float
         Where it is [Hz].
     coupling_mean : float

@@ -3,31 +3,31 @@
 Each extension has a fixed name and fixed parameter names (the JSON vocabulary of ``twin
 diagnose``) and acts on some DOFs:
 
-==================  ==============================  =============================================
-effect              parameters                      block
-==================  ==============================  =============================================
-``delay``           ``extra_delay_s``               e^{-d s} on top of the configuration's delay
-                                                    (negative: less delay, never below zero)
-``gain``            ``gain``                        g
-``platform_filter`` ``break_hz``                    replaces the Eq 5.1 filter (or adds one)
-``resonance``       ``frequency_hz``, ``damping``   w^2 / (s^2 + 2 z w s + w^2), a structural mode
-``lead``            ``time_constant_s``             1 + T s (the form of Eq 5.12 / 5.13)
-``sensor_filter``   ``cutoff_hz``, ``channels``     1 / (1 + s / w_c) inside the IMU, on the
-                                                    named channels (ax ay az p q r), noise included
-``backlash``        ``play``                        dead band of width ``play`` [m or rad] on the
-                                                    platform input (after filter and delay)
-``platform_lag``    ``lag_s``                       1 / (1 + t_m s): the platform's own first-order
-                                                    lag (Eq 5.11, Table 5.5's t_m), e.g. a heavier
-                                                    cabin behind the same PD
-``noise``           ``scale``                       the motion noise (Eq 5.10) times ``scale``
-                                                    (the IMU's own noise belongs to the IMU:
-                                                    :class:`~twin.chain.imu.ImuSpec`)
-``imu_alignment``   ``roll_rad``, ``pitch_rad``,    the IMU mounted with its axes rotated by
-                    ``yaw_rad``                     R = Rz(yaw) Ry(pitch) Rx(roll) (IMU axes to
-                                                    cabin axes, Eq A.2's form): it reads R^T f and
-                                                    R^T omega, so one DOF leaks into the other
-                                                    channels (each angle within +-0.2 rad)
-==================  ==============================  =============================================
+===================  ==============================  =============================================
+effect               parameters                      block
+===================  ==============================  =============================================
+``delay``            ``extra_delay_s``               e^{-d s} on top of the configuration's delay
+                                                     (negative: less delay, never below zero)
+``gain``             ``gain``                        g
+``platform_filter``  ``break_hz``                    replaces the Eq 5.1 filter (or adds one)
+``resonance``        ``frequency_hz``, ``damping``   w^2 / (s^2 + 2 z w s + w^2), a structural mode
+``lead``             ``time_constant_s``             1 + T s (the form of Eq 5.12 / 5.13)
+``sensor_filter``    ``cutoff_hz``, ``channels``     1 / (1 + s / w_c) inside the IMU, on the
+                                                     named channels (ax ay az p q r), noise included
+``backlash``         ``play``                        dead band of width ``play`` [m or rad] on the
+                                                     platform input (after filter and delay)
+``platform_lag``     ``lag_s``                       1 / (1 + t_m s): the platform's own first-order
+                                                     lag (Eq 5.11, Table 5.5's t_m), e.g. a heavier
+                                                     cabin behind the same PD
+``noise``            ``scale``                       the motion noise (Eq 5.10) times ``scale``
+                                                     (the IMU's own noise belongs to the IMU:
+                                                     :class:`~twin.chain.imu.ImuSpec`)
+``imu_alignment``    ``roll_rad``, ``pitch_rad``,    the IMU mounted with its axes rotated by
+                     ``yaw_rad``                     R = Rz(yaw) Ry(pitch) Rx(roll) (IMU axes to
+                                                     cabin axes, Eq A.2's form): it reads R^T f and
+                                                     R^T omega, so one DOF leaks into the other
+                                                     channels (each angle within +-0.2 rad)
+===================  ==============================  =============================================
 
 Command-side blocks act on the platform input in the order of the table (after the
 configuration's own filter and delay); ``sensor_filter`` and ``imu_alignment`` act on the IMU

@@ -3,19 +3,24 @@
 Parent parsers (``parents=[...]`` of a subcommand) give the same options the same spelling,
 type and help everywhere:
 
-``--json``                    print the result as JSON
-``--seed N``                  seed of the noise and the IMU (integer >= 0; default 0)
-numbers                       every numeric option's ``type`` is :func:`number` or :func:`count`:
-                              finite and in a range its help gives
-``--out DIR``                 where results go (the command says what it writes)
-``--rrd FILE``                save a Rerun recording
-``--quiet``                   no progress on stderr
-``--scheduler WHERE``         where a batch command's tasks run (:mod:`twin.tasks.engine`)
-``--model {full,reduced}``    platform model; **full by default everywhere**; a command
-                              that defaults to ``reduced`` says why in its help
-``--delay-ms``, ``--break-hz``, ``--no-noise``, ``--resonance``
-                              configuration overrides (:meth:`MotionSystem.override`)
-``--ideal-imu``               IMU without noise and bias (commands that use an IMU)
+==============================  ===========================================================
+option                          meaning
+==============================  ===========================================================
+``--json``                      print the result as JSON
+``--seed N``                    seed of the noise and the IMU (integer >= 0; default 0)
+numbers                         every numeric option's ``type`` is :func:`number` or
+                                :func:`count`: finite and in a range its help gives
+``--out DIR``                   where results go (the command says what it writes)
+``--rrd FILE``                  save a Rerun recording
+``--quiet``                     no progress on stderr
+``--scheduler WHERE``           where a batch command's tasks run (:mod:`twin.tasks.engine`)
+``--model {full,reduced}``      platform model; **full by default everywhere**; a command
+                                that defaults to ``reduced`` says why in its help
+overrides                       ``--delay-ms``, ``--break-hz``, ``--no-noise``,
+                                ``--resonance``: configuration overrides
+                                (:meth:`MotionSystem.override`)
+``--ideal-imu``                 IMU without noise and bias (commands that use an IMU)
+==============================  ===========================================================
 
 Progress goes through one helper, :func:`progress`: a :class:`twin.progress.Progress` that
 library functions take as their ``progress=`` argument (a tqdm bar with ETA for counted work);

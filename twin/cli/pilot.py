@@ -171,7 +171,7 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
         help="with --pilot adaptive: how much the subjects differ in perceiving motion, the "
         "log-normal sd of the felt rate's observation noise relative to the visual one "
         f"({MOTION_SPREAD.span}; default {spreads.MOTION_NOISE_SD:g}, from profiles "
-        "against Tables 6.4-6.7, README; 0: every subject perceives motion as well as vision; "
+        "against Tables 6.4-6.7, docs; 0: every subject perceives motion as well as vision; "
         "with --visual-delay-spread 0.03 the subjects of earlier versions)",
     )
     exp.add_argument(
@@ -180,7 +180,7 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
         metavar="S",
         help="with --pilot adaptive: how much the subjects differ in visual delay, its sd in s "
         f"around 0.30 s ({VISUAL_DELAY_SPREAD.span}; default "
-        f"{spreads.VISUAL_DELAY_SD:g}, from profiles against Tables 6.4-6.7, README; 0: every "
+        f"{spreads.VISUAL_DELAY_SD:g}, from profiles against Tables 6.4-6.7, docs; 0: every "
         "subject has the mean delay)",
     )
     exp.add_argument(

@@ -179,7 +179,7 @@ class Model:
         return base * self.response(lines.f)
 
     def chi2(self, evidence: Sequence[Lines]) -> float:
-        """Sum over the evidence of |Y - Yhat|^2 / sd^2 (minus the log-likelihood)."""
+        """Sum over the evidence of ``|Y - Yhat|^2 / sd^2`` (minus the log-likelihood)."""
         return sum(x.chi2(self.line_prediction(x)) for x in evidence)
 
 
@@ -273,7 +273,7 @@ class SetFit:
     extensions : tuple of Extension
         The effects with their fitted parameters.
     chi2 : float
-        sum |Y - Yhat|^2 / sd^2 with them.
+        ``sum |Y - Yhat|^2 / sd^2`` with them.
     std : dict of str to dict of str to float
         Standard deviation per effect and parameter (nan where not identifiable).
     correlation : dict

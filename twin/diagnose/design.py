@@ -9,7 +9,7 @@ expected evidence between the closest two explanations is largest.
 
 The expected evidence of a run between explanations i and j, if i is true, is
 
-    E_ij = 2 |H_i(f) - H_j(f)|^2 A^2 / s(f)^2
+    ``E_ij = 2 |H_i(f) - H_j(f)|^2 A^2 / s(f)^2``
 
 (the BIC difference the run adds with both at their fitted parameters: the Kullback-Leibler
 divergence of the two complex Gaussians, as :func:`twin.diagnose.detect.expected_delta_bic`;
@@ -391,7 +391,7 @@ class LineSet:
         )
 
     def evidence(self, hi: ComplexArray, hj: ComplexArray) -> float:
-        """Return 2 sum |H_i - H_j|^2 A^2 / s^2: the BIC difference if i is true."""
+        """Return ``2 sum |H_i - H_j|^2 A^2 / s^2``: the BIC difference if i is true."""
         return float(2 * np.sum(np.abs(hi - hj) ** 2 * self.amplitude**2 / self.noise**2))
 
 

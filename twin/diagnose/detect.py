@@ -1,10 +1,10 @@
 """What a run could have revealed: expected evidence, Cramér-Rao bounds, smallest effects.
 
 For a true set of effects (line prediction Y_t) on top of a model (Y_0) the expected chi2
-gain is sum |Y_t - Y_0|^2 / sd^2 over the lines (the Kullback-Leibler divergence of the two
+gain is ``sum |Y_t - Y_0|^2 / sd^2`` over the lines (the Kullback-Leibler divergence of the two
 complex Gaussians), so the expected BIC improvement of naming them is
 
-    2 sum |Y_t - Y_0|^2 / sd^2 + p - p ln(n)
+    ``2 sum |Y_t - Y_0|^2 / sd^2 + p - p ln(n)``
 
 (+p: the fitted parameters' own expected gain). An effect is *detectable* when that exceeds
 ``BIC_MARGIN``; :func:`smallest_detectable` states, per effect, the size at which it does (e.g.

@@ -11,9 +11,9 @@ dynamic cause can be named for a noise difference (that is judged on its own, in
 :mod:`twin.diagnose.nuisance`).
 
 Under a model that predicts Yhat at the lines, Y - Yhat is complex Gaussian with
-E|Y - Yhat|^2 = sd^2, so the log-likelihood is -chi2 with chi2 = sum |Y - Yhat|^2 / sd^2 (a
+``E|Y - Yhat|^2 = sd^2``, so the log-likelihood is -chi2 with ``chi2 = sum |Y - Yhat|^2 / sd^2`` (a
 constant dropped). The variance estimate from M neighbouring bins (2 M real degrees of
-freedom) is scaled by 2M / (2M - 2), which makes E[|Y - Yhat|^2 / sd^2] = 1 under the true
+freedom) is scaled by 2M / (2M - 2), which makes ``E[|Y - Yhat|^2 / sd^2] = 1`` under the true
 model (1 / chi-square bias).
 """
 
@@ -82,7 +82,7 @@ class Lines:
     nominal : ndarray of complex
         The nominal twin's noise-free amplitudes P.
     sd : ndarray
-        Standard deviation of Y (complex: E|dY|^2 = sd^2) from the measurement's own noise.
+        Standard deviation of Y (complex: ``E|dY|^2 = sd^2``) from the measurement's own noise.
 
     """
 
@@ -103,7 +103,7 @@ class Lines:
         return line_amplitudes(self.channel.t, x, self.f, self.window)
 
     def chi2(self, predicted: ComplexArray) -> float:
-        """Return sum |Y - Yhat|^2 / sd^2 (minus the log-likelihood)."""
+        """Return ``sum |Y - Yhat|^2 / sd^2`` (minus the log-likelihood)."""
         return float(np.sum(np.abs(self.measured - predicted) ** 2 / self.sd**2))
 
     def residuals(self, predicted: ComplexArray) -> FloatArray:

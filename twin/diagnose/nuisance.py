@@ -3,7 +3,7 @@
 Off the excited lines (and the two bins the Hann taper spreads each over) the residual
 measured - model is noise. Its spectrum is modelled as
 
-    S(f) = (a S_motion(f) + b S_imu(f)) |H_sensor(f)|^2,
+    ``S(f) = (a S_motion(f) + b S_imu(f)) |H_sensor(f)|^2``,
 
 the nominal spectra of the configuration's motion noise (Eq 5.10) and of the IMU's own noise
 (:mod:`twin.diagnose.data` keeps them apart; smoothed over a third of an octave,
@@ -86,7 +86,7 @@ class NoiseFit:
 
 
 def _terms(model: Model, segments: Sequence[Segment]) -> list[tuple[FloatArray, ...]]:
-    """Per segment, at the off-line bins: |R|^2 and the two source spectra."""
+    """Per segment, at the off-line bins: ``|R|^2`` and the two source spectra."""
     out = []
     for seg in segments:
         keep = off_line(seg)

@@ -5,13 +5,13 @@ prediction of it over the run's measurement window, against the nominal noise:
 
 * **Describing-function ratio** measured / nominal at every excited line, with its standard
   deviation from the noise measured at the neighbouring non-excited bins (AGARD-AR-144's
-  "noise" estimate). A line is significant when 2 |R - 1|^2 / sd(R)^2 exceeds the chi-square
+  "noise" estimate). A line is significant when ``2 |R - 1|^2 / sd(R)^2`` exceeds the chi-square
   (2 degrees of freedom) quantile for ``ALPHA``; the smallest deviation the line could have
   shown is ``sqrt(q / 2) sd(R)``, given in dB and degrees.
 * **Harmonic content and stochastic residue** (AGARD-AR-144's decomposition, §3.3.3): the
   power of measured - nominal at the 2nd-3rd harmonics of the lines, the 4th and higher, and
   at every other bin of the band, each against the power the nominal noise model expects
-  there. Under the nominal model sum |Y_m - Y_n|^2 / S over n bins is Gamma(n, 1)
+  there. Under the nominal model ``sum |Y_m - Y_n|^2 / S`` over n bins is Gamma(n, 1)
   distributed (each bin's periodogram is exponential with mean S): the p-value is two-sided.
 * **Residual noise spectrum** in octave bands against the nominal noise spectrum (same test).
 
@@ -204,9 +204,9 @@ class LineRatios:
     ratio : ndarray of complex
         Measured / nominal describing function.
     sd : ndarray
-        Standard deviation of ``ratio`` (complex: E|dR|^2 = sd^2) from neighbouring bins.
+        Standard deviation of ``ratio`` (complex: ``E|dR|^2 = sd^2``) from neighbouring bins.
     statistic : ndarray
-        2 |R - 1|^2 / sd^2 (chi-square, 2 degrees of freedom, under the nominal model).
+        ``2 |R - 1|^2 / sd^2`` (chi-square, 2 degrees of freedom, under the nominal model).
     significant : ndarray of bool
         ``statistic`` above its (1 - ALPHA) quantile.
     min_db, min_deg : ndarray

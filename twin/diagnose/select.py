@@ -30,7 +30,7 @@ the measurement window and scored on the other (two-fold, both ways), or on vali
 an effect whose held-out line error (chi2 per line: the describing-function error at the
 excited lines, weighted by its uncertainty) does not fall is dropped. Reported per finding,
 before -> after (the set without it -> with it): held-out chi2 per line, describing-function
-error (mean |dB| and |deg| of measured over predicted at the lines) and VAF.
+error (mean absolute dB and deg of measured over predicted at the lines) and VAF.
 
 An effect named beside another must also matter: removing it must raise the held-out
 describing-function error by at least :data:`MIN_DF_GAIN_DB` or :data:`MIN_DF_GAIN_DEG`

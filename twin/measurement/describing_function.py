@@ -42,7 +42,7 @@ class ResponseMixin:
 
     @property
     def gain(self) -> FloatArray:
-        """|H| (ratio)."""
+        """``|H|`` (ratio)."""
         return np.abs(self.response)
 
     @property
@@ -120,7 +120,7 @@ class LagDelayFit:
     tau : float
         Delay [s].
     rms_error : float
-        RMS of the relative complex residual |H / H_fit - 1|.
+        RMS of the relative complex residual ``|H / H_fit - 1|``.
 
     """
 

@@ -15,7 +15,7 @@ thesis found both changed with the filter, Table 6.7) - to minimise
 for the motion system at hand, while its delays tau_v and tau_m stay its own (on request,
 ``adapted`` with ``"tau_v"``, the visual delay adapts too, traded against the visual remnant:
 :func:`visual_noise_ratio`; tau_m does not: behind the filter K_m is zero and tau_m means
-nothing, see the README's Chapter 6 figures): the
+nothing, see the docs' Chapter 6 pages): the
 optimal-control view of manual control (Kleinman, Baron and Levison 1970; McRuer's adjustment
 rules, McRuer and Jex 1967, as the outcome), restricted to the structure of Eq 6.5-6.7 as in
 Hess (1990) and Zaal et al. (2009). A stiffer, faster neuromuscular system passes more of the
@@ -100,7 +100,7 @@ NOISE_RATIO = 0.01
 STARTS = ((3.0, 0.2, 0.6, 0.5), (2.0, 0.3, 0.8, 0.0))
 #: Cost given to unstable or remnant-dominated equalisations (relative to the start's).
 UNSTABLE_COST = 1e6
-#: Frequency grid of the Nyquist test [rad/s] (|L| >> 1 at its start, << 1 at its end).
+#: Frequency grid of the Nyquist test [rad/s] (``|L| >> 1`` at its start, ``<< 1`` at its end).
 STABILITY_GRID_RAD_S = np.geomspace(1e-2, 1e2, 3000)
 #: Frequency grid of the remnant and noise integrals [rad/s].
 GRID_RAD_S = np.geomspace(0.05, 200.0, 1500)

@@ -117,7 +117,7 @@ class ArxModel:
     def sampled_std(
         self, w: FloatArray, draws: int = 400, seed: int | tuple[int, ...] = 0
     ) -> dict[str, tuple[FloatArray, FloatArray]]:
-        """Return the standard deviations of |H| and of the phase [deg], propagating P exactly.
+        """Return the standard deviations of ``|H|`` and of the phase [deg], propagating P exactly.
 
         Eq 2.16-2.18 propagate the parameter covariance P to H = B/A to first order. Where
         the relative spread of H is 10-30 % (the Chapter 2 pilot at 10 % remnant) that
@@ -142,7 +142,7 @@ class ArxModel:
         }
 
     def std(self, w: FloatArray) -> dict[str, tuple[FloatArray, FloatArray]]:
-        """Return the standard deviations of |H| and of the phase [deg] (Eq 2.16-2.18).
+        """Return the standard deviations of ``|H|`` and of the phase [deg] (Eq 2.16-2.18).
 
         First-order propagation of P, as in the thesis; see :meth:`sampled_std`.
         """

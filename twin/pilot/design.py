@@ -30,7 +30,7 @@ with its 5-95 % over the resamples. The default pool, 20 populations of nine, is
 subjects. The predicted agreement at the flown populations' size is printed beside their own
 count; the pool holds those very populations, so this is a check of the approach in-sample
 (``bench/pilot_adaptive.py --design-only`` flies fresh ones: 20 populations of 18 agreed with
-the design within its interval and theirs on every effect, README).
+the design within its interval and theirs on every effect, docs).
 
 Examples
 --------

@@ -116,7 +116,7 @@ def _expectations(r1: FloatArray, epsilon: float = 0.01) -> tuple[FloatArray, Fl
 def _neighbour_power(
     C: ComplexArray, lines: NDArray, excited: NDArray, bins: int = 2
 ) -> FloatArray:
-    """Mean |C|^2 over the non-excited bins next to each line (noise power per bin)."""
+    """Mean ``|C|^2`` over the non-excited bins next to each line (noise power per bin)."""
     taken = set(int(k) for k in excited)
     out = np.empty((C.shape[0], lines.size))
     for i, k in enumerate(lines):
@@ -140,8 +140,8 @@ def fc_variance(
     At the disturbance lines, as the thesis gives them: the remnant power in u is taken from
     the neighbouring non-excited bins, referred to the disturbance input by Eq 2.10 to give the
     signal-to-noise ratio r_1 of f_d; the target's r_2 (its remnant referred to the target
-    input, |1 + H_c (H_pe + H_px)|^2 / |H_pe|^2) is interpolated to these lines (r~_2). E1 and E2
-    follow from Eq 2.8-2.9 with a 1 % probability of underestimating the variance.
+    input, ``|1 + H_c (H_pe + H_px)|^2 / |H_pe|^2``) is interpolated to these lines (r~_2). E1
+    and E2 follow from Eq 2.8-2.9 with a 1 % probability of underestimating the variance.
 
     Parameters
     ----------

@@ -2,7 +2,7 @@
 
 The seven parameters of :data:`twin.pilot.model.ESTIMATED` are fitted to estimates of H_pe and
 H_px (the canal dynamics are kept at their Table 2.1 values, as in the thesis) by least squares
-on the complex relative error, |H_model / H_estimate - 1|, of both responses together.
+on the complex relative error, ``|H_model / H_estimate - 1|``, of both responses together.
 """
 
 from __future__ import annotations

@@ -640,7 +640,7 @@ def goodness_of_fit(chi2: float, dof: int) -> dict[str, float]:
     parameters); ``p`` the chance of one at least this large were the model the pilot and
     the remnant all that is left at the lines (chi-square with ``dof`` degrees of freedom;
     approximate, as the remnant's variance at each line is estimated from its neighbours:
-    on the twin's own pilot the ratio's spread matches the chi-square's, see the README).
+    on the twin's own pilot the ratio's spread matches the chi-square's, see the docs).
     """
     from scipy.stats import chi2 as chi2_dist
 

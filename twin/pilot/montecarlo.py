@@ -78,11 +78,11 @@ class MonteCarloResult:
         return self.fc["pe"].shape[0]
 
     def sample_std_mag(self, method: str, response: str) -> FloatArray:
-        """Sample standard deviation of |H| over the runs."""
+        """Sample standard deviation of ``|H|`` over the runs."""
         return np.abs(getattr(self, method)[response]).std(axis=0, ddof=1)
 
     def to_dict(self) -> dict[str, object]:
-        """JSON-ready result: standard deviations of |H| per method at the input frequencies.
+        """JSON-ready result: standard deviations of ``|H|`` per method at the input frequencies.
 
         ``parameter_errors`` (mean absolute error per parameter, Table 2.3) is included when
         pilot models were fitted.
@@ -106,7 +106,7 @@ class MonteCarloResult:
         return out
 
     def plot(self, path: str | None = None):
-        """Plot the standard deviation of |H| over the runs: FC against ARX (§2.5).
+        """Plot the standard deviation of ``|H|`` over the runs: FC against ARX (§2.5).
 
         Parameters
         ----------

@@ -33,7 +33,7 @@ minus the first), beside the thesis' F and directions.
 
 Assumptions (stated, not from the thesis): the spreads of :data:`SUBJECT_SPREAD` and the
 adaptation noise (the motion perception's and the visual delay's spreads are settings,
-:class:`twin.pilot.spread.Spread`, chosen from profiles against Tables 6.4-6.7, README); the
+:class:`twin.pilot.spread.Spread`, chosen from profiles against Tables 6.4-6.7, docs); the
 cost J = var(e) + r var(u) and the observation-noise remnant of :mod:`twin.pilot.adapt`; where
 the subjects adapt their visual delay too (``adapted`` with ``"tau_v"``), the speed-accuracy
 trade-off of :func:`twin.pilot.adapt.visual_noise_ratio`. What to keep in mind when reading the
@@ -513,7 +513,7 @@ def signed_f(f: float, direction: str | None) -> float:
 
 
 def signed_log(f: ArrayLike) -> FloatArray:
-    """sign(F) log10(1 + |F|): F values from 0.1 to 500 of either sign on one axis."""
+    """``sign(F) log10(1 + |F|)``: F values from 0.1 to 500 of either sign on one axis."""
     a = np.asarray(f, dtype=float)
     return np.sign(a) * np.log10(1 + np.abs(a))
 

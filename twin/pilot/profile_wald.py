@@ -27,7 +27,7 @@ is plausible *for it*, which is the question a bound at the truth answers.
 Examples
 --------
 A bound that does not change gives itself back; one that grows by a quarter of a unit per
-unit, sd = 1 + |theta| / 4, has the interval's end at d = 2 (1 + d / 4), d = 4: an sd of 2,
+unit, ``sd = 1 + |theta| / 4``, has the interval's end at d = 2 (1 + d / 4), d = 4: an sd of 2,
 approached from below in the six steps:
 
 >>> import numpy as np

@@ -4,7 +4,7 @@ The thesis reports its nine subjects' measures, not how the subjects differ in w
 model needs (how well each perceives motion, how long each one's visual delay is). These
 spreads set how alike the subjects' responses to the motion system are, and so the effect
 sizes a population shows; they are chosen by profiles against Tables 6.4-6.7
-(``python bench/pilot_adaptive.py --spread-profile``, README "Subjects who differ in
+(``python bench/pilot_adaptive.py --spread-profile``, docs "Subjects who differ in
 perceiving motion" and "Subjects who differ in visual delay"). :class:`Spread` holds them,
 checked once, so every function that draws subjects takes one value.
 """

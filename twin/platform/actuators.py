@@ -18,7 +18,7 @@ field                  in the MJCF                                       applied
 ``lag_s``              ``<custom><numeric name="leg_lag_s">``: a         :mod:`twin.chain.physics`
                        first-order lag of the leg's servo [s]            (on the leg reference)
 ``play_m``             ``<custom><numeric name="leg_play_m">``: a dead   :mod:`twin.chain.physics`
-                       band between reference and rod [m]               (on the leg reference)
+                       band between reference and rod [m]                (on the leg reference)
 =====================  ================================================  ====================
 
 The static-force feedback K_s (the cabin's ``gravcomp``) carries the cabin's weight outside

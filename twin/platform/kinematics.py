@@ -336,7 +336,7 @@ def leg_rates(
 ) -> tuple[FloatArray, FloatArray | None, FloatArray | None]:
     """Leg lengths, velocities and accelerations from a pose and its exact derivatives.
 
-    Uses l_dot = n . L_dot and l_ddot = n . L_ddot + (|L_dot|^2 - l_dot^2) / l, with
+    Uses l_dot = n . L_dot and l_ddot = n . L_ddot + ``(|L_dot|^2 - l_dot^2) / l``, with
     L_dot = c_dot + omega x T a and L_ddot = c_ddot + omega_dot x T a + omega x (omega x T a),
     omega = R eta_dot (Eq A.4, A.8).
 

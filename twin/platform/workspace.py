@@ -21,7 +21,7 @@ def comparable(ws: dict[str, DofRange]) -> dict[str, float]:
 
 
 def relative_errors(ws: dict[str, DofRange], platform: str) -> dict[str, float]:
-    """Relative error of each Table 5.1 figure in magnitude, (|twin| - |thesis|) / |thesis|.
+    """Relative error of each Table 5.1 figure in magnitude, ``(|twin| - |thesis|) / |thesis|``.
 
     Negative means the twin reaches less far than the thesis states.
     """

@@ -13,6 +13,9 @@ nothing but time: the Dask scheduler runs its tasks again elsewhere (up to
 The ``--scheduler`` option of those commands (default: the ``TWIN_SCHEDULER`` environment
 variable, else ``local``) says where:
 
+===================  ========================================================================
+value                where
+===================  ========================================================================
 ``local``            a Dask ``LocalCluster`` started for the command: one worker process per
                      CPU core, one thread each (BLAS pinned to one thread per worker, as the
                      Dask nanny does by default: no oversubscribed cores)
@@ -20,6 +23,7 @@ variable, else ``local``) says where:
 ``inline``           this process, one task after another (no Dask)
 ``tcp://HOST:PORT``  a running ``dask scheduler`` (``HOST:PORT`` alone means tcp); its
                      workers need the same twin version installed (checked on connect)
+===================  ========================================================================
 
 A local cluster is started only when a batch has more than one task, so a one-task command
 pays nothing for it. Its workers ignore Ctrl-C: this process shuts them down
