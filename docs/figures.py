@@ -183,40 +183,22 @@ def chapter_6_fixed() -> None:
     _keep(WORK / "conditions.png", "ch6-conditions.png")
 
 
+def _adaptive(stem: str, second: str, *options: str) -> None:
+    """Fly adaptive subjects (``pilot experiment --pilot adaptive``); keep its two figures."""
+    twin("pilot", "experiment", "--pilot", "adaptive", *options, "--plot", f"{stem}.png",
+         "--quiet", "--overwrite")  # fmt: skip
+    _keep(WORK / f"{stem}.png", f"ch6-{stem}.png")
+    _keep(WORK / f"{stem}-{second}.png", f"ch6-{stem}-{second}.png")
+
+
 def chapter_6_adaptive() -> None:
     """Ch 6: nine adaptive subjects and the thesis' ANOVA."""
-    twin(
-        "pilot",
-        "experiment",
-        "--pilot",
-        "adaptive",
-        "--plot",
-        "anova.png",
-        "--quiet",
-        "--overwrite",
-    )
-    _keep(WORK / "anova.png", "ch6-anova.png")
-    _keep(WORK / "anova-conditions.png", "ch6-anova-conditions.png")
+    _adaptive("anova", "conditions")
 
 
 def chapter_6_replication() -> None:
     """Ch 6: five populations of eight subjects (the pages' tables: 20 of nine)."""
-    twin(
-        "pilot",
-        "experiment",
-        "--pilot",
-        "adaptive",
-        "--populations",
-        "5",
-        "--subjects",
-        "8",
-        "--plot",
-        "replication.png",
-        "--quiet",
-        "--overwrite",
-    )
-    _keep(WORK / "replication.png", "ch6-replication.png")
-    _keep(WORK / "replication-subjects.png", "ch6-replication-subjects.png")
+    _adaptive("replication", "subjects", "--populations", "5", "--subjects", "8")
 
 
 def sweep() -> None:
