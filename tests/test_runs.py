@@ -211,3 +211,13 @@ def test_ctrl_c_during_a_full_model_run_exits_130(tmp_path):
         out, err = proc.communicate(timeout=60)
         assert (proc.returncode, out, err) == (130, "", "twin: interrupted\n")
         assert not any((tmp_path / f"{k}").iterdir())
+
+
+def test_simulate_says_where_the_recording_went(tmp_path, capsys):
+    out, rrd = tmp_path / "run", tmp_path / "rest.rrd"
+    assert main(["simulate", "srs", "--signal", "rest-1", "--model", "reduced", "--out",
+                 str(out), "--rrd", str(rrd)]) == 0  # fmt: skip
+    printed = capsys.readouterr().out
+    assert f"wrote {out} (" in printed
+    assert f"wrote {rrd} (a Rerun recording; view it with python -m rerun {rrd})" in printed
+    assert rrd.is_file()

@@ -144,6 +144,9 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     if not args.quiet:
         print(f"wrote {folder} ({commands.duration:.1f} s simulated in {wall:.1f} s, "
               f"{commands.duration / wall:.0f}x real time)")  # fmt: skip
+        if args.rrd is not None:
+            print(f"wrote {args.rrd} (a Rerun recording; view it with python -m rerun "
+                  f"{args.rrd})")  # fmt: skip
         print(run.limits.summary())
         for note in run.notes:
             print(f"note: {note}")
