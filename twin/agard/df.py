@@ -179,12 +179,12 @@ class DfResult(ResponseMixin):
         }
 
     def format_table(self) -> str:
-        """Plain-text table: frequency, gain, phase, analytic gain and phase."""
+        """Plain-text table: frequency, measured gain and phase, Eq 5.11's, signal-to-noise."""
         a = self.analytic()
         lines = [
             f"describing function, {self.dof} ({self.source})",
-            f"{'f [Hz]':>7} {'gain dB':>8} {'phase':>7} {'Eq 5.11 dB':>10} {'phase':>7} "
-            f"{'SNR dB':>7}",
+            f"{'':7} {'measured':>16} {'Eq 5.11':>18}",
+            f"{'f [Hz]':>7} {'gain dB':>8} {'deg':>7} {'gain dB':>10} {'deg':>7} {'SNR dB':>7}",
         ]
         phase_a = self.analytic_phase_deg()
         for f, g, p, ga, pa, snr in zip(
