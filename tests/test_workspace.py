@@ -64,7 +64,9 @@ def test_cli_unknown_platform_is_one_line_and_exit_2():
     assert proc.returncode == 2
     assert proc.stdout == ""
     assert proc.stderr.strip().splitlines() == [
-        "twin: error: unknown platform 'simona' (known platforms: mpi, srs)"
+        "twin: error: unknown configuration 'simona'; expected one of mpi, mpi-2008, srs, "
+        "condition-1, condition-2, condition-3, condition-4, condition-5, condition-6, "
+        "condition-7, condition-8 or a twin-config/1 .json file"
     ]
 
 

@@ -68,8 +68,6 @@ def _common(out: str) -> list[argparse.ArgumentParser]:
 
 def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
     """Add ``twin agard`` and its subcommands to the ``twin`` parser."""
-    from twin.chain.config import config_help
-
     agard = sub.add_parser(
         "agard", help="AGARD-AR-144 and OMCT tests on a twin or a recorded run", description=__doc__
     )
@@ -81,16 +79,12 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
             help=HELP[name],
             description=HELP[name],
         )
-        p.add_argument(
-            "target",
-            metavar="PLATFORM_OR_CONFIG",
-            help=f"{config_help()}, or a twin-run/1 folder",
-        )
-        p.add_argument(
-            "--dof",
-            choices=DOF_NAMES,
-            help="driven DOF (needed for a configuration; a run says its own)"
-            + ("; default all six" if name == "parasitic" else ""),
+        common.add_config(p, run=True, note=" (analysed as measured)")
+        common.add_dof(
+            p,
+            "the driven DOF (needed for a configuration; a run says its own"
+            + ("; default all six)" if name == "parasitic" else ")"),
+            one=True,
         )
         if name in SCHEDULED:
             _schedule_option(p)
@@ -132,8 +126,12 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
         "report",
         parents=[
             *_common(
-                "report folder: report.json, summary.md, a figure per test and DOF and the runs "
-                "(twin-run/1) under runs/ (default out/agard-CONFIG-MODEL)"
+                common.default_out_help(
+                    "report folder: report.json, summary.md, a figure per test and DOF and the "
+                    "runs (twin-run/1) under runs/",
+                    "agard-report",
+                    "CONFIG-MODEL",
+                )
             ),
             common.scheduler_parent(),
         ],
@@ -142,24 +140,20 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
         "write report.json, summary.md and figures into a folder. Each DOF's suite is a task "
         "(--scheduler); with --rrd (one recording) the DOFs run one after another here.",
     )
-    rep.add_argument(
-        "target",
-        metavar="CONFIG_OR_RUN",
-        help=f"{config_help()}; or a twin-run/1 folder: the tests it holds are reported, and "
-        "the ones it lacks named",
+    common.add_config(
+        rep, run=True, note=" (the tests a run holds are reported, and the ones it lacks named)"
     )
-    rep.add_argument(
-        "--dof",
-        nargs="+",
-        choices=DOF_NAMES,
-        help="DOFs of the twin's own suite (default pitch heave; a schedule names its own)",
+    common.add_dof(
+        rep, "a DOF of the twin's own suite (default pitch and heave; a schedule names its own)"
     )
     _schedule_option(rep)
     rep.set_defaults(func=_cmd_report, model=None, seed=None)
     demo = tests.add_parser(
         "demo",
-        parents=[common.out_parent("folder for figures and .rrd (default out/demo)"),
-                 common.quiet_parent()],
+        parents=[
+            common.out_parent(common.default_out_help("folder for figures and .rrd", "agard-demo")),
+            common.quiet_parent(),
+        ],
         help="the make-demo sweep: Table 5.2 DFs of MPI and SRS twins",
     )  # fmt: skip
     demo.set_defaults(func=_cmd_demo)
@@ -172,7 +166,9 @@ def _schedule_option(p: argparse.ArgumentParser) -> None:
         help="a lab's test schedule (.json MovementSeries, .toml twin-schedule/1): on a "
         "configuration it is simulated as one run; with a recorded run it says what the run "
         "did (its t = 0 the commands' first sample; a run the twin simulated from a schedule "
-        "carries it). Writes a report folder of the tests the schedule holds.",
+        "carries it). Writes a report folder of the tests the schedule holds (default "
+        "out/agard-<test or report>-<name>: the run folder's name, or "
+        "CONFIG-MODEL-<schedule's name>).",
     )
 
 
@@ -216,7 +212,7 @@ def _simulate(args: argparse.Namespace, out: Path | None):
 
     if args.dof is None and args.test != "parasitic":
         raise SignalError(f"give --dof for a configuration ({', '.join(DOF_NAMES)})")
-    bench = _bench(args, args.target)
+    bench = _bench(args, args.config)
     with Session(bench, out, args.rrd, common.progress(args)) as s:
         if args.test == "df":
             return df.run_df(s, args.dof), bench.config
@@ -259,7 +255,7 @@ def _refuse_simulation_options(args: argparse.Namespace) -> None:
 
         names = ", ".join("--" + o.replace("_", "-") for o in given)
         raise UsageError(f"{names}: only for a test simulated on a configuration; the recorded "
-                         f"run {args.target} has its own configuration, model, seed and "
+                         f"run {args.config} has its own configuration, model, seed and "
                          "signals (leave them out)")  # fmt: skip
 
 
@@ -280,14 +276,14 @@ def _analyse(args: argparse.Namespace):
     if args.test in SCHEDULE_ONLY:
         from twin.errors import UsageError
 
-        raise UsageError(f"{args.target}: a {args.test} test takes several sines; give the "
+        raise UsageError(f"{args.config}: a {args.test} test takes several sines; give the "
                          "schedule the run was made with (--schedule FILE)")  # fmt: skip
-    m = from_run(args.target)
+    m = from_run(args.config)
     kind = m.meta.get("signal", {}).get("kind")
     if args.test in ("bump", "limits") and kind != args.test:
         from twin.errors import UsageError
 
-        raise UsageError(f"{args.target}: a {args.test} test analyses a {args.test} run (twin "
+        raise UsageError(f"{args.config}: a {args.test} test analyses a {args.test} run (twin "
                          f"agard {args.test} CONFIG --out DIR writes them) or a schedule's "
                          f"moves (--schedule FILE); this run's signal is "
                          f"{kind or 'not stated in its meta.json'}")  # fmt: skip
@@ -296,7 +292,7 @@ def _analyse(args: argparse.Namespace):
     if args.test == "bump":
         return bump.analyse_bump(m, args.dof), m.config
     if args.test == "limits":
-        rec = read_plausible_run(args.target)
+        rec = read_plausible_run(args.config)
         pose = PositionRecord.from_run(rec).on(m.t)
         level = limits.analyse_limits(m, pose, args.dof, limits.recorded_counts(rec))
         dof = DOF_NAMES[driven_dof(m, args.dof)]
@@ -323,8 +319,8 @@ def _analyse(args: argparse.Namespace):
 def _cmd_test(args: argparse.Namespace) -> int:
     from twin.measurement.measure import check_target, is_run_folder
 
-    check_target(args.target)
-    if args.test in SCHEDULED and (args.schedule is not None or _has_schedule(args.target)):
+    check_target(args.config)
+    if args.test in SCHEDULED and (args.schedule is not None or _has_schedule(args.config)):
         return _scheduled(args, (args.test,))
     bounds = None
     if args.test == "omct":  # checked before anything runs
@@ -335,7 +331,7 @@ def _cmd_test(args: argparse.Namespace) -> int:
         check_output_dir(args.out, "result.json")
     staged = replacing_dir(args.out, "result.json") if args.out else contextlib.nullcontext()
     with staged as work:  # renamed into place when complete, removed on failure
-        if is_run_folder(args.target):
+        if is_run_folder(args.config):
             result, config = _analyse(args)
         else:
             result, config = _simulate(args, work)
@@ -371,11 +367,11 @@ def _cmd_report(args: argparse.Namespace) -> int:
     from twin.agard.report import write_report
     from twin.measurement.measure import check_target, is_run_folder
 
-    check_target(args.target)
-    if args.schedule is not None or is_run_folder(args.target):
+    check_target(args.config)
+    if args.schedule is not None or is_run_folder(args.config):
         return _scheduled(args, None)
-    bench = _bench(args, args.target)
-    out = Path(args.out or f"out/agard-{bench.config.name}-{bench.model}")
+    bench = _bench(args, args.config)
+    out = Path(args.out or common.default_out("agard-report", f"{bench.config.name}-{bench.model}"))
     check_output_dir(out, "report.json")
     with common.engine(args) as engine:
         report = write_report(bench, args.dof or ["pitch", "heave"], out, args.rrd,
@@ -400,23 +396,24 @@ def _scheduled(args: argparse.Namespace, tests: tuple[str, ...] | None) -> int:
     if args.dof is not None and args.schedule is not None:
         raise UsageError("--dof: a schedule names the DOFs it drives (leave --dof out)")
     schedule = read_schedule(args.schedule) if args.schedule is not None else None
-    run = is_run_folder(args.target)
+    run = is_run_folder(args.config)
     if run:
         _refuse_simulation_options(args)
-        name = Path(args.target).resolve().name
+        name = Path(args.config).resolve().name
     else:
-        bench = _bench(args, args.target)
+        bench = _bench(args, args.config)
         name = f"{bench.config.name}-{bench.model}-{schedule.slug}"  # type: ignore[union-attr]
-    out = Path(args.out or f"out/agard-{name}")
+    command = "agard-report" if tests is None else f"agard-{args.test}"
+    out = Path(args.out or common.default_out(command, name))
     check_output_dir(out, "report.json")
     with replacing_dir(out, "report.json") as tmp:
         if run:
-            m = from_run(args.target)
+            m = from_run(args.config)
             if schedule is None and "schedule" in m.meta:
                 schedule = Schedule.from_json(m.meta["schedule"])
             positions = None
             with contextlib.suppress(DataError):  # no actuators.csv: no position record
-                positions = PositionRecord.from_run(args.target)
+                positions = PositionRecord.from_run(args.config)
         else:
             with Session(bench, tmp, args.rrd, common.progress(args)) as s:
                 m = s.measure_schedule(schedule)  # type: ignore[arg-type]
@@ -437,7 +434,7 @@ def _scheduled(args: argparse.Namespace, tests: tuple[str, ...] | None) -> int:
 def _cmd_demo(args: argparse.Namespace) -> int:
     from twin.agard.demo import run_demo
 
-    final = Path(args.out or "out/demo")
+    final = Path(args.out or common.default_out("agard-demo"))
     with replacing_dir(final, "df.json") as tmp:  # complete, or not there
         text = run_demo(tmp, common.progress(args), shown_as=final)
     print(text)

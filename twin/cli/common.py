@@ -6,13 +6,22 @@ type and help everywhere:
 ==============================  ===========================================================
 option                          meaning
 ==============================  ===========================================================
-``--json``                      print the result as JSON
+``CONFIG``                        the motion system (first positional, :func:`add_config`):
+                                a configuration name, a platform name, a ``twin-config/1``
+                                file, or (where the command reads one) a ``twin-run/1`` folder
+``--dof DOF``                   a DOF, repeated for several (``--dof pitch --dof roll``); a
+                                command that takes one refuses a second (:func:`add_dof`)
+``--json``                      print the result as JSON on stdout
 ``--seed N``                    seed of the noise and the IMU (integer >= 0; default 0)
 numbers                         every numeric option's ``type`` is :func:`number` or
                                 :func:`count`: finite and in a range its help gives
-``--out DIR``                   where results go (the command says what it writes)
+``--out DIR``                   where results go (the command says what it writes); a
+                                command that writes a folder by default writes
+                                ``out/<command>-<name>`` (:func:`default_out`), the others
+                                write nothing unless asked (``--out``, ``--plot``, ``--rrd``)
 ``--rrd FILE``                  save a Rerun recording
-``--quiet``                     no progress on stderr
+``--quiet``                     no progress on stderr (never changes stdout)
+``--overwrite``                 on every command that writes: replace what twin wrote before
 ``--scheduler WHERE``           where a batch command's tasks run (:mod:`twin.tasks.engine`)
 ``--model {full,reduced}``      platform model; **full by default everywhere**; a command
                                 that defaults to ``reduced`` says why in its help
@@ -192,11 +201,132 @@ def options_named(names: Mapping[str, str]) -> Iterator[None]:
         raise
 
 
-def json_parent(what: str = "the result") -> argparse.ArgumentParser:
-    """Return a parent parser with ``--json``."""
+#: The metavar of every argument that names a motion system.
+CONFIG = "CONFIG"
+
+
+def config_phrase(run: bool = False) -> str:
+    """Return the help of a ``CONFIG`` argument: what names a motion system.
+
+    Parameters
+    ----------
+    run : bool
+        The command also reads a recorded ``twin-run/1`` folder in its place.
+
+    """
+    from twin.chain.config import config_names
+
+    names = config_names()
+    conditions = [n for n in names if n.startswith("condition-")]
+    shown = [n for n in names if n not in conditions]
+    if conditions:  # the eight Table 6.3 conditions as a range
+        shown.append(f"{conditions[0]} ... {conditions[-1]}" if conditions[1:] else conditions[0])
+    names = ", ".join(shown)
+    text = (f"the motion system: a configuration ({names}; mpi and srs are also the "
+            "platforms' names) or a twin-config/1 .json file")  # fmt: skip
+    return text + (", or a recorded twin-run/1 folder" if run else "")
+
+
+def add_config(parser: argparse.ArgumentParser, *, run: bool = False, note: str = "") -> None:
+    """Add the positional ``CONFIG`` (``dest`` ``config``) with the one help of every command.
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+        The command's parser.
+    run : bool
+        The command also reads a recorded ``twin-run/1`` folder (:func:`config_phrase`).
+    note : str
+        What this command does with it, appended to the help (``; only its platform ...``).
+
+    """
+    parser.add_argument("config", metavar=CONFIG, help=config_phrase(run) + note)
+
+
+class _OneDof(argparse.Action):
+    """``--dof`` of a command that takes one DOF: a second ``--dof`` is refused."""
+
+    def __call__(self, parser: argparse.ArgumentParser, namespace: argparse.Namespace,
+                 values: object, option_string: str | None = None) -> None:  # fmt: skip
+        given = getattr(namespace, self.dest, None)
+        if given is not None:
+            raise argparse.ArgumentError(
+                self, f"{parser.prog} takes one DOF; got --dof {given} --dof {values}"
+            )
+        setattr(namespace, self.dest, values)
+
+
+def add_dof(parser: argparse.ArgumentParser, what: str, *, one: bool = False,
+            choices: tuple[str, ...] | None = None) -> None:  # fmt: skip
+    """Add ``--dof DOF``: repeated for several DOFs, or (``one``) given at most once.
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+        The command's parser.
+    what : str
+        The help: what the DOFs are for and the default.
+    one : bool
+        The command takes one DOF: ``args.dof`` is a str (or None) and a second ``--dof`` is
+        refused in one line naming the command and both DOFs. Otherwise ``args.dof`` is a list
+        (or None) and ``--dof`` is repeated (``--dof pitch --dof roll``).
+    choices : tuple of str, optional
+        The DOFs allowed (default all six).
+
+    """
+    from twin.frames import DOF_NAMES
+
+    allowed = DOF_NAMES if choices is None else choices
+    if one:
+        parser.add_argument("--dof", action=_OneDof, choices=allowed, metavar="DOF",
+                            help=f"{what} (one of {', '.join(allowed)})")  # fmt: skip
+    else:
+        parser.add_argument("--dof", action="append", choices=allowed, metavar="DOF",
+                            help=f"{what}; repeat for several: --dof pitch --dof roll (each "
+                            f"one of {', '.join(allowed)})")  # fmt: skip
+
+
+#: ``--json``'s help: the same on every command that has it.
+JSON_HELP = "print the result as JSON on stdout (instead of the text)"
+
+
+def json_parent() -> argparse.ArgumentParser:
+    """Return a parent parser with ``--json`` (:data:`JSON_HELP`)."""
     p = _parent()
-    p.add_argument("--json", action="store_true", help=f"print {what} as JSON")
+    p.add_argument("--json", action="store_true", help=JSON_HELP)
     return p
+
+
+def default_out(command: str, name: str = "") -> Path:
+    """Return the folder a command writes when no ``--out`` is given: ``out/<command>-<name>``.
+
+    The one rule of every command that writes a folder by default (``simulate``, ``agard
+    report``, ``agard demo``, a scheduled ``agard`` test, ``design``, ``diagnose``,
+    ``import``, ``sweep``); the other commands write nothing unless asked (``--out``,
+    ``--plot``, ``--rrd``).
+
+    Parameters
+    ----------
+    command : str
+        The command's words joined by ``-`` (``agard-report``).
+    name : str
+        What the output is of: the first input's name, or the configuration and model.
+
+    Examples
+    --------
+    >>> str(default_out("agard-report", "srs-full"))
+    'out/agard-report-srs-full'
+    >>> str(default_out("agard-demo"))
+    'out/agard-demo'
+
+    """
+    return Path("out") / (f"{command}-{name}" if name else command)
+
+
+def default_out_help(what: str, command: str, name: str = "") -> str:
+    """Return ``--out``'s help of a command with a default folder: ``what (default ...)``."""
+    shown = f"out/{command}-{name}" if name else f"out/{command}"
+    return f"{what} (default {shown})"
 
 
 def seed_parent(what: str = "seed of the noise and the IMU") -> argparse.ArgumentParser:

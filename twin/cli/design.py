@@ -7,7 +7,6 @@ import json
 from pathlib import Path
 
 from twin.cli import common
-from twin.frames import DOF_NAMES
 from twin.lifecycle import check_output_dir, replacing_dir
 
 #: ``--budget-s``: from a few periods to an hour.
@@ -22,10 +21,13 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "design",
         parents=[
             common.out_parent(
-                "folder for design.json, commands.csv and schedule.toml "
-                "(default out/design-<diagnosis folder's name>)"
+                common.default_out_help(
+                    "folder for design.json, commands.csv and schedule.toml",
+                    "design",
+                    "<diagnosis folder's name>",
+                )
             ),
-            common.json_parent("the design"),
+            common.json_parent(),
             common.quiet_parent(),
         ],
         help="design the run that tells a diagnosis' explanations apart",
@@ -49,11 +51,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         help="instead: the effect to see below its smallest detectable "
         "size (after 'no finding'; e.g. delay, backlash)",
     )
-    p.add_argument(
-        "--dof",
-        choices=DOF_NAMES,
-        help="with --effect: the DOF (default the first the diagnosis analysed)",
-    )
+    common.add_dof(p, "with --effect: the DOF (default the first the diagnosis analysed)",
+                   one=True)  # fmt: skip
     p.add_argument(
         "--budget-s",
         type=BUDGET_S,
@@ -66,7 +65,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 def _cmd_design(args: argparse.Namespace) -> int:
     from twin.diagnose.design import design_from, write_design
 
-    out = Path(args.out or Path("out") / f"design-{Path(args.diagnosis).resolve().name}")
+    out = Path(args.out or common.default_out("design", Path(args.diagnosis).resolve().name))
     check_output_dir(out, "design.json")
     result = design_from(
         args.diagnosis,

@@ -29,8 +29,15 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
             ),
             common.overrides_parent(imu=False),
             common.seed_parent("seed of the simulated noise"),
-            common.out_parent("report folder (default out/diagnose-<first run's name>)"),
-            common.json_parent("the findings"),
+            common.out_parent(
+                common.default_out_help(
+                    "report folder (with --each: the batch's folder, default "
+                    "out/diagnose-each-<first run's name>)",
+                    "diagnose",
+                    "<first run's name>",
+                )
+            ),
+            common.json_parent(),
             common.quiet_parent(),
             common.scheduler_parent(),
         ],
@@ -55,7 +62,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("--max-hz", type=MAX_HZ, default=15.0,
                    help=f"top of the band, Hz ({MAX_HZ.span}; default 15)")  # fmt: skip
-    p.add_argument("--dof", nargs="+", help="DOFs to analyse (default: the driven ones)")
+    common.add_dof(p, "a DOF to analyse (default: the driven ones)")
     p.add_argument("--imu-noise", type=IMU_NOISE, metavar="FACTOR",
                    help="the IMU's noise over its data sheet's, when known (e.g. from a "
                    f"recording at rest; {IMU_NOISE.span}); default: fitted as a "
@@ -103,7 +110,7 @@ def _cmd_each(args: argparse.Namespace) -> int:
     options = {"model": args.model, "max_hz": args.max_hz, "seed": args.seed, "dofs": args.dof,
                "imu_noise": args.imu_noise, "physics": args.physics}  # fmt: skip
     config = _nominal(args)
-    out = Path(args.out) if args.out else Path("out") / "diagnose-batch"
+    out = Path(args.out or common.default_out("diagnose-each", Path(args.runs[0]).name))
     check_output_dir(out, "batch.json")
     with common.engine(args) as engine:
         b = diagnose_each(args.runs, config, engine, common.progress(args), **options)
@@ -128,7 +135,7 @@ def _cmd_diagnose(args: argparse.Namespace) -> int:
         check_options(args.max_hz, args.imu_noise)  # before any work, also of a batch
     if args.each:
         return _cmd_each(args)
-    out = Path(args.out) if args.out else Path("out") / f"diagnose-{Path(args.runs[0]).name}"
+    out = Path(args.out or common.default_out("diagnose", Path(args.runs[0]).name))
     check_output_dir(out, "diagnosis.json")
 
     d = diagnose(

@@ -19,8 +19,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "import",
         parents=[
-            common.out_parent("run folder to write (default out/import-<first file's name>)"),
-            common.json_parent("what was done (meta.json's import entry)"),
+            common.out_parent(
+                common.default_out_help("run folder to write", "import", "<first file's name>")
+            ),
+            common.json_parent(),
             common.quiet_parent(),
         ],
         help="turn measured CSV logs into a twin-run/1 folder (units, time bases, clocks, "
@@ -37,8 +39,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         help="one file with commands and IMU, or a command file and an IMU file",
     )  # fmt: skip
     p.add_argument("--platform", choices=("mpi", "srs"), help="the platform (or give --config)")
-    p.add_argument("--config", help="the configuration the run was made on (name or "
-                   "twin-config/1 file; default: the platform's)")  # fmt: skip
+    p.add_argument("--config", metavar=common.CONFIG,
+                   help="the configuration the run was made on (name or twin-config/1 file; "
+                   "default: the platform's)")  # fmt: skip
     p.add_argument("--map", action="append", default=[], metavar="TARGET=COLUMN[:UNIT]",
                    help="a column the names do not give, e.g. z=heave_cmd:mm or q=gy:deg/s "
                    "(targets t x y z roll pitch yaw ax ay az p q r); repeat")  # fmt: skip
@@ -59,7 +62,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 def _cmd_import(args: argparse.Namespace) -> int:
     from twin.ingest import import_run
 
-    out = Path(args.out) if args.out else Path("out") / f"import-{Path(args.files[0]).stem}"
+    out = Path(args.out or common.default_out("import", Path(args.files[0]).stem))
     report = import_run(
         args.files, out, args.platform, args.config, args.map, args.clock_offset,
         args.imu_position, args.imu_axes, args.overwrite, common.progress(args),

@@ -41,18 +41,37 @@ class _Parser(argparse.ArgumentParser):
         raise UsageError(f"{message} (see `{self.prog} --help`)")
 
 
+def _platform_of(config: str, command: str, physics: bool) -> str:
+    """Return the platform of ``CONFIG`` for a command that models only the platform.
+
+    Raises
+    ------
+    UsageError
+        For a configuration with calibrated physics where the command models the platform's
+        own (``physics``): the command would not use it.
+
+    """
+    from twin.chain.config import motion_system
+
+    ms = motion_system(config)
+    if physics and ms.physics is not None:
+        raise UsageError(f"{config}: carries calibrated physics (legs, payload), which twin "
+                         f"{command} does not model (it fits the {ms.platform} platform's own "
+                         f"full model); give the platform, {ms.platform}")  # fmt: skip
+    return ms.platform
+
+
 def _cmd_workspace(args: argparse.Namespace) -> int:
-    from twin.platform.facts import check_platform
     from twin.platform.geometry import load_geometry
     from twin.platform.kinematics import workspace
     from twin.platform.workspace import format_table, to_json_dict
 
-    check_platform(args.platform)
-    ws = workspace(load_geometry(args.platform))
+    platform = _platform_of(args.config, "workspace", physics=False)
+    ws = workspace(load_geometry(platform))
     if args.json:
         print(json.dumps(to_json_dict(ws), indent=2))
     else:
-        print(format_table(ws, args.platform))
+        print(format_table(ws, platform))
     return 0
 
 
@@ -60,7 +79,7 @@ def _cmd_compare(args: argparse.Namespace) -> int:
     from twin.agard.compare import compare
 
     cfg = common.configured(args.config, args)
-    cmp = compare(cfg, dofs=args.dofs or DOF_NAMES, progress=common.progress(args))
+    cmp = compare(cfg, dofs=args.dof or DOF_NAMES, progress=common.progress(args))
     if args.plot:
         cmp.plot(args.plot)
     print(cmp.to_json() if args.json else cmp.format_table())
@@ -69,23 +88,18 @@ def _cmd_compare(args: argparse.Namespace) -> int:
 
 def _cmd_dynamics(args: argparse.Namespace) -> int:
     from twin.agard.compare import platform_dynamics
-    from twin.platform.facts import check_platform
 
-    check_platform(args.platform)
-    dyn = platform_dynamics(
-        args.platform, dofs=args.dofs or DOF_NAMES, progress=common.progress(args)
-    )
+    platform = _platform_of(args.config, "dynamics", physics=True)
+    dyn = platform_dynamics(platform, dofs=args.dof or DOF_NAMES, progress=common.progress(args))
     print(json.dumps(dyn.to_dict(), indent=2) if args.json else dyn.format_table())
     return 0
 
 
 def _add_analysis(sub: argparse._SubParsersAction) -> None:
-    from twin.chain.config import config_help
-
     p = sub.add_parser(
         "compare",
         parents=[
-            common.json_parent("the comparison"),
+            common.json_parent(),
             common.quiet_parent(),
             common.overrides_parent(imu=False),
         ],
@@ -94,19 +108,24 @@ def _add_analysis(sub: argparse._SubParsersAction) -> None:
         "multi-sines (Table 5.2, plus 4.5-10 Hz) in each DOF and print gain and phase "
         "differences, the equivalent delay and the time-domain RMS difference.",
     )
-    p.add_argument("config", metavar="CONFIG", help=config_help())
-    p.add_argument("--dofs", nargs="+", choices=DOF_NAMES, help="DOFs (default all six)")
+    common.add_config(p)
+    common.add_dof(p, "a DOF to compare (default all six)")
     p.add_argument("--plot", metavar="PNG", type=common.figure_file, help="save a Bode plot")
     p.set_defaults(func=_cmd_compare)
     d = sub.add_parser(
         "dynamics",
-        parents=[common.json_parent("the fits"), common.quiet_parent()],
+        parents=[common.json_parent(), common.quiet_parent()],
         help="the full model's own lag per DOF beside Table 5.5",
         description="Fit a first-order lag plus delay to the full model's describing functions "
         "(no filter, delay or noise; thesis §5.5.1) and compare with Table 5.5.",
     )
-    d.add_argument("platform", metavar="PLATFORM", help="mpi or srs")
-    d.add_argument("--dofs", nargs="+", choices=DOF_NAMES, help="DOFs (default all six)")
+    common.add_config(
+        d,
+        note="; only its platform matters: the fit is of the "
+        "platform's own full model, without the configuration's filter, delay "
+        "and noise (a configuration with calibrated physics is refused)",
+    )
+    common.add_dof(d, "a DOF to fit (default all six)")
     d.set_defaults(func=_cmd_dynamics)
 
 
@@ -117,12 +136,16 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
     ws = sub.add_parser(
         "workspace",
-        parents=[common.json_parent("the workspace (m and deg)")],
+        parents=[common.json_parent()],
         help="workspace per DOF (App. B.3) beside Table 5.1",
         description="Workspace per degree of freedom about neutral: each DOF alone, the others "
         "at neutral, limited by the actuator stroke (thesis App. B.3).",
     )
-    ws.add_argument("platform", metavar="PLATFORM", help="mpi or srs")
+    common.add_config(
+        ws,
+        note="; only its platform matters: the workspace is the platform's "
+        "geometry and actuator stroke",
+    )
     ws.set_defaults(func=_cmd_workspace)
     add_simulate(sub)
     _add_analysis(sub)

@@ -58,14 +58,14 @@ def load_signal(spec: str, rate_hz: float = 100.0) -> tuple[Trajectory, Schedule
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
     """Add ``twin simulate`` to the ``twin`` parser."""
-    from twin.chain.config import config_help
-
     p = sub.add_parser(
         "simulate",
         parents=[
             common.model_parent(),
             common.seed_parent(),
-            common.out_parent("run folder (default out/CONFIG-MODEL-SIGNAL-seedN)"),
+            common.out_parent(
+                common.default_out_help("run folder", "simulate", "CONFIG-MODEL-SIGNAL-seedN")
+            ),
             common.quiet_parent(),
             common.overrides_parent(imu=False),
         ],
@@ -74,7 +74,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "full MuJoCo or the reduced platform) with pose commands and write the run in the "
         "twin-run/1 format (meta.json, commands.csv, imu.csv, actuators.csv).",
     )
-    p.add_argument("config", metavar="CONFIG", help=config_help())
+    common.add_config(p)
     p.add_argument(
         "--signal",
         required=True,
@@ -114,7 +114,8 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     limit_mode = "strict" if args.strict else "limit"
     run = prepare(ms, commands, args.model, args.seed, limit_mode=limit_mode)
     name = Path(args.signal).stem if Path(args.signal).exists() else args.signal
-    folder = Path(args.out or f"out/{run.config.name}-{args.model}-{name}-seed{args.seed}")
+    folder = Path(args.out or common.default_out(
+        "simulate", f"{run.config.name}-{args.model}-{name}-seed{args.seed}"))  # fmt: skip
     meta = run_meta(run, f"simulated by twin ({args.model} model) from signal {args.signal!r}",
                     schedule=schedule)  # fmt: skip
     if args.rrd:
@@ -141,13 +142,12 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     if recorder is not None:
         recorder.close()
     wall = time.perf_counter() - start
-    if not args.quiet:
-        print(f"wrote {folder} ({commands.duration:.1f} s simulated in {wall:.1f} s, "
-              f"{commands.duration / wall:.0f}x real time)")  # fmt: skip
-        if args.rrd is not None:
-            print(f"wrote {args.rrd} (a Rerun recording; view it with python -m rerun "
-                  f"{args.rrd})")  # fmt: skip
-        print(run.limits.summary())
-        for note in run.notes:
-            print(f"note: {note}")
+    print(f"wrote {folder} ({commands.duration:.1f} s simulated in {wall:.1f} s, "
+          f"{commands.duration / wall:.0f}x real time)")  # fmt: skip
+    if args.rrd is not None:
+        print(f"wrote {args.rrd} (a Rerun recording; view it with python -m rerun "
+              f"{args.rrd})")  # fmt: skip
+    print(run.limits.summary())
+    for note in run.notes:
+        print(f"note: {note}")
     return 0

@@ -19,8 +19,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "sweep",
         parents=[
-            common.out_parent("sweep folder (default out/sweep-<grid file's name>)"),
-            common.json_parent("the sweep's manifest (sweep.json)"),
+            common.out_parent(
+                common.default_out_help("sweep folder", "sweep", "<grid file's name>")
+            ),
+            common.json_parent(),
             common.quiet_parent(),
             common.scheduler_parent(),
         ],
@@ -43,7 +45,7 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     from twin.tasks.sweep_report import write_sweep
 
     grid = read_grid(args.grid)
-    out = Path(args.out) if args.out else Path("out") / f"sweep-{Path(args.grid).stem}"
+    out = Path(args.out or common.default_out("sweep", Path(args.grid).stem))
     check_output_dir(out, "sweep.json")
     with common.engine(args) as engine:
         result = run_sweep(grid, engine, common.progress(args))
