@@ -656,11 +656,11 @@ def _processes_started(proc: subprocess.Popen, root: Path) -> bool:
 #: for the Ctrl-C (s): from the cluster's start to the end of the tasks or outputs written.
 INTERRUPTIBLE = {
     "agard report, local cluster starting": (
-        ["agard", "report", "srs", "--model", "reduced", "--dof", "pitch", "heave",
+        ["agard", "report", "srs", "--model", "reduced", "--dof", "pitch", "--dof", "heave",
          "--scheduler", "local:2", "--out", "out"], _processes_started, 4.0),
     "agard report, local cluster at work": (
-        ["agard", "report", "srs", "--dof", "pitch", "heave", "--scheduler", "local:2", "--out",
-         "out"], _run_written, 6.0),
+        ["agard", "report", "srs", "--dof", "pitch", "--dof", "heave", "--scheduler", "local:2",
+         "--out", "out"], _run_written, 6.0),
     "agard df, threads": (
         ["agard", "df", "srs", "--dof", "pitch", "--out", "out", "--quiet"], _run_written, 3.0),
     "simulate, full model": (

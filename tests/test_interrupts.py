@@ -32,8 +32,8 @@ def test_ctrl_c_with_a_local_cluster_is_one_line_and_leaves_no_temporary_folder(
     time, as the workers were killed mid-task, and Ctrl-C at other moments printed 34-67
     lines of worker tracebacks. Now the workers ignore SIGINT and are stopped by the ``twin``
     process before it removes the report's staging folder, where their scratch folders are."""
-    proc = start(["agard", "report", "srs", "--model", "reduced", "--dof", "pitch", "heave",
-                  "--scheduler", "local:2", "--out", "report"], tmp_path)  # fmt: skip
+    proc = start(["agard", "report", "srs", "--model", "reduced", "--dof", "pitch", "--dof",
+                  "heave", "--scheduler", "local:2", "--out", "report"], tmp_path)  # fmt: skip
     wait_until(lambda: writing_a_run(tmp_path), proc, tmp_path)
     ctrl_c(proc)
     assert finish(proc, tmp_path) == (130, INTERRUPTED)

@@ -323,21 +323,21 @@ def test_cli_adapt_prints_parameters_and_margins(capsys):
     doc = json.loads(capsys.readouterr().out)
     assert doc["pilot"]["k_m"] < 0.05
     assert doc["crossover_disturbance_rad_s"] > 0
-    assert main(["pilot", "experiment", "--pilot", "adaptive", "--subjects", "1"]) == 2
+    assert main(["pilot", "experiment", "subjects", "--subjects", "1"]) == 2
     assert "--subjects: must be an integer in [2, 1,000]" in capsys.readouterr().err
     assert main(["pilot", "adapt", "srs", "--weight", "0"]) == 2
     assert "--weight: must be a number in (0, 1000]; got 0" in capsys.readouterr().err
-    assert main(["pilot", "experiment", "--fixed-neuromuscular"]) == 2
-    assert "give it with --pilot adaptive" in capsys.readouterr().err
+    assert main(["pilot", "experiment", "fixed", "--fixed-neuromuscular"]) == 2
+    assert "unrecognized arguments: --fixed-neuromuscular" in capsys.readouterr().err
     assert main(["pilot", "adapt", "condition-5", "--fixed-neuromuscular", "--json"]) == 0
     doc = json.loads(capsys.readouterr().out)
     assert doc["adapted"] == list(EQUALISATION)
     assert doc["pilot"]["omega_nm"] == PitchPilot().omega_nm
-    assert main(["pilot", "experiment", "--adapt-visual-delay"]) == 2
-    assert "--adapt-visual-delay chooses what adaptive subjects adapt" in capsys.readouterr().err
+    assert main(["pilot", "experiment", "fixed", "--adapt-visual-delay"]) == 2
+    assert "unrecognized arguments: --adapt-visual-delay" in capsys.readouterr().err
     # the fixed pilot has no subjects: refused, not silently ignored
-    assert main(["pilot", "experiment", "--subjects", "3"]) == 2
-    assert "--subjects counts adaptive subjects" in capsys.readouterr().err
+    assert main(["pilot", "experiment", "fixed", "--subjects", "3"]) == 2
+    assert "unrecognized arguments: --subjects 3" in capsys.readouterr().err
 
 
 @pytest.mark.slow

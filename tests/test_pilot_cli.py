@@ -201,8 +201,8 @@ def test_identify_intervals_are_printed_and_in_the_json(capsys, tmp_path):
 
 
 def test_an_interval_end_at_the_fit_range_is_called_open():
-    from twin.cli.pilot import _interval_text
+    from twin.pilot.identify_runs import interval_text
 
-    assert _interval_text("omega_nm", 9.5, 12.0) == "[9.5000, 12.0000]"
-    assert _interval_text("omega_nm", 3.0, 12.0) == "[3.0000, 12.0000] (open below)"
-    assert _interval_text("t_lag", 0.0, 5.0) == "[0.0000, 5.0000] (open above)"  # 0: physical
+    assert interval_text("omega_nm", 9.5, 12.0) == "[9.5000, 12.0000]"
+    assert interval_text("omega_nm", 3.0, 12.0) == "[3.0000, 12.0000] (open below)"
+    assert interval_text("t_lag", 0.0, 5.0) == "[0.0000, 5.0000] (open above)"  # 0: physical

@@ -219,7 +219,7 @@ def test_cli_populations_design_the_next_experiment(monkeypatch, tmp_path, capsy
 
     monkeypatch.setattr(replication, "fly_subject", fake_fly)
     png = str(tmp_path / "rep.png")
-    assert main(["pilot", "experiment", "--pilot", "adaptive", "--populations", "5",
+    assert main(["pilot", "experiment", "subjects", "--populations", "5",
                  "--scheduler", "inline", "--json", "--plot", png]) == 0  # fmt: skip
     doc = json.loads(capsys.readouterr().out)
     kv = doc["design"]["design"]["k_v"]["filter"]

@@ -45,9 +45,9 @@ def test_tau_m_is_identified_where_motion_is_used_and_not_behind_the_filter(subj
 
 
 def test_identify_is_refused_where_it_means_nothing(capsys):
-    for argv, needs in ((["--feedthrough", "0.5"], "--identify"),
-                        (["--identify"], "--pilot adaptive"),
-                        (["--pilot", "adaptive", "--identify", "--populations", "3",
+    for argv, needs in ((["subjects", "--feedthrough", "0.5"], "--identify"),
+                        (["fixed", "--identify"], "unrecognized arguments: --identify"),
+                        (["subjects", "--identify", "--populations", "3",
                           "--feedthrough", "1.5"], "--feedthrough: must be a")):  # fmt: skip
         assert main(["pilot", "experiment", *argv]) == 2
         assert needs in capsys.readouterr().err
@@ -61,7 +61,7 @@ def test_nine_subjects_identified_find_the_large_filter_effects(capsys):
     the thesis found with F above 40 (Tables 6.4-6.7: disturbance crossover 159.68, its phase
     margin 68.95, var(e) 357.79, K_v 43.36, K_m 66.20, t_lead 60.96, t_lag 132.26, omega_nm
     53.11) come out in their direction with p < 0.05."""
-    assert main(["pilot", "experiment", "--pilot", "adaptive", "--identify", "--json",
+    assert main(["pilot", "experiment", "subjects", "--identify", "--json",
                  "--quiet"]) == 0  # fmt: skip
     out = json.loads(capsys.readouterr().out)
     assert out["identified"] == 0.0 and "tau_m" in out["anova"]
@@ -93,7 +93,7 @@ def test_identified_populations_replicate_as_one_flown_alone(capsys):
     """Populations measured as the thesis did, flown together for a replication (the CLI's
     JSON), are each the population flown alone (same ANOVA), tau_m is among the replicated
     effects, and each population carries its fits' chi-square per dof."""
-    assert main(["pilot", "experiment", "--pilot", "adaptive", "--identify", "--populations",
+    assert main(["pilot", "experiment", "subjects", "--identify", "--populations",
                  "2", "--subjects", "2", "--seed", "5", "--json", "--quiet"]) == 0  # fmt: skip
     out = json.loads(capsys.readouterr().out)
     alone = identified_population(2, 6)

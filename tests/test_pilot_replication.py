@@ -190,26 +190,27 @@ def test_run_populations_flies_each_population_as_run_population_does(monkeypatc
 
 
 def test_cli_populations_only_with_adaptive_subjects(capsys):
-    assert main(["pilot", "experiment", "--populations", "3"]) == 2
+    assert main(["pilot", "experiment", "fixed", "--populations", "3"]) == 2
     err = capsys.readouterr().err.strip()
-    assert "--populations counts populations of adaptive subjects" in err and "\n" not in err
-    assert main(["pilot", "experiment", "--pilot", "adaptive", "--populations", "0"]) == 2
+    assert "unrecognized arguments: --populations 3" in err and "\n" not in err
+    assert "twin pilot experiment fixed --help" in err
+    assert main(["pilot", "experiment", "subjects", "--populations", "0"]) == 2
     assert "--populations: must be an integer in [1, 1,000]" in capsys.readouterr().err
-    assert main(["pilot", "experiment", "--pilot", "adaptive", "--runs", "3"]) == 2
-    assert "adaptive subjects fly five repetitions" in capsys.readouterr().err
-    assert main(["pilot", "experiment", "--motion-spread", "1"]) == 2
-    assert "--motion-spread sets how adaptive subjects differ" in capsys.readouterr().err
-    assert main(["pilot", "experiment", "--pilot", "adaptive", "--motion-spread", "nan"]) == 2
+    assert main(["pilot", "experiment", "subjects", "--runs", "3"]) == 2
+    assert "unrecognized arguments: --runs 3" in capsys.readouterr().err
+    assert main(["pilot", "experiment", "fixed", "--motion-spread", "1"]) == 2
+    assert "unrecognized arguments: --motion-spread 1" in capsys.readouterr().err
+    assert main(["pilot", "experiment", "subjects", "--motion-spread", "nan"]) == 2
     err = capsys.readouterr().err.strip()
     assert (
         err.startswith("twin: error: argument --motion-spread:")
         and "[0, 3]" in err
         and "\n" not in err
     )
-    assert main(["pilot", "experiment", "--visual-delay-spread", "0.01"]) == 2
-    assert "--visual-delay-spread sets how adaptive subjects differ" in capsys.readouterr().err
+    assert main(["pilot", "experiment", "fixed", "--visual-delay-spread", "0.01"]) == 2
+    assert "unrecognized arguments: --visual-delay-spread" in capsys.readouterr().err
     for bad in ("nan", "-0.01", "0.2"):
-        assert main(["pilot", "experiment", "--pilot", "adaptive",
+        assert main(["pilot", "experiment", "subjects",
                      "--visual-delay-spread", bad]) == 2  # fmt: skip
         err = capsys.readouterr().err.strip()
         assert err.startswith("twin: error: argument --visual-delay-spread:") and "[0, 0.1]" in err
@@ -221,7 +222,7 @@ def test_cli_populations_json_and_figure(monkeypatch, tmp_path, capsys):
     (a subject's rows stand in for flying it)."""
     monkeypatch.setattr(replication, "fly_subject", fake_fly)
     png = tmp_path / "rep.png"
-    code = main(["pilot", "experiment", "--pilot", "adaptive", "--populations", "2",
+    code = main(["pilot", "experiment", "subjects", "--populations", "2",
                  "--subjects", "3", "--seed", "4", "--scheduler", "inline", "--json",
                  "--plot", str(png)])  # fmt: skip
     assert code == 0
@@ -234,7 +235,7 @@ def test_cli_populations_json_and_figure(monkeypatch, tmp_path, capsys):
     assert doc["replication"]["k_v"]["filter"]["populations"] == 2
     assert doc["design"] is None  # six subjects pooled: too few to design on
     assert png.stat().st_size > 10_000 and not (tmp_path / "rep-subjects.png").exists()
-    assert main(["pilot", "experiment", "--pilot", "adaptive", "--populations", "2",
+    assert main(["pilot", "experiment", "subjects", "--populations", "2",
                  "--subjects", "3", "--scheduler", "inline",
                  "--motion-spread", "1.5", "--visual-delay-spread", "0.01"]) == 0  # fmt: skip
     out = capsys.readouterr().out

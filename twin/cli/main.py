@@ -34,11 +34,36 @@ EXIT_INTERRUPTED = 130
 EXIT_BROKEN_PIPE = 141
 
 
+#: The attribute that carries the innermost command's ``prog`` while parsing.
+_PROG = "_twin_prog"
+
+
 class _Parser(argparse.ArgumentParser):
-    """An argument parser whose errors are :class:`UsageError` (one line, exit code 2)."""
+    """An argument parser whose errors are :class:`UsageError` (one line, exit code 2).
+
+    An unrecognised argument is reported with the help of the command it was given to
+    (``see `twin pilot experiment fixed --help```), not the ``twin`` command's.
+    """
 
     def error(self, message: str) -> NoReturn:
         raise UsageError(f"{message} (see `{self.prog} --help`)")
+
+    def parse_known_args(
+        self, args: Sequence[str] | None = None, namespace: argparse.Namespace | None = None
+    ) -> tuple[argparse.Namespace, list[str]]:
+        parsed, extra = super().parse_known_args(args, namespace)
+        if not hasattr(parsed, _PROG):  # the innermost command parses first
+            setattr(parsed, _PROG, self.prog)
+        return parsed, extra
+
+    def parse_args(  # type: ignore[override]
+        self, args: Sequence[str] | None = None, namespace: argparse.Namespace | None = None
+    ) -> argparse.Namespace:
+        parsed, extra = self.parse_known_args(args, namespace)
+        prog = vars(parsed).pop(_PROG, self.prog)
+        if extra:
+            raise UsageError(f"unrecognized arguments: {' '.join(extra)} (see `{prog} --help`)")
+        return parsed
 
 
 def _platform_of(config: str, command: str, physics: bool) -> str:
