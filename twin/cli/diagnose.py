@@ -50,8 +50,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "held-out line error), and state what the runs could have shown.",
     )
     p.add_argument("runs", nargs="+", metavar="RUN_DIR", help="twin-run/1 folders (same platform)")
-    p.add_argument("--config", help="nominal configuration (name or twin-config/1 file); "
-                   "default: the runs' meta.json; the overrides below apply to it")  # fmt: skip
+    p.add_argument("--config", metavar=common.CONFIG,
+                   help="nominal configuration (name or twin-config/1 file); default: the "
+                   "runs' meta.json; the overrides below apply to it")  # fmt: skip
     p.add_argument("--validate", nargs="+", default=[], metavar="RUN_DIR",
                    help="runs only for measuring the gain (default: held-out halves)")  # fmt: skip
     p.add_argument(
