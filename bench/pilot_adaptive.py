@@ -1,6 +1,6 @@
 """Chapter 6 with adaptive subjects and the MLE's honesty, measured in one run.
 
-1. ``twin pilot experiment --pilot adaptive --subjects 6`` wall time on both cores (goal
+1. ``twin pilot experiment subjects --subjects 6`` wall time on both cores (goal
    <= 60 s on this 2-core machine); over 20 seeded populations of nine subjects (the
    thesis' participants), how often each main effect of Tables 6.4-6.7 agrees with the thesis
    (direction and p < 0.05 where it found an effect, p >= 0.05 where not), beside how often

@@ -96,7 +96,16 @@ def demo() -> None:
 def compare() -> None:
     """Full against reduced MPI model (§5.5), as the configurations guide shows it."""
     twin(
-        "compare", "mpi", "--dofs", "heave", "pitch", "--plot", "mpi.png", "--quiet", "--overwrite"
+        "compare",
+        "mpi",
+        "--dof",
+        "heave",
+        "--dof",
+        "pitch",
+        "--plot",
+        "mpi.png",
+        "--quiet",
+        "--overwrite",
     )
     _keep(WORK / "mpi.png", "compare-mpi.png")
 
@@ -179,13 +188,14 @@ def chapter_2() -> None:
 
 def chapter_6_fixed() -> None:
     """Ch 6: the eight conditions flown by one fixed pilot (Fig 6.5-6.9)."""
-    twin("pilot", "experiment", "--runs", "5", "--plot", "conditions.png", "--quiet", "--overwrite")
+    twin("pilot", "experiment", "fixed", "--runs", "5", "--plot", "conditions.png", "--quiet",
+         "--overwrite")  # fmt: skip
     _keep(WORK / "conditions.png", "ch6-conditions.png")
 
 
 def _adaptive(stem: str, second: str, *options: str) -> None:
-    """Fly adaptive subjects (``pilot experiment --pilot adaptive``); keep its two figures."""
-    twin("pilot", "experiment", "--pilot", "adaptive", *options, "--plot", f"{stem}.png",
+    """Fly adaptive subjects (``pilot experiment subjects``); keep its two figures."""
+    twin("pilot", "experiment", "subjects", *options, "--plot", f"{stem}.png",
          "--quiet", "--overwrite")  # fmt: skip
     _keep(WORK / f"{stem}.png", f"ch6-{stem}.png")
     _keep(WORK / f"{stem}-{second}.png", f"ch6-{stem}-{second}.png")

@@ -399,7 +399,7 @@ def test_nine_adaptive_subjects_predict_the_filter_effects_of_chapter_6():
             hits[measure, factor] += agree[measure][factor]
     missed = {k: v for k, v in hits.items() if v < (4 if k in checked else 3)}
     assert not missed, missed
-    # the issue's acceptance at once, on what `twin pilot experiment --pilot adaptive` flies by
+    # the issue's acceptance at once, on what `twin pilot experiment subjects` flies by
     # default (seed 0): one draw; over 20 populations it holds in 39 % (28-50 %) of
     # nine-subject experiments, 43 % were the thesis' conclusions the truth (docs)
     agree = results[0].agreement()
