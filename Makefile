@@ -27,7 +27,8 @@ demo: $(STAMP)
 	# a "measured" SRS (its IMU filters the gyros) diagnosed against the nominal SRS
 	for n in 1 2; do $(BIN)/twin simulate notebooks/data/srs-imu-filtered.json --quiet \
 	  --signal multisine$$n-pitch --model reduced --seed $$n --overwrite \
-	  --out out/demo/recorded-pitch-$$n --rrd out/demo/recorded-pitch-$$n.rrd || exit 1; done
+	  --out out/demo/recorded-pitch-$$n --rrd out/demo/recorded-pitch-$$n.rrd > /dev/null \
+	  || exit 1; done
 	$(BIN)/twin diagnose out/demo/recorded-pitch-1 out/demo/recorded-pitch-2 --config srs \
 	  --out out/demo/diagnosis --save-config out/demo/srs-measured.json
 	# a pilot flying the pitch task behind the MPI's 1 Hz filter, 35 ms and noise (Table 6.3, 8)
