@@ -66,7 +66,7 @@ def test_95_percent_bounds_cover_95_percent_of_noisy_lines():
 
 def test_bode_figure_has_grids_units_and_error_bars(tmp_path):
     cfg, r = _result(noise=0.02)
-    fig = r.plot(str(tmp_path / "df.png"), config=cfg)
+    fig = r.plot(path=str(tmp_path / "df.png"), config=cfg)
     ax_g, ax_p = fig.axes
     assert ax_g.get_ylabel() == "gain [dB]" and ax_p.get_ylabel() == "phase [deg]"
     assert ax_p.get_xlabel() == "frequency [Hz]" and ax_g.get_xscale() == "log"

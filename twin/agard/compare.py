@@ -24,6 +24,7 @@ from __future__ import annotations
 import json
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
@@ -40,10 +41,13 @@ from twin.measurement.describing_function import (
     fit_lag_delay,
     phase_deg,
 )
-from twin.plotting import finish, pyplot
+from twin.plotting import AxesArg, finish, subplots
 from twin.progress import ProgressFn
 from twin.signals import describing_signal
 from twin.thesis import TABLE_5_5
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 FloatArray = NDArray[np.float64]
 ComplexArray = NDArray[np.complex128]
@@ -153,11 +157,14 @@ class PlatformDynamics:
         """JSON-ready result: the platform and the rows of :meth:`table`."""
         return {"platform": self.platform, "fits": self.table()}
 
-    def plot(self, path: str | None = None):
+    def plot(self, ax: AxesArg = None, *, path: str | None = None) -> Figure:
         """Bode plot per DOF: the full model's describing function and its lag-plus-delay fit.
 
         Parameters
         ----------
+        ax : sequence of 2 x n Axes, optional
+            Where to draw: gain (first row) and phase (second row), one column per DOF,
+            in row order; a new figure by default.
         path : str, optional
             Save the figure here.
 
@@ -166,9 +173,8 @@ class PlatformDynamics:
         matplotlib.figure.Figure
 
         """
-        plt = pyplot()
         n = len(self.fits)
-        fig, axes = plt.subplots(2, n, figsize=(3.2 * n, 5.5), squeeze=False, sharex=True)
+        fig, axes = subplots(ax, 2, n, figsize=(3.2 * n, 5.5), squeeze=False, sharex=True)
         for j, (dof, fit) in enumerate(self.fits.items()):
             r = self.responses[dof]
             f = r.frequencies_hz
@@ -317,11 +323,24 @@ class Comparison:
         out.extend(f"note: {n}" for n in self.notes)
         return "\n".join(out)
 
-    def plot(self, path: str | None = None):
-        """Bode plot per DOF: full, reduced and analytic Eq 5.11; saved to ``path`` if given."""
-        plt = pyplot()
+    def plot(self, ax: AxesArg = None, *, path: str | None = None) -> Figure:
+        """Bode plot per DOF: full, reduced and analytic Eq 5.11; saved to ``path`` if given.
+
+        Parameters
+        ----------
+        ax : sequence of 2 x n Axes, optional
+            Where to draw: gain (first row) and phase (second row), one column per DOF,
+            in row order; a new figure by default.
+        path : str, optional
+            Save the figure here.
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+
+        """
         n = len(self.dofs)
-        fig, axes = plt.subplots(2, n, figsize=(3.2 * n, 5.5), squeeze=False, sharex=True)
+        fig, axes = subplots(ax, 2, n, figsize=(3.2 * n, 5.5), squeeze=False, sharex=True)
         for j, (dof, r) in enumerate(self.dofs.items()):
             f = r.frequencies_hz
             fa = np.geomspace(f.min(), max(f.max(), 10.0), 200)

@@ -23,6 +23,7 @@ import re
 from collections.abc import Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
@@ -41,9 +42,12 @@ from twin.measurement.describing_function import (
     phase_deg,
 )
 from twin.measurement.measure import Bench, Measurement, driven_dof
-from twin.plotting import finish, pyplot
+from twin.plotting import AxesArg, finish, subplots
 from twin.run_folder import signal_meta
 from twin.signals import describing_signal
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 FloatArray = NDArray[np.float64]
 ComplexArray = NDArray[np.complex128]
@@ -207,11 +211,15 @@ class DfResult(ResponseMixin):
         )
         return "\n".join(lines)
 
-    def plot(self, path: str | None = None, config=None, cross: bool = True):
+    def plot(
+        self, ax: AxesArg = None, *, path: str | None = None, config=None, cross: bool = True
+    ) -> Figure:
         """Bode plot: measured points with 95 % error bars, the analytic model, the fitted delay.
 
         Parameters
         ----------
+        ax : sequence of two Axes, optional
+            Where to draw: gain and phase; a new figure by default.
         path : str, optional
             Save the figure here.
         config : MotionSystem, optional
@@ -220,8 +228,7 @@ class DfResult(ResponseMixin):
             Also show the largest cross describing function.
 
         """
-        plt = pyplot()
-        fig, (ax_g, ax_p) = plt.subplots(2, 1, figsize=(6.5, 6), sharex=True)
+        fig, (ax_g, ax_p) = subplots(ax, 2, 1, figsize=(6.5, 6), sharex=True)
         model = "Eq 5.11 of the configuration" if config is not None else "Eq 5.11"
         draw_bode(ax_g, ax_p, self, "C0", f"measured {self.dof}", config, model)
         if config is not None:

@@ -44,6 +44,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
@@ -56,8 +57,11 @@ from twin.chain.config import MotionSystem
 from twin.checks import number
 from twin.errors import SignalError, SignalLimitError
 from twin.frames import DOF_NAMES, dof_index
-from twin.plotting import finish, pyplot
+from twin.plotting import AxesArg, finish, subplots
 from twin.signals import DescribingSignal, MultiSine, check_signal, periodic_signal
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 FloatArray = NDArray[np.float64]
 
@@ -225,14 +229,26 @@ class HysteresisResult:
             lines.append(f"{'':7} {a:10.4g} skipped: {why}")
         return "\n".join(lines)
 
-    def plot(self, path: str | None = None):
+    def plot(self, ax: AxesArg = None, *, path: str | None = None) -> Figure:
         """Plot output against input per amplitude, and output minus input below it.
 
         The output is advanced by the lag; the lower panels open the loop up.
+
+        Parameters
+        ----------
+        ax : sequence of 2 x n Axes, optional
+            Where to draw: the loops (first row) and output minus input (second row),
+            one column per amplitude, in row order; a new figure by default.
+        path : str, optional
+            Save the figure here.
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+
         """
-        plt = pyplot()
         n = max(1, len(self.loops))
-        fig, axes = plt.subplots(2, n, figsize=(4.2 * n, 6.5), squeeze=False, sharex="col")
+        fig, axes = subplots(ax, 2, n, figsize=(4.2 * n, 6.5), squeeze=False, sharex="col")
         u = position_unit(self.dof)
         for c, lp in enumerate(self.loops):
             top, bottom = axes[0, c], axes[1, c]

@@ -359,11 +359,11 @@ def _save(out: Path, test: str, result, payload: dict, config, bounds) -> None:
         tmp.write_text(json.dumps(payload, indent=2) + "\n", encoding="utf-8")
     png = str(out / f"{test}.png")
     if test == "df":
-        fig = result.plot(png, config=config)
+        fig = result.plot(path=png, config=config)
     elif test == "omct":
-        fig = result.plot(png, bounds=bounds)
+        fig = result.plot(path=png, bounds=bounds)
     else:
-        fig = result.plot(png)
+        fig = result.plot(path=png)
     plt.close(fig)
 
 

@@ -62,7 +62,7 @@ def _cmd_compare(args: argparse.Namespace) -> int:
     cfg = common.configured(args.config, args)
     cmp = compare(cfg, dofs=args.dofs or DOF_NAMES, progress=common.progress(args))
     if args.plot:
-        cmp.plot(args.plot)
+        cmp.plot(path=args.plot)
     print(cmp.to_json() if args.json else cmp.format_table())
     return 0
 

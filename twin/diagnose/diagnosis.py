@@ -17,6 +17,7 @@ import json
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -52,10 +53,13 @@ from twin.diagnose.select import (
 from twin.diagnose.sensor_side import decide_side, side_text
 from twin.errors import SignalError, UsageError
 from twin.jsonable import plain
-from twin.plotting import finish, pyplot
+from twin.plotting import AxesArg, finish, subplots
 from twin.progress import ProgressFn
 from twin.run_checks import check_distinct, read_plausible_run
 from twin.runs import RecordedRun
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 
 @dataclass(eq=False)
@@ -98,11 +102,15 @@ class DofReport:
     findings: list[Finding]
     model: Model
 
-    def plot(self, path: str | None = None, max_hz: float = MAX_HZ):
+    def plot(
+        self, ax: AxesArg = None, *, path: str | None = None, max_hz: float = MAX_HZ
+    ) -> Figure:
         """Plot the describing-function ratio measured / nominal, and the extended model's.
 
         Parameters
         ----------
+        ax : sequence of two Axes, optional
+            Where to draw: measured over nominal gain and phase; a new figure by default.
         path : str, optional
             Save the figure here.
         max_hz : float
@@ -113,8 +121,7 @@ class DofReport:
         matplotlib.figure.Figure
 
         """
-        plt = pyplot()
-        fig, (a1, a2) = plt.subplots(2, 1, figsize=(7, 6), sharex=True)
+        fig, (a1, a2) = subplots(ax, 2, 1, figsize=(7, 6), sharex=True)
         lo, hi = self.lines.ci_db()
         db = self.lines.db
         a1.errorbar(self.lines.f, db, yerr=[db - lo, hi - db], fmt="o",
@@ -395,11 +402,15 @@ class Diagnosis:
         """Alias of :meth:`to_dict` (kept for existing callers)."""
         return self.to_dict()
 
-    def plot(self, path: str | None = None, dof: str | None = None):
+    def plot(
+        self, ax: AxesArg = None, *, path: str | None = None, dof: str | None = None
+    ) -> Figure:
         """Plot one DOF's describing-function ratios (see :meth:`DofReport.plot`).
 
         Parameters
         ----------
+        ax : sequence of two Axes, optional
+            Where to draw: measured over nominal gain and phase; a new figure by default.
         path : str, optional
             Save the figure here.
         dof : str, optional
@@ -412,7 +423,7 @@ class Diagnosis:
         """
         if dof is not None and dof not in self.dofs:
             raise UsageError(f"{dof!r} was not analysed; analysed: {', '.join(self.dofs)}")
-        return self.dofs[dof or next(iter(self.dofs))].plot(path, self.max_hz)
+        return self.dofs[dof or next(iter(self.dofs))].plot(ax, path=path, max_hz=self.max_hz)
 
 
 def check_options(max_hz: float, imu_noise: float | None = None) -> None:
