@@ -66,9 +66,11 @@ from twin.frames import DOF_NAMES, acceleration_unit, dof_index
 from twin.measurement.measure import Measurement, driven_dof
 from twin.plotting import AxesArg, finish, subplots
 from twin.profiles import JerkProfile, constant_acceleration, constant_speed
+from twin.results import frame
 from twin.trajectory import Trajectory
 
 if TYPE_CHECKING:
+    import pandas as pd
     from matplotlib.figure import Figure
 
 FloatArray = NDArray[np.float64]
@@ -373,6 +375,10 @@ class BumpResult:
         lines.append(f"noise (rms deviation at constant speed): {self.noise_rms:.3e} {unit}")
         lines.append(f"trend: |peak| ~ speed^{self.trend_exponent:.2f}")
         return "\n".join(lines)
+
+    def to_frame(self) -> pd.DataFrame:
+        """One row per velocity reversal (:meth:`Reversal.to_dict`)."""
+        return frame(r.to_dict() for r in self.reversals)
 
     def plot(self, ax: AxesArg = None, *, path: str | None = None) -> Figure:
         """Acceleration around each reversal (over ``|commanded|``), and ``|peak|`` vs speed.

@@ -21,7 +21,6 @@ Not run as a doctest (it takes some seconds; ``tests/test_compare.py`` runs it):
 
 from __future__ import annotations
 
-import json
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
@@ -33,7 +32,7 @@ from twin.chain.config import MotionSystem, motion_system
 from twin.chain.physics import FullPlatform
 from twin.chain.reduced import ReducedPlatform
 from twin.chain.simulate import Platform, make_platform, simulate
-from twin.errors import SignalError
+from twin.errors import SignalError, UsageError
 from twin.frames import DOF_NAMES, dof_index
 from twin.measurement.describing_function import (
     LagDelayFit,
@@ -43,10 +42,13 @@ from twin.measurement.describing_function import (
 )
 from twin.plotting import AxesArg, finish, subplots
 from twin.progress import ProgressFn
+from twin.results import frame, frd, pick
 from twin.signals import describing_signal
 from twin.thesis import TABLE_5_5
 
 if TYPE_CHECKING:
+    import control
+    import pandas as pd
     from matplotlib.figure import Figure
 
 FloatArray = NDArray[np.float64]
@@ -156,6 +158,15 @@ class PlatformDynamics:
     def to_dict(self) -> dict[str, object]:
         """JSON-ready result: the platform and the rows of :meth:`table`."""
         return {"platform": self.platform, "fits": self.table()}
+
+    def to_frame(self) -> pd.DataFrame:
+        """One row per DOF: the rows of :meth:`table`."""
+        return frame(self.table())
+
+    def to_frd(self, dof: str | None = None) -> control.FrequencyResponseData:
+        """Return the full model's describing function of ``dof`` (the only one by default)."""
+        r = self.responses[pick(dof, self.responses, "the platform dynamics")]
+        return frd(r.full, r.frequencies_hz, r.dof)
 
     def plot(self, ax: AxesArg = None, *, path: str | None = None) -> Figure:
         """Bode plot per DOF: the full model's describing function and its lag-plus-delay fit.
@@ -299,10 +310,6 @@ class Comparison:
             "notes": self.notes,
         }
 
-    def to_json(self) -> str:
-        """Return :meth:`to_dict` as JSON text (alias)."""
-        return json.dumps(self.to_dict(), indent=2)
-
     def format_table(self) -> str:
         """Plain-text table: per DOF and frequency, full minus reduced."""
         out = [f"full vs reduced, configuration {self.config.name} (platform "
@@ -322,6 +329,25 @@ class Comparison:
                        f"{r.rms_difference * 100:.2f} % of RMS(command)")  # fmt: skip
         out.extend(f"note: {n}" for n in self.notes)
         return "\n".join(out)
+
+    def to_frame(self) -> pd.DataFrame:
+        """One row per DOF and line: the columns of :meth:`to_dict`'s ``dofs``."""
+        rows = []
+        for dof, part in self.to_dict()["dofs"].items():  # type: ignore[union-attr]
+            n = len(part["frequency_hz"])
+            rows += [{"dof": dof, **{k: v[i] for k, v in part.items() if isinstance(v, list)},
+                      "rms_difference": part["rms_difference"]} for i in range(n)]  # fmt: skip
+        return frame(rows)
+
+    def to_frd(self, dof: str | None = None, model: str = "full") -> control.FrequencyResponseData:
+        """Return the ``model``'s (``full``/``reduced``) describing function of ``dof``.
+
+        ``dof`` may be left out where the comparison holds one DOF.
+        """
+        if model not in ("full", "reduced"):
+            raise UsageError(f"model {model!r}: expected 'full' or 'reduced'")
+        r = self.dofs[pick(dof, self.dofs, "the comparison")]
+        return frd(getattr(r, model), r.frequencies_hz, f"{r.dof} ({model})")
 
     def plot(self, ax: AxesArg = None, *, path: str | None = None) -> Figure:
         """Bode plot per DOF: full, reduced and analytic Eq 5.11; saved to ``path`` if given.

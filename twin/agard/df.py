@@ -43,10 +43,13 @@ from twin.measurement.describing_function import (
 )
 from twin.measurement.measure import Bench, Measurement, driven_dof
 from twin.plotting import AxesArg, finish, subplots
+from twin.results import frame, frd
 from twin.run_folder import signal_meta
 from twin.signals import describing_signal
 
 if TYPE_CHECKING:
+    import control
+    import pandas as pd
     from matplotlib.figure import Figure
 
 FloatArray = NDArray[np.float64]
@@ -210,6 +213,20 @@ class DfResult(ResponseMixin):
             f"configured {self.configured_delay_s * 1e3:.1f} ms)"
         )
         return "\n".join(lines)
+
+    def to_frame(self) -> pd.DataFrame:
+        """One row per excited line: frequency, measured and Eq 5.11 gain and phase, SNR."""
+        a = self.analytic()
+        return frame({
+            "frequency_hz": self.frequencies_hz, "gain": self.gain,
+            "gain_db": 20 * np.log10(self.gain), "phase_deg": self.phase_deg,
+            "gain_sd": self.noise, "snr_db": self.snr_db, "analytic_gain": np.abs(a),
+            "analytic_phase_deg": self.analytic_phase_deg(),
+        })  # fmt: skip
+
+    def to_frd(self) -> control.FrequencyResponseData:
+        """Return the measured describing function at its lines, as python-control data (rad/s)."""
+        return frd(self.response, self.frequencies_hz, self.dof)
 
     def plot(
         self, ax: AxesArg = None, *, path: str | None = None, config=None, cross: bool = True

@@ -58,9 +58,11 @@ from twin.checks import number
 from twin.errors import SignalError, SignalLimitError
 from twin.frames import DOF_NAMES, dof_index
 from twin.plotting import AxesArg, finish, subplots
+from twin.results import frame
 from twin.signals import DescribingSignal, MultiSine, check_signal, periodic_signal
 
 if TYPE_CHECKING:
+    import pandas as pd
     from matplotlib.figure import Figure
 
 FloatArray = NDArray[np.float64]
@@ -228,6 +230,10 @@ class HysteresisResult:
         for a, why in self.skipped.items():
             lines.append(f"{'':7} {a:10.4g} skipped: {why}")
         return "\n".join(lines)
+
+    def to_frame(self) -> pd.DataFrame:
+        """One row per amplitude's loop (:meth:`HysteresisLoop.to_dict`)."""
+        return frame(lp.to_dict() for lp in self.loops)
 
     def plot(self, ax: AxesArg = None, *, path: str | None = None) -> Figure:
         """Plot output against input per amplitude, and output minus input below it.

@@ -54,10 +54,12 @@ from twin.frames import DOF_NAMES, acceleration_unit, dof_index
 from twin.measurement.measure import Measurement, driven_dof
 from twin.plotting import AxesArg, finish, subplots
 from twin.profiles import point_to_point
+from twin.results import frame
 from twin.runs import RecordedRun
 from twin.trajectory import Trajectory
 
 if TYPE_CHECKING:
+    import pandas as pd
     from matplotlib.figure import Figure
 
 FloatArray = NDArray[np.float64]
@@ -378,6 +380,10 @@ class LimitsResult:
                      f"{c.excursion_max:.4f}, speed {c.velocity:.4f}, acceleration "
                      f"{c.acceleration:.3f}")  # fmt: skip
         return "\n".join(lines)
+
+    def to_frame(self) -> pd.DataFrame:
+        """One row per level (:meth:`LevelResult.to_dict`, nested values as ``a.b``)."""
+        return frame(lv.to_dict() for lv in self.levels)
 
     def plot(self, ax: AxesArg = None, *, path: str | None = None) -> Figure:
         """Commanded and reached pose per level, and reached against commanded peaks.

@@ -51,9 +51,11 @@ from twin.frames import DOF_NAMES, acceleration_unit
 from twin.measurement.describing_function import fourier_coefficients, neighbour_noise
 from twin.measurement.measure import Measurement, driven_dof
 from twin.plotting import AxesArg, finish, subplots
+from twin.results import frame
 from twin.signals import check_signal, single_sine
 
 if TYPE_CHECKING:
+    import pandas as pd
     from matplotlib.figure import Figure
 
 FloatArray = NDArray[np.float64]
@@ -276,6 +278,10 @@ class LinearityResult:
         for s in self.skipped:
             lines.append(f"{s.frequency_hz:7.3g} {s.amplitude:12.4g} skipped: {s.reason}")
         return "\n".join(lines)
+
+    def to_frame(self) -> pd.DataFrame:
+        """One row per frequency and amplitude: the ``points`` of :meth:`to_dict`."""
+        return frame(self.to_dict()["points"])  # type: ignore[arg-type]
 
     def plot(self, ax: AxesArg = None, *, path: str | None = None) -> Figure:
         """Gain and phase against amplitude, one line per frequency, with error bars.

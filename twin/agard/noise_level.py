@@ -37,8 +37,10 @@ from twin.errors import SignalError
 from twin.frames import DOF_NAMES, acceleration_unit
 from twin.measurement.measure import Measurement, driven_dof
 from twin.plotting import AxesArg, finish, subplots
+from twin.results import frame
 
 if TYPE_CHECKING:
+    import pandas as pd
     from matplotlib.figure import Figure
 
 FloatArray = NDArray[np.float64]
@@ -237,6 +239,10 @@ class NoiseLevelResult:
         for a, why in self.skipped.items():
             lines.append(f"{a:14.3f} skipped: {why}")
         return "\n".join(lines)
+
+    def to_frame(self) -> pd.DataFrame:
+        """One row per amplitude (:meth:`NoiseLevelPoint.to_dict`, nested values as ``a.b``)."""
+        return frame(p.to_dict() for p in self.points)
 
     def plot(self, ax: AxesArg = None, *, path: str | None = None) -> Figure:
         """Bar chart of the noise ratios per amplitude (as Fig 3.5).

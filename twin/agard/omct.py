@@ -38,8 +38,11 @@ from twin.frames import DOF_NAMES, dof_index
 from twin.measurement.describing_function import ResponseMixin, describing_function, phase_deg
 from twin.measurement.measure import Measurement, driven_dof
 from twin.plotting import AxesArg, finish, subplots
+from twin.results import frame, frd
 
 if TYPE_CHECKING:
+    import control
+    import pandas as pd
     from matplotlib.figure import Figure
 
 FloatArray = NDArray[np.float64]
@@ -195,6 +198,17 @@ class OmctResult(ResponseMixin):
             out["inside"] = self.check(bounds)
             out["bounds"] = {"title": bounds.title, "path": bounds.path}
         return out
+
+    def to_frame(self) -> pd.DataFrame:
+        """One row per OMCT frequency: measured and Eq 5.11 gain and phase."""
+        return frame({
+            "frequency_rad_s": self.w_rad_s, "gain": self.gain, "phase_deg": self.phase_deg,
+            "analytic_gain": np.abs(self.analytic), "analytic_phase_deg": phase_deg(self.analytic),
+        })  # fmt: skip
+
+    def to_frd(self) -> control.FrequencyResponseData:
+        """Return the measured response at the OMCT frequencies, as python-control data (rad/s)."""
+        return frd(self.response, self.w_rad_s, self.label or self.dof, rad_s=True)
 
     def plot(
         self, ax: AxesArg = None, *, path: str | None = None, bounds: OmctBounds | None = None

@@ -58,9 +58,11 @@ from twin.frames import DOF_NAMES, dof_index
 from twin.measurement.describing_function import fourier_coefficients, neighbour_noise
 from twin.measurement.measure import Measurement, driven_dof
 from twin.plotting import AxesArg, finish, subplots
+from twin.results import frame
 from twin.signals import base_frequency, describing_signal, single_sine
 
 if TYPE_CHECKING:
+    import pandas as pd
     from matplotlib.figure import Figure
 
 FloatArray = NDArray[np.float64]
@@ -278,6 +280,11 @@ class ParasiticResult:
             f"{100 * c.coupling_noise:.2f} %"
         )
         return "\n".join(lines)
+
+    def to_frame(self) -> pd.DataFrame:
+        """One row per driven and measured DOF (:meth:`Cell.to_dict`)."""
+        return frame({"driven": d, "measured": m, **c.to_dict()}
+                     for d, row in self.cells.items() for m, c in row.items())  # fmt: skip
 
     def plot(self, ax: AxesArg = None, *, path: str | None = None) -> Figure:
         """Heat map of the coupling in dB (rows driven, columns measured), numbers in cells.

@@ -27,8 +27,10 @@ from twin.agard.noise_level import NoiseLevelPoint, analyse_noise
 from twin.agard.session import Session
 from twin.frames import acceleration_unit, dof_index
 from twin.plotting import AxesArg, finish, subplots
+from twin.results import frame
 
 if TYPE_CHECKING:
+    import pandas as pd
     from matplotlib.figure import Figure
 
 FloatArray = NDArray[np.float64]
@@ -118,6 +120,10 @@ class SnrResult:
         if self.skipped:
             lines.append(f"{len(self.skipped)} grid point(s) beyond the system limits not run")
         return "\n".join(lines)
+
+    def to_frame(self) -> pd.DataFrame:
+        """One row per grid point: frequency, amplitude and total noise ratio."""
+        return frame(self.to_dict()["points"])  # type: ignore[arg-type]
 
     def plot(
         self,

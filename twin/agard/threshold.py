@@ -28,10 +28,12 @@ from twin.errors import SignalError
 from twin.frames import DOF_NAMES, acceleration_unit, dof_index
 from twin.measurement.measure import Measurement, driven_dof
 from twin.plotting import AxesArg, finish, subplots
+from twin.results import frame
 from twin.signals import square_steps
 from twin.trajectory import Trajectory
 
 if TYPE_CHECKING:
+    import pandas as pd
     from matplotlib.figure import Figure
 
 FloatArray = NDArray[np.float64]
@@ -221,6 +223,10 @@ class ThresholdResult:
                 f"Eq 5.11 step from rest reaches 63 % after {self.analytic_t63_s * 1e3:.1f} ms",
             ]
         )
+
+    def to_frame(self) -> pd.DataFrame:
+        """One row per sample: time, commanded and measured response (the plotted traces)."""
+        return frame({"t_s": self.t, "commanded": self.commanded, "measured": self.measured})
 
     def plot(self, ax: AxesArg = None, *, path: str | None = None) -> Figure:
         """Commanded, measured and fitted responses (as Fig 3.8 / Fig 4.2).

@@ -63,7 +63,7 @@ def _cmd_compare(args: argparse.Namespace) -> int:
     cmp = compare(cfg, dofs=args.dofs or DOF_NAMES, progress=common.progress(args))
     if args.plot:
         cmp.plot(path=args.plot)
-    print(cmp.to_json() if args.json else cmp.format_table())
+    print(json.dumps(cmp.to_dict(), indent=2) if args.json else cmp.format_table())
     return 0
 
 

@@ -54,9 +54,11 @@ from scipy import stats
 from twin.errors import SignalError
 from twin.pilot.population import FACTORS, MEASURES, PopulationResult
 from twin.pilot.replication import ALPHA, THESIS_SUBJECTS, agreement_probability, alike
+from twin.results import frame
 from twin.thesis import TABLES_6_4_TO_6_7
 
 if TYPE_CHECKING:
+    import pandas as pd
     from matplotlib.figure import Figure
 
     from twin.plotting import AxesArg
@@ -446,6 +448,13 @@ class Design:
             f"{self.flown_acceptance} of {self.populations} (predicted {flown})",
         ]
         return "\n".join(lines)
+
+    def to_frame(self) -> pd.DataFrame:
+        """One row per main effect (measure and factor): the ``design`` of :meth:`to_dict`."""
+        design = self.to_dict()["design"]
+        return frame(
+            {"measure": m, "factor": f, **v} for m, by in design.items() for f, v in by.items()
+        )
 
     def plot(self, ax: AxesArg = None, *, path: str | None = None) -> Figure:
         """Agreement against subjects per filter effect, the twin's beside the thesis'.

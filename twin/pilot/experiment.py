@@ -24,10 +24,12 @@ from twin.pilot.forcing import pitch_task
 from twin.pilot.mle import fit_pitch_pilot
 from twin.pilot.pitch import PitchPilot, open_loops, simulate_pitch, variance_decomposition
 from twin.progress import ProgressFn
+from twin.results import frame
 from twin.tasks.engine import Engine, using
 from twin.thesis import TABLE_6_3
 
 if TYPE_CHECKING:
+    import pandas as pd
     from matplotlib.figure import Figure
 
     from twin.plotting import AxesArg
@@ -71,6 +73,10 @@ class ExperimentResult:
     def to_dict(self) -> dict[str, object]:
         """JSON-ready result: ``conditions`` and ``effects``."""
         return {"conditions": self.conditions, "effects": self.effects}
+
+    def to_frame(self) -> pd.DataFrame:
+        """One row per condition: its measures (nested values as ``a.b``)."""
+        return frame({"condition": n, **v} for n, v in self.conditions.items())
 
     def plot(self, ax: AxesArg = None, *, path: str | None = None) -> Figure:
         """Measures per condition as Fig 6.5-6.9: variances, open loops, estimated parameters.

@@ -38,8 +38,10 @@ from twin.pilot.profile_wald import profile_wald_sd
 from twin.pilot.selection import selected_bounds
 from twin.plotting import AxesArg, finish, subplots
 from twin.progress import ProgressFn
+from twin.results import frame
 
 if TYPE_CHECKING:
+    import pandas as pd
     from matplotlib.figure import Figure
 
 FloatArray = NDArray[np.float64]
@@ -189,6 +191,14 @@ class PilotFit:
             return abs(value - est) <= 2 * self.crlb[name]
         lo, hi = self.intervals[name]
         return lo <= value <= hi
+
+    def to_frame(self) -> pd.DataFrame:
+        """One row per parameter: estimate, reported sd, and whether it is identifiable."""
+        est = dataclasses.asdict(self.pilot)
+        return frame([{"parameter": k, "estimate": est.get(k), "sd": sd,
+                       "sd_at_estimate": (self.crlb_at_estimate or {}).get(k),
+                       "identifiable": k not in self.unidentifiable}
+                      for k, sd in self.crlb.items()])  # fmt: skip
 
     def plot(self, ax: AxesArg = None, *, path: str | None = None) -> Figure:
         """Estimated parameters with their reported sd (``crlb``), relative to the estimate.

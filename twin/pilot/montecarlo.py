@@ -26,9 +26,11 @@ from twin.pilot.loop import remnant_scale_for, simulate_loop
 from twin.pilot.model import RollPilot
 from twin.plotting import AxesArg, finish, subplots
 from twin.progress import ProgressFn
+from twin.results import frame
 from twin.tasks.engine import Engine, using
 
 if TYPE_CHECKING:
+    import pandas as pd
     from matplotlib.figure import Figure
 
 FloatArray = NDArray[np.float64]
@@ -108,6 +110,14 @@ class MonteCarloResult:
                 m: parameter_errors(self.pilots[m], RollPilot()) for m in ("fc", "arx")
             }
         return out
+
+    def to_frame(self) -> pd.DataFrame:
+        """One row per input frequency: the standard deviations of ``|H|`` per method."""
+        d = self.to_dict()
+        cols: dict[str, object] = {"omega_rad_s": self.omega_rad_s}
+        for resp in ("pe", "px"):
+            cols |= {f"{resp}_{k}": v for k, v in d[resp].items()}  # type: ignore[union-attr]
+        return frame(cols)
 
     def plot(self, ax: AxesArg = None, *, path: str | None = None) -> Figure:
         """Plot the standard deviation of ``|H|`` over the runs: FC against ARX (§2.5).

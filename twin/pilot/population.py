@@ -82,10 +82,12 @@ from twin.pilot.adapt import (
 from twin.pilot.pitch import PitchPilot, open_loops
 from twin.pilot.spread import DEFAULT_SPREAD, VISUAL_DELAY_SD, Spread, checked
 from twin.progress import ProgressFn
+from twin.results import frame
 from twin.tasks.engine import Engine, using
 from twin.thesis import TABLE_6_3, TABLES_6_4_TO_6_7
 
 if TYPE_CHECKING:
+    import pandas as pd
     from matplotlib.figure import Figure
 
     from twin.plotting import AxesArg
@@ -447,6 +449,10 @@ class PopulationResult:
                     f"{tf:8.2f} {td or 'ns':>4s}  {'yes' if agree[m][f] else 'NO'}"
                 )
         return "\n".join(lines)
+
+    def to_frame(self) -> pd.DataFrame:
+        """One row per subject and condition: the measures (:attr:`rows`)."""
+        return frame(self.rows)
 
     def plot(self, ax: AxesArg = None, *, path: str | None = None) -> Figure:
         """Predicted vs thesis main effects: signed F per measure and factor.

@@ -77,10 +77,12 @@ from twin.pilot.population import (
 )
 from twin.pilot.spread import DEFAULT_SPREAD, Spread
 from twin.progress import ProgressFn
+from twin.results import frame
 from twin.tasks.engine import Engine, using
 from twin.thesis import TABLES_6_4_TO_6_7
 
 if TYPE_CHECKING:
+    import pandas as pd
     from matplotlib.figure import Figure
 
     from twin.plotting import AxesArg
@@ -430,6 +432,10 @@ class Replication:
             lines.append(f"(the test is calibrated for populations of {THESIS_SUBJECTS}, the "
                          f"thesis' size; with {self.subjects} it is approximate)")  # fmt: skip
         return "\n".join(lines)
+
+    def to_frame(self) -> pd.DataFrame:
+        """One row per main effect (:meth:`EffectReplication.to_dict`)."""
+        return frame(e.to_dict() for e in self.effects)
 
     def plot(self, ax: AxesArg = None, *, path: str | None = None) -> Figure:
         """Standardised effects over populations (5-95 % and median) beside the thesis'.

@@ -28,8 +28,10 @@ from scipy.optimize import brentq
 from twin.errors import ForwardKinematicsError, OutOfStrokeError, PoseError
 from twin.frames import DOF_NAMES, angular_motion, euler_rate_matrix, rotation_matrix
 from twin.platform.geometry import Geometry
+from twin.results import frame
 
 if TYPE_CHECKING:
+    import pandas as pd
     from matplotlib.figure import Figure
 
     from twin.plotting import AxesArg
@@ -234,6 +236,13 @@ class ForwardResult:
             "iterations_per_sample": np.asarray(self.iterations_per_sample).tolist(),
             "residual_m": float(self.residual),
         }
+
+    def to_frame(self) -> pd.DataFrame:
+        """One row per solved sample: the pose (m, rad) and the iterations it took."""
+        pose = np.atleast_2d(np.asarray(self.pose, dtype=float))
+        cols: dict[str, object] = {d: pose[:, k] for k, d in enumerate(DOF_NAMES)}
+        cols["iterations"] = np.broadcast_to(self.iterations_per_sample, pose.shape[:1])
+        return frame(cols)
 
     def plot(self, ax: AxesArg = None, *, path: str | None = None) -> Figure:
         """Plot the solved poses per DOF against the sample number (translations and angles).
