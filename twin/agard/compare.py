@@ -370,7 +370,7 @@ class Comparison:
         for j, (dof, r) in enumerate(self.dofs.items()):
             f = r.frequencies_hz
             fa = np.geomspace(f.min(), max(f.max(), 10.0), 200)
-            ha = self.config.frequency_response(fa)[:, dof_index(dof)]
+            ha = self.config.response_at_hz(fa)[:, dof_index(dof)]
             axes[0, j].semilogx(fa, 20 * np.log10(np.abs(ha)), "k-", lw=0.8, label="Eq 5.11")
             axes[1, j].semilogx(fa, phase_deg(ha), "k-", lw=0.8)
             for h, style, label in ((r.full, "o", "full"), (r.reduced, "x", "reduced")):
@@ -418,7 +418,7 @@ def compare(
         cmd = np.concatenate([a[1] for a in w_full])
         rms = float(np.sqrt(np.mean(diff**2)) / np.sqrt(np.mean(cmd**2)))
         out[dof] = DofResponse(dof, f, h_full, h_red, rms)
-        analytic[dof] = ms_quiet.frequency_response(f)[:, dof_index(dof)]
+        analytic[dof] = ms_quiet.response_at_hz(f)[:, dof_index(dof)]
         if progress:
             progress(f"{ms.name}: full and reduced [DOFs]", len(out), len(checked))
     notes = [] if not ms.noise else ["the configuration's noise was off for these runs"]

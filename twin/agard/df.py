@@ -250,7 +250,7 @@ class DfResult(ResponseMixin):
         draw_bode(ax_g, ax_p, self, "C0", f"measured {self.dof}", config, model)
         if config is not None:
             fa = dense_frequencies(self.frequencies_hz)
-            h0 = config.without_delay().frequency_response(fa)[:, dof_index(self.dof)]
+            h0 = config.without_delay().response_at_hz(fa)[:, dof_index(self.dof)]
             hf = h0 * np.exp(-2j * np.pi * fa * self.delay_s)
             label = f"fitted delay {self.delay_s * 1e3:.1f} ms"
             ax_p.semilogx(fa, phase_deg(hf), "C1--", lw=0.8, label=label)
@@ -279,7 +279,7 @@ def draw_bode(
     f, k = r.frequencies_hz, dof_index(r.dof)
     if config is not None:
         fa = dense_frequencies(f)
-        ha = config.transfer_function(k).frequency_response(fa)  # python-control
+        ha = config.transfer_function(k).response_at_hz(fa)  # python-control
         ax_g.semilogx(fa, 20 * np.log10(np.abs(ha)), "-", color=colour, lw=0.8, alpha=0.8,
                       label=model_label)  # fmt: skip
         ax_p.semilogx(fa, phase_deg(ha), "-", color=colour, lw=0.8, alpha=0.8)
@@ -461,7 +461,7 @@ def analyse_windows(
         DOF_NAMES[j]: np.concatenate([p[3][j] for p in parts])[order] for j in range(6) if j != k
     }
     f = f[order]
-    model = m.config.without_delay().frequency_response(f)[:, k]
+    model = m.config.without_delay().response_at_hz(f)[:, k]
     return _result(DOF_NAMES[k], f, h, cross, model, m.config.delays_s[k], m.source, noise)
 
 

@@ -20,7 +20,7 @@ A delay opens a loop too: at low frequency a lag tau turns the output y(t) = x(t
 ellipse of width 2 A sin(2 pi f tau) at zero input. Both widths are therefore taken after the
 output has been advanced by the configuration's lag at the test frequency (its delay plus the
 platform filter's phase, -arg H(f) / (2 pi f), :meth:`~twin.chain.config.MotionSystem.
-frequency_response`; or a lag the user gives, e.g. the describing function's fitted delay).
+response_at_hz`; or a lag the user gives, e.g. the describing function's fitted delay).
 The raw width (output not advanced) and the lag's own width 2 A sin(2 pi f tau) are reported
 beside them, so that a pure delay is not called hysteresis.
 
@@ -276,10 +276,10 @@ class HysteresisResult:
 def configured_lag(config: MotionSystem, dof: str, frequency_hz: float) -> float:
     """Return the configuration's lag at ``frequency_hz``: -arg H(f) / (2 pi f) [s].
 
-    H is the reduced model (:meth:`MotionSystem.frequency_response`: filter, delay,
+    H is the reduced model (:meth:`MotionSystem.response_at_hz`: filter, delay,
     resonance); at the hysteresis test's low frequencies the filter's phase is a lag too.
     """
-    h = config.frequency_response([frequency_hz])[0, dof_index(dof)]
+    h = config.response_at_hz([frequency_hz])[0, dof_index(dof)]
     return float(-np.angle(h) / (2 * np.pi * frequency_hz))
 
 

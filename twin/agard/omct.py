@@ -334,7 +334,7 @@ def run_omct(
         ws.append(wi)
         hs.append(h)
     w_arr = np.asarray(ws)
-    analytic = cfg.frequency_response(w_arr / (2 * np.pi))[:, dof_index(dof)]
+    analytic = cfg.response_at_hz(w_arr / (2 * np.pi))[:, dof_index(dof)]
     return OmctResult(
         dof,
         w_arr,

@@ -245,7 +245,7 @@ class MotionSystem:
             return None
         return MotionNoise(imu_rate_hz, self.noise_highpass_hz, self.noise_scale)
 
-    def frequency_response(self, f: ArrayLike) -> NDArray[np.complex128]:
+    def response_at_hz(self, f: ArrayLike) -> NDArray[np.complex128]:
         """Return the reduced model (Eq 5.11 and the optional resonance) at ``f`` [Hz].
 
         An ``imu_alignment`` is left out (here and in :meth:`transfer_function`): it mixes the
@@ -261,7 +261,7 @@ class MotionSystem:
         h = np.ones((np.size(f), 6), dtype=complex)
         for block in self.blocks():
             if not isinstance(block, Backlash):
-                h = h * block.frequency_response(f)
+                h = h * block.response_at_hz(f)
         for ext in self.of("sensor_filter"):
             mask = _sensed(ext)
             h[:, mask] = h[:, mask] * ext.response(f)[:, None]
@@ -270,7 +270,7 @@ class MotionSystem:
     def transfer_function(self, dof: int | str) -> LinearModel:
         """Return one DOF's reduced model as a python-control transfer function and a delay.
 
-        The same model as :meth:`frequency_response` (the blocks' own transfer functions
+        The same model as :meth:`response_at_hz` (the blocks' own transfer functions
         multiplied, a ``sensor_filter`` on the DOF's IMU channel included; backlash has none).
         """
         import control

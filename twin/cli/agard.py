@@ -314,7 +314,7 @@ def _analyse(args: argparse.Namespace):
         return threshold.analyse_threshold(m, args.dof, fix), m.config
     w, h = omct.analyse_omct_point(m, args.dof)
     dof = DOF_NAMES[np.argmax(np.ptp(m.commands.values, axis=0))] if args.dof is None else args.dof
-    analytic = m.config.frequency_response([w / (2 * np.pi)])[:, dof_index(dof)]
+    analytic = m.config.response_at_hz([w / (2 * np.pi)])[:, dof_index(dof)]
     return omct.OmctResult(
         dof, np.array([w]), np.array([h]), analytic, m.source, m.source
     ), m.config

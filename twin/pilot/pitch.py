@@ -166,7 +166,7 @@ def aircraft(w: ArrayLike) -> ComplexArray:
 
 def motion_response(config: MotionSystem, w: ArrayLike) -> ComplexArray:
     """Felt over simulated pitch attitude: the configuration's filter and delay (Eq 5.11)."""
-    return config.frequency_response(np.asarray(w, dtype=float) / (2 * np.pi))[:, PITCH]
+    return config.response_at_hz(np.asarray(w, dtype=float) / (2 * np.pi))[:, PITCH]
 
 
 @dataclass(frozen=True)
