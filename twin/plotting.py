@@ -88,7 +88,7 @@ def subplots(
         given = [ax]
     elif isinstance(ax, np.ndarray):
         given = list(ax.ravel())
-    elif isinstance(ax, Sequence):
+    elif isinstance(ax, Sequence) and not isinstance(ax, str):
         given = list(ax)
     what = f"{n} Axes ({panels})" if panels else ("one Axes" if n == 1 else f"{n} Axes")
     if given is None or len(given) != n or not all(isinstance(a, Axes) for a in given):

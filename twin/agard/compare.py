@@ -28,7 +28,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import NDArray
 
-from twin.chain.config import MotionSystem, motion_system
+from twin.chain.config import MotionSystem, resolve
 from twin.chain.physics import FullPlatform
 from twin.chain.reduced import ReducedPlatform
 from twin.chain.simulate import Platform, make_platform, simulate
@@ -405,7 +405,7 @@ def compare(
         Called with a message before each run.
 
     """
-    ms = motion_system(config) if isinstance(config, str) else config
+    ms = resolve(config)
     ms_quiet = ms.replace(name=ms.name, noise=False)
     full = make_platform(ms.platform, "full")
     reduced = ReducedPlatform(ms.platform, rate_hz=full.rate_hz)  # same grid, sample by sample

@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import os
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -44,7 +45,7 @@ from twin.chain.lti import LinearModel
 from twin.chain.noise import MotionNoise
 from twin.chain.resonance import Resonance
 from twin.checks import check_keys, did_you_mean, flag, number, read_json
-from twin.errors import ConfigError, SignalError, UnknownPlatformError
+from twin.errors import ConfigError, SignalError, UnknownPlatformError, UsageError
 from twin.lifecycle import replacing_file
 from twin.platform.facts import PLATFORMS, load_facts
 from twin.platform.platform_physics import PlatformPhysics
@@ -480,4 +481,47 @@ def motion_system(name: str) -> MotionSystem:
     raise UnknownPlatformError(
         f"unknown configuration {name!r}{did_you_mean(name, config_names())}; expected one of "
         f"{', '.join(config_names())} or a twin-config/1 .json file"
+    )
+
+
+#: What every function taking a configuration accepts (:func:`resolve`).
+ConfigLike = "MotionSystem | str | os.PathLike[str]"
+
+
+def resolve(config: MotionSystem | str | os.PathLike[str]) -> MotionSystem:
+    """Return the configuration ``config`` names: the one resolver every entry point uses.
+
+    Parameters
+    ----------
+    config : MotionSystem, str or path
+        A :class:`MotionSystem` (returned as it is), a configuration name (``mpi``, ``srs``,
+        ``condition-1`` ...: :func:`motion_system`) or the path of a ``twin-config/1`` file
+        (as ``str`` or :class:`pathlib.Path`: :func:`load_config`).
+
+    Raises
+    ------
+    UnknownPlatformError
+        For an unknown name (the message lists the known ones).
+    ConfigError
+        For a file that is not a valid ``twin-config/1`` file.
+    UsageError
+        For anything else (an ``int``, None, ...).
+
+    Examples
+    --------
+    >>> resolve("srs").delay_s
+    0.025
+    >>> resolve(resolve("mpi")).name
+    'mpi'
+
+    """
+    if isinstance(config, MotionSystem):
+        return config
+    if isinstance(config, str):
+        return motion_system(config)
+    if isinstance(config, os.PathLike):
+        return load_config(config)
+    raise UsageError(
+        f"config: expected a configuration name ({', '.join(config_names())}), the path of a "
+        f"twin-config/1 file or a MotionSystem; got {type(config).__name__} {config!r}"
     )
