@@ -50,7 +50,7 @@ def test_all_names_exist_and_the_entry_points_are_documented():
     for name in twin.__all__:
         assert hasattr(twin, name), name
     for name in ("configure", "simulate", "describing_function", "agard_test", "session",
-                 "compare", "diagnose", "load_run", "workspace", "fly"):  # fmt: skip
+                 "compare", "diagnose_runs", "load_run", "workspace", "fly"):  # fmt: skip
         fn = getattr(twin, name)
         assert name in twin.__all__ and fn.__doc__, name
 
@@ -63,7 +63,7 @@ POSITIONAL = {
     "agard_test": ["config", "test", "dof"],
     "session": ["config"],
     "compare": ["config"],
-    "diagnose": ["runs"],
+    "diagnose_runs": ["runs"],
     "load_run": ["path"],
     "workspace": ["platform"],
     "fly": ["config"],
@@ -76,6 +76,23 @@ def test_only_the_obvious_arguments_are_positional(name):
     positional = [p.name for p in params if p.kind is p.POSITIONAL_OR_KEYWORD]
     assert positional == POSITIONAL[name]
     assert all(p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY, p.VAR_KEYWORD) for p in params)
+
+
+def test_the_namespace_s_defaults_are_those_of_the_functions_it_calls():
+    from twin.agard.compare import compare
+    from twin.diagnose.diagnosis import diagnose
+    from twin.frames import DOF_NAMES
+
+    ours, theirs = (
+        inspect.signature(twin.diagnose_runs).parameters,
+        inspect.signature(diagnose).parameters,
+    )
+    for name in ("model", "max_hz", "realisations", "seed", "physics", "imu_noise"):
+        assert ours[name].default == theirs[name].default, name
+    assert inspect.signature(twin.compare).parameters["dofs"].default == DOF_NAMES
+    assert inspect.signature(compare).parameters["signals"].default == (1, 2, 3)
+    assert set(twin.AGARD_TESTS) == {"df", "noise", "snr", "threshold", "omct", "linearity",
+                                     "hysteresis", "bump", "limits", "parasitic"}  # fmt: skip
 
 
 def test_keyword_only_arguments_are_refused_by_position():
@@ -166,13 +183,13 @@ def test_workspace_takes_a_platform_or_any_configuration_of_it():
 
 
 def test_fly_flies_the_pitch_task_with_the_nominal_pilot_by_default():
-    from twin.pilot.pitch import simulate_pitch
+    from twin.pilot.pitch import PitchPilot, simulate_pitch
 
     runs = twin.fly("condition-8", seed=1)
-    same = simulate_pitch(twin.PitchPilot(), "condition-8", seed=1)
+    same = simulate_pitch(PitchPilot(), "condition-8", seed=1)
     assert np.array_equal(runs.e, same.e) and runs.e.shape == (1, 8192)
     with pytest.raises(TypeError, match="positional"):
-        twin.fly("condition-8", twin.PitchPilot())  # type: ignore[misc]
+        twin.fly("condition-8", PitchPilot())  # type: ignore[misc]
 
 
 @pytest.fixture(scope="module")
@@ -189,15 +206,17 @@ def test_load_run_reads_a_run_folder(recorded):
 
 
 def test_diagnose_takes_the_runs_and_a_configuration_in_any_form(recorded, tmp_path):
-    by_name = twin.diagnose(recorded, config="mpi", seed=1, realisations=2)
-    by_file = twin.diagnose(recorded, config=_three_ways(tmp_path)[2], seed=1, realisations=2)
+    by_name = twin.diagnose_runs(recorded, config="mpi", seed=1, realisations=2)
+    by_file = twin.diagnose_runs(recorded, config=_three_ways(tmp_path)[2], seed=1, realisations=2)
     assert by_name.to_dict()["findings"] == by_file.to_dict()["findings"] == []
     assert list(by_name.dofs) == ["heave"]
     assert by_name.to_frd().omega == pytest.approx(2 * np.pi * by_name.dofs["heave"].lines.f)
     with pytest.raises(UsageError, match="runs: expected a sequence of runs"):
-        twin.diagnose(recorded[0])
+        twin.diagnose_runs(recorded[0])
     with pytest.raises(TypeError, match="positional"):
-        twin.diagnose(recorded, "mpi")  # type: ignore[misc]
+        twin.diagnose_runs(recorded, "mpi")  # type: ignore[misc]
+    # named apart from the subpackage: twin.diagnose stays the package once its modules load
+    assert inspect.ismodule(twin.diagnose) and twin.diagnose.diagnosis.Diagnosis
 
 
 # --- the result protocol ---------------------------------------------------------------------
@@ -393,11 +412,12 @@ print("ok")
         assert (Path(tmp) / "df.png").read_bytes()[:4] == b"\x89PNG"
 
 
-def test_import_twin_loads_neither_matplotlib_nor_pandas_nor_control():
+def test_import_twin_is_light_and_leaves_numpy_to_the_entry_points():
+    """The ``twin`` command imports the package before it sets one BLAS thread (twin.threads)."""
     code = (
         "import sys, twin\n"
-        "print(sorted(m for m in ('matplotlib', 'pandas', 'control', 'dm_control') "
-        "if m in sys.modules))"
+        "print(sorted(m for m in ('numpy', 'scipy', 'mujoco', 'matplotlib', 'pandas', 'control')"
+        " if m in sys.modules))"
     )
     done = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True,
                           text=True, timeout=120)  # fmt: skip

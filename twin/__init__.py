@@ -8,10 +8,12 @@ motion noise, platform (full MuJoCo model or reduced Eq 5.11 model) and virtual 
 
 What a newcomer needs is here, one call each (:mod:`twin.api`): :func:`configure`,
 :func:`simulate`, :func:`describing_function`, :func:`agard_test`, :func:`session`,
-:func:`compare`, :func:`diagnose`, :func:`load_run`, :func:`workspace` and :func:`fly`. Each
+:func:`compare`, :func:`diagnose_runs`, :func:`load_run`, :func:`workspace` and :func:`fly`. Each
 takes a configuration as a name (``"mpi"``), a ``twin-config/1`` path or a
-:class:`MotionSystem`. Every result they return follows :class:`Result` (``to_dict``,
-``to_frame``, ``plot``; ``to_frd`` for a frequency response: :class:`FrequencyResult`).
+:class:`~twin.chain.config.MotionSystem` (what :func:`configure` returns). Every result they
+return follows :class:`Result` (``to_dict``, ``to_frame``, ``plot``; ``to_frd`` for a
+frequency response: :class:`FrequencyResult`). ``import twin`` loads no NumPy: each entry
+point imports the modules it runs (the ``twin`` command sets its BLAS threads first).
 
 Examples
 --------
@@ -29,24 +31,21 @@ from twin.api import (
     AGARD_TESTS,
     agard_test,
     compare,
+    config_names,
     configure,
     describing_function,
-    diagnose,
+    diagnose_runs,
     fly,
     load_run,
     session,
     simulate,
     workspace,
 )
-from twin.chain.config import MotionSystem, config_names
-from twin.pilot.pitch import PitchPilot
 from twin.results import FrequencyResult, Result
 
 __all__ = [
     "AGARD_TESTS",
     "FrequencyResult",
-    "MotionSystem",
-    "PitchPilot",
     "Result",
     "__version__",
     "agard_test",
@@ -54,7 +53,7 @@ __all__ = [
     "config_names",
     "configure",
     "describing_function",
-    "diagnose",
+    "diagnose_runs",
     "fly",
     "load_run",
     "session",

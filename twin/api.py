@@ -19,62 +19,75 @@ Examples
 
 from __future__ import annotations
 
+import importlib
 import inspect
 import os
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from twin.agard.bump import run_bump
-from twin.agard.compare import Comparison
-from twin.agard.compare import compare as _compare
-from twin.agard.df import DfResult, run_df
-from twin.agard.hysteresis import run_hysteresis
-from twin.agard.limits import run_limits
-from twin.agard.linearity import run_linearity
-from twin.agard.noise_level import run_noise
-from twin.agard.omct import run_omct
-from twin.agard.parasitic import run_parasitic
-from twin.agard.session import Session
-from twin.agard.snr import run_snr
-from twin.agard.threshold import run_threshold
-from twin.chain.config import MotionSystem, resolve
-from twin.chain.simulate import Simulation
-from twin.chain.simulate import simulate as _simulate
-from twin.diagnose.diagnosis import MAX_HZ, NOISE_REALISATIONS, Diagnosis
-from twin.diagnose.diagnosis import diagnose as _diagnose
 from twin.errors import UsageError
-from twin.frames import DOF_NAMES
-from twin.measurement.measure import Bench
-from twin.pilot.pitch import PitchPilot, PitchRuns, simulate_pitch
-from twin.platform.geometry import load_geometry
-from twin.platform.kinematics import DofRange
-from twin.platform.kinematics import workspace as _workspace
-from twin.runs import RecordedRun, read_run
-from twin.signals import builtin_signal
-from twin.trajectory import Trajectory
 
 if TYPE_CHECKING:
+    from twin.agard.compare import Comparison
+    from twin.agard.df import DfResult
+    from twin.agard.session import Session
+    from twin.chain.config import MotionSystem
     from twin.chain.imu import ImuSpec
+    from twin.chain.simulate import Simulation
+    from twin.diagnose.diagnosis import Diagnosis
+    from twin.pilot.pitch import PitchPilot, PitchRuns
+    from twin.platform.kinematics import DofRange
     from twin.progress import ProgressFn
     from twin.results import Result
+    from twin.runs import RecordedRun
+    from twin.trajectory import Trajectory
+
+# The modules behind each entry point are imported by the entry point, so that ``import twin``
+# loads neither NumPy nor SciPy: the ``twin`` command sets one BLAS thread before NumPy loads
+# (twin.threads), and it imports this package first.
 
 #: A configuration as every entry point takes it.
-Config = MotionSystem | str | os.PathLike
+Config = "MotionSystem | str | os.PathLike[str]"
 
-#: The AGARD-AR-144 tests of :func:`agard_test`, by the name ``twin agard`` gives them.
-AGARD_TESTS: dict[str, Callable[..., Any]] = {
-    "df": run_df,
-    "noise": run_noise,
-    "snr": run_snr,
-    "threshold": run_threshold,
-    "omct": run_omct,
-    "linearity": run_linearity,
-    "hysteresis": run_hysteresis,
-    "bump": run_bump,
-    "limits": run_limits,
-    "parasitic": run_parasitic,
+#: The AGARD-AR-144 tests of :func:`agard_test`, by the name ``twin agard`` gives them: the
+#: ``run_*`` function (module and name) that runs each.
+AGARD_TESTS: dict[str, str] = {
+    "df": "twin.agard.df:run_df",
+    "noise": "twin.agard.noise_level:run_noise",
+    "snr": "twin.agard.snr:run_snr",
+    "threshold": "twin.agard.threshold:run_threshold",
+    "omct": "twin.agard.omct:run_omct",
+    "linearity": "twin.agard.linearity:run_linearity",
+    "hysteresis": "twin.agard.hysteresis:run_hysteresis",
+    "bump": "twin.agard.bump:run_bump",
+    "limits": "twin.agard.limits:run_limits",
+    "parasitic": "twin.agard.parasitic:run_parasitic",
 }
+
+#: The six DOFs (as :data:`twin.frames.DOF_NAMES`).
+DOFS = ("surge", "sway", "heave", "roll", "pitch", "yaw")
+
+
+def config_names() -> list[str]:
+    """Return every configuration name the entry points accept (besides files and objects).
+
+    Examples
+    --------
+    >>> config_names()[:3]
+    ['mpi', 'mpi-2008', 'srs']
+
+    """
+    from twin.chain.config import config_names as names
+
+    return names()
+
+
+def resolve(config: Config) -> MotionSystem:
+    """Return the configuration ``config`` names (:func:`twin.chain.config.resolve`)."""
+    from twin.chain.config import resolve as resolved
+
+    return resolved(config)
 
 
 def configure(
@@ -143,13 +156,17 @@ def simulate(
         The cabin motion (``response``), the IMU (``imu``) and the limits met (``limits``).
 
     """
+    from twin.chain.simulate import simulate as simulated
+    from twin.signals import builtin_signal
+    from twin.trajectory import Trajectory
+
     commands = builtin_signal(signal) if isinstance(signal, str) else signal
     if not isinstance(commands, Trajectory):
         raise UsageError(
             f"signal: expected a Trajectory or a built-in signal's name; got "
             f"{type(signal).__name__}"
         )
-    return _simulate(resolve(config), commands, model, seed, imu, limit_mode)
+    return simulated(resolve(config), commands, model, seed, imu, limit_mode)
 
 
 def session(
@@ -168,6 +185,9 @@ def session(
     functions of :mod:`twin.agard`'s modules; runs are numbered (and seeded) in order.
     ``out`` keeps each run as a ``twin-run/1`` folder, ``rrd`` a Rerun recording.
     """
+    from twin.agard.session import Session
+    from twin.measurement.measure import Bench
+
     return Session(Bench(resolve(config), model, seed, imu), out, rrd, progress)
 
 
@@ -211,6 +231,8 @@ def describing_function(
     DfResult
 
     """
+    from twin.agard.df import run_df
+
     with session(config, model=model, seed=seed, imu=imu, out=out, rrd=rrd) as s:
         return run_df(s, dof, signals)
 
@@ -257,7 +279,8 @@ def agard_test(
     """
     if test not in AGARD_TESTS:
         raise UsageError(f"unknown AGARD test {test!r}; expected one of {', '.join(AGARD_TESTS)}")
-    run = AGARD_TESTS[test]
+    module, name = AGARD_TESTS[test].split(":")
+    run = getattr(importlib.import_module(module), name)
     allowed = list(inspect.signature(run).parameters)[2:]
     unknown = sorted(set(options) - set(allowed))
     if unknown:
@@ -267,7 +290,7 @@ def agard_test(
     if test == "parasitic":
         dof = (dof,) if isinstance(dof, str) else tuple(dof)
     elif not isinstance(dof, str):
-        raise UsageError(f"dof: the {test} test drives one DOF ({', '.join(DOF_NAMES)})")
+        raise UsageError(f"dof: the {test} test drives one DOF ({', '.join(DOFS)})")
     with session(config, model=model, seed=seed, imu=imu, out=out, rrd=rrd) as s:
         return run(s, dof, **options)
 
@@ -275,7 +298,7 @@ def agard_test(
 def compare(
     config: Config,
     *,
-    dofs: Sequence[str] = DOF_NAMES,
+    dofs: Sequence[str] = DOFS,
     signals: Sequence[int] = (1, 2, 3),
     progress: ProgressFn | None = None,
 ) -> Comparison:
@@ -283,10 +306,12 @@ def compare(
 
     See :func:`twin.agard.compare.compare`; the full model runs, so this takes a while.
     """
-    return _compare(resolve(config), dofs, signals, progress)
+    from twin.agard.compare import compare as compared
+
+    return compared(resolve(config), dofs, signals, progress)
 
 
-def diagnose(
+def diagnose_runs(
     runs: Sequence[str | Path | RecordedRun],
     *,
     config: Config | None = None,
@@ -295,12 +320,15 @@ def diagnose(
     seed: int = 0,
     dofs: Sequence[str] | None = None,
     physics: bool = False,
-    max_hz: float = MAX_HZ,
-    realisations: int = NOISE_REALISATIONS,
+    max_hz: float = 15.0,
+    realisations: int = 4,
     imu_noise: float | None = None,
     progress: ProgressFn | None = None,
 ) -> Diagnosis:
     """Diagnose recorded runs against the nominal twin (``twin diagnose``).
+
+    Named apart from the subpackage :mod:`twin.diagnose` (a function of that name would
+    shadow it as an attribute of :mod:`twin`).
 
     Parameters
     ----------
@@ -316,15 +344,20 @@ def diagnose(
     Diagnosis
 
     """
+    from twin.diagnose.diagnosis import diagnose as diagnosed
+    from twin.runs import RecordedRun
+
     if isinstance(runs, str | os.PathLike | RecordedRun):
         raise UsageError("runs: expected a sequence of runs (a list of run folders); got one")
     nominal = None if config is None else resolve(config)
-    return _diagnose(list(runs), nominal, model, validate, max_hz, seed, dofs, realisations,
+    return diagnosed(list(runs), nominal, model, validate, max_hz, seed, dofs, realisations,
                      progress, imu_noise, physics)  # fmt: skip
 
 
 def load_run(path: str | Path) -> RecordedRun:
     """Read a ``twin-run/1`` run folder (:func:`twin.runs.read_run`)."""
+    from twin.runs import read_run
+
     return read_run(path)
 
 
@@ -333,7 +366,10 @@ def workspace(platform: Config) -> dict[str, DofRange]:
 
     ``platform`` is a platform (``mpi``, ``srs``) or any configuration: its platform's.
     """
-    return _workspace(load_geometry(resolve(platform).platform))
+    from twin.platform.geometry import load_geometry
+    from twin.platform.kinematics import workspace as ranges
+
+    return ranges(load_geometry(resolve(platform).platform))
 
 
 def fly(
@@ -372,5 +408,7 @@ def fly(
         (:func:`twin.pilot.pitch.simulate_pitch`).
 
     """
+    from twin.pilot.pitch import PitchPilot, simulate_pitch
+
     return simulate_pitch(pilot if pilot is not None else PitchPilot(), resolve(config), runs,
                           seed, remnant_scale, model=model, progress=progress)  # fmt: skip

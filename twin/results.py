@@ -31,15 +31,13 @@ from __future__ import annotations
 from collections.abc import Iterable, Mapping
 from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
-import numpy as np
-from numpy.typing import ArrayLike
-
 from twin.errors import UsageError
 
 if TYPE_CHECKING:
     import control
     import pandas as pd
     from matplotlib.figure import Figure
+    from numpy.typing import ArrayLike
 
     from twin.plotting import AxesArg
 
@@ -71,6 +69,7 @@ def frame(rows: Iterable[Mapping[str, Any]] | Mapping[str, Any]) -> pd.DataFrame
 
     A mapping of columns (equal lengths) is taken as it is.
     """
+    import numpy as np
     import pandas as pd
 
     if isinstance(rows, Mapping):
@@ -100,6 +99,7 @@ def frd(
 
     """
     import control
+    import numpy as np
 
     f = np.asarray(frequencies_hz, dtype=float)
     w = f if rad_s else 2 * np.pi * f
