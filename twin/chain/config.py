@@ -484,10 +484,6 @@ def motion_system(name: str) -> MotionSystem:
     )
 
 
-#: What every function taking a configuration accepts (:func:`resolve`).
-ConfigLike = "MotionSystem | str | os.PathLike[str]"
-
-
 def resolve(config: MotionSystem | str | os.PathLike[str]) -> MotionSystem:
     """Return the configuration ``config`` names: the one resolver every entry point uses.
 
