@@ -177,7 +177,7 @@ def populations(sd: float, n: int, adapted: tuple[str, ...] = ADAPTED) -> list[P
     print(rep.format_table())
     if sd == ADAPTATION_SD and adapted == ADAPTED:
         Path("out").mkdir(exist_ok=True)
-        rep.plot(FIGURE)
+        rep.plot(path=FIGURE)
         print(f"figure: {FIGURE}")
     return results
 
@@ -224,7 +224,7 @@ def design_check(pool: list[PopulationResult], subjects_n: int | None = None) ->
     plan = design(pool)
     print(plan.format_table())
     Path("out").mkdir(exist_ok=True)
-    plan.plot("out/bench-chapter6-subjects.png")
+    plan.plot(path="out/bench-chapter6-subjects.png")
     win = plan.acceptance_window()
     n = subjects_n or (win[0] if win else SUBJECTS)
     plan.at(n)  # refuses a size beyond the design before anything flies

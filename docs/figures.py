@@ -176,14 +176,14 @@ def omct() -> None:
         with Session(bench) as s:
             label = "SRS baseline" if fb == 0 else f"MPI {fb:g} Hz"
             results.append(run_omct(s, "pitch", label=label))
-    plot_omct(results, read_bounds(), str(OUT / "omct-fig-5-12.png"))
+    plot_omct(results, read_bounds(), path=str(OUT / "omct-fig-5-12.png"))
 
 
 def chapter_2() -> None:
     """Ch 2: FC against ARX over 1000 closed-loop runs (§2.5)."""
     from twin.pilot.montecarlo import monte_carlo
 
-    monte_carlo(runs=1000, seed=0).plot(str(OUT / "ch2-montecarlo.png"))
+    monte_carlo(runs=1000, seed=0).plot(path=str(OUT / "ch2-montecarlo.png"))
 
 
 def chapter_6_fixed() -> None:

@@ -140,7 +140,7 @@ def test_nominal_platform_bump_is_at_noise_level(tmp_path):
     table = r.format_table()
     assert "turn-around bump, heave" in table and table.count("\n") >= 13
     png = tmp_path / "bump.png"
-    r.plot(str(png))
+    r.plot(path=str(png))
     assert png.stat().st_size > 10_000
 
 

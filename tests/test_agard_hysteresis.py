@@ -123,7 +123,7 @@ def test_result_outputs(tmp_path):
     assert {"width", "width_pct", "width_max", "raw_width", "lag_width", "lag_ms"} <= set(
         d["loops"][0]
     )
-    fig = r.plot(str(tmp_path / "loop.png"))
+    fig = r.plot(path=str(tmp_path / "loop.png"))
     assert (tmp_path / "loop.png").stat().st_size > 0 and len(fig.axes) == 4
 
 

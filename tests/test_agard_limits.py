@@ -126,7 +126,7 @@ def test_full_model_reaches_the_workspace_and_the_stroke_stops_it(tmp_path):
     table = r.format_table()
     assert "stroke" in table and table.count("\n") == 8
     png = tmp_path / "limits.png"
-    r.plot(str(png))
+    r.plot(path=str(png))
     assert png.stat().st_size > 10_000
     # the recorded run of the last level: pose from the leg lengths, limits from the shortfall
     folder = tmp_path / "runs" / "04-limits-heave-1.2"

@@ -185,5 +185,5 @@ def test_result_outputs(measured, tmp_path):
     assert d["test"] == "linearity" and d["dof"] == "roll" and d["confidence_level"] == 0.95
     assert d["points"][0]["gain_change"] == 0.0  # its own reference
     assert "reference" in r.format_table()
-    fig = r.plot(str(tmp_path / "lin.png"))
+    fig = r.plot(path=str(tmp_path / "lin.png"))
     assert (tmp_path / "lin.png").stat().st_size > 0 and len(fig.axes) == 2

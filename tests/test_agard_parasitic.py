@@ -203,7 +203,7 @@ def test_run_folder_style_analysis_and_outputs(tmp_path):
     assert d["above_noise_db"] == ABOVE_NOISE_DB
     table = r.format_table()
     assert "roll" in table and "~" in table
-    fig = r.plot(str(tmp_path / "parasitic.png"))
+    fig = r.plot(path=str(tmp_path / "parasitic.png"))
     assert (tmp_path / "parasitic.png").stat().st_size > 1000
     assert fig.axes
 

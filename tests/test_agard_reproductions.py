@@ -108,7 +108,7 @@ def test_omct_matches_the_analytic_response_at_every_frequency(model, breaks_hz,
         assert np.abs(np.angle(err, deg=True)).max() < deg
         results.append(r)
     path = tmp_path / "fig_5_12.png"
-    plot_omct(results, read_bounds(), str(path))
+    plot_omct(results, read_bounds(), path=str(path))
     assert path.stat().st_size > 10_000
 
 

@@ -94,7 +94,7 @@ def test_report_of_a_scheduled_run_holds_its_tests_and_names_the_rest(
     # the describing function at the schedule's 0.5 Hz against the configuration's Eq 5.11
     # model (1 Hz filter, 35 ms delay) within 1 dB and 5 deg
     df = doc["tests"]["df"]["heave"]
-    h = motion_system("mpi").frequency_response([0.5])[0, 2]
+    h = motion_system("mpi").response_at_hz([0.5])[0, 2]
     assert df["frequencies_hz"] == pytest.approx([0.5])
     assert 20 * np.log10(df["gain"][0] / abs(h)) == pytest.approx(0.0, abs=1.0)
     assert df["phase_deg"][0] == pytest.approx(np.degrees(np.angle(h)), abs=5.0)

@@ -21,7 +21,7 @@ def _df(block, dof="heave", signal=2):
     h = describing_function(
         sig.commands.t, sig.commands.values[:, k], out.values[:, k], sig.frequencies_hz, sig.window
     )
-    return sig.frequencies_hz, h, block.frequency_response(sig.frequencies_hz)[:, k]
+    return sig.frequencies_hz, h, block.response_at_hz(sig.frequencies_hz)[:, k]
 
 
 @pytest.mark.parametrize("fb", [1.0, 5.0, 10.0])
@@ -33,7 +33,7 @@ def test_filter_matches_eq_5_1_within_0_05_db_and_0_5_deg(fb):
 
 
 def test_filter_is_minus_6_db_at_break():
-    h = PlatformFilter(1.0).frequency_response([1.0])[0, 0]
+    h = PlatformFilter(1.0).response_at_hz([1.0])[0, 0]
     assert 20 * np.log10(abs(h)) == pytest.approx(-6.0206, abs=1e-3)
 
 

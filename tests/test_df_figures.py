@@ -14,8 +14,8 @@ LINES_HZ = np.array([0.1, 0.2, 0.25, 0.45, 0.65, 0.85, 1.35, 2.3, 3.35, 5.5, 7.1
 def _result(name="mpi", dof="heave", noise=0.01, seed=0):
     cfg = motion_system(name)
     k = dof_index(dof)
-    model = cfg.without_delay().frequency_response(LINES_HZ)[:, k]
-    truth = cfg.frequency_response(LINES_HZ)[:, k]
+    model = cfg.without_delay().response_at_hz(LINES_HZ)[:, k]
+    truth = cfg.response_at_hz(LINES_HZ)[:, k]
     rng = np.random.default_rng(seed)
     sd = noise * np.ones(LINES_HZ.size)
     meas = truth + sd / np.sqrt(2) * (rng.standard_normal(11) + 1j * rng.standard_normal(11))
@@ -31,7 +31,7 @@ def test_phase_follows_the_continuous_model_where_line_to_line_unwrapping_fails(
     cfg, r = _result(noise=0.0)
     k = dof_index("heave")
     dense = np.geomspace(0.05, 8.0, 4000)
-    h = cfg.frequency_response(dense)[:, k]
+    h = cfg.response_at_hz(dense)[:, k]
     reference = np.interp(LINES_HZ, dense, np.degrees(np.unwrap(np.angle(h))))
     assert r.analytic_phase_deg() == pytest.approx(reference, abs=0.5)
     noisy = r.response.copy()
@@ -66,7 +66,7 @@ def test_95_percent_bounds_cover_95_percent_of_noisy_lines():
 
 def test_bode_figure_has_grids_units_and_error_bars(tmp_path):
     cfg, r = _result(noise=0.02)
-    fig = r.plot(str(tmp_path / "df.png"), config=cfg)
+    fig = r.plot(path=str(tmp_path / "df.png"), config=cfg)
     ax_g, ax_p = fig.axes
     assert ax_g.get_ylabel() == "gain [dB]" and ax_p.get_ylabel() == "phase [deg]"
     assert ax_p.get_xlabel() == "frequency [Hz]" and ax_g.get_xscale() == "log"

@@ -82,7 +82,7 @@ def test_simulated_extensions_match_their_frequency_responses():
         ms = base.replace(extensions=(ext,))
         res = run_df(Session(Bench(ms, "reduced", imu=imu)), "heave", signals=(2,))
         # against the nominal run: the IMU post-processing's own response cancels
-        model = ms.frequency_response(f)[:, 2] / base.frequency_response(f)[:, 2]
+        model = ms.response_at_hz(f)[:, 2] / base.response_at_hz(f)[:, 2]
         err = res.response / nominal.response / model
         assert np.abs(20 * np.log10(np.abs(err))).max() < 0.05, ext.effect
         assert np.abs(np.degrees(np.angle(err))).max() < 0.5, ext.effect

@@ -75,5 +75,5 @@ def test_the_platform_reading_has_the_sensor_filters_line_response():
     f = np.array([0.1, 1.0, 5.0, 12.0])
     assert np.allclose(platform.response(f), sensor.response(f), rtol=1e-12)
     cfg = motion_system("srs").replace(extensions=(platform,))
-    h = cfg.frequency_response(f)[:, 4] / motion_system("srs").frequency_response(f)[:, 4]
+    h = cfg.response_at_hz(f)[:, 4] / motion_system("srs").response_at_hz(f)[:, 4]
     assert np.allclose(h, sensor.response(f), rtol=1e-9)  # the chain's block is the same lag

@@ -232,7 +232,7 @@ def test_an_alignment_has_no_response_of_one_dof():
         ext.response([1.0])
     f = np.array([0.1, 1.0, 10.0])
     ms = motion_system("mpi")
-    assert np.array_equal(_with(ms, ext).frequency_response(f), ms.frequency_response(f))
+    assert np.array_equal(_with(ms, ext).response_at_hz(f), ms.response_at_hz(f))
 
 
 # --- (6) both models, and the order with a sensor filter ------------------------------------------

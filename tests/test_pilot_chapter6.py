@@ -27,7 +27,7 @@ def test_felt_motion_is_the_filtered_delayed_attitude():
     k = k[k * 2 * np.pi / 81.92 < 5.0]
     ratio = np.fft.rfft(r.theta_felt[0])[k] / np.fft.rfft(r.theta[0])[k]
     w = 2 * np.pi * k / 81.92
-    expected = motion_system("condition-7").frequency_response(w / (2 * np.pi))[:, 4]
+    expected = motion_system("condition-7").response_at_hz(w / (2 * np.pi))[:, 4]
     assert np.abs(ratio / expected - 1).max() < 0.01
     assert n == 8192
 

@@ -144,7 +144,7 @@ def test_a_design_on_planted_subjects_recovers_their_effects(planted, tmp_path):
     assert len(doc["acceptance"]["by_subjects"]) == 26
     table = d.format_table()
     assert "54 pooled from 6 populations of 9" in table and "in 80 % with no size" in table
-    assert d.plot(str(tmp_path / "design.png")) is not None
+    assert d.plot(path=str(tmp_path / "design.png")) is not None
     assert (tmp_path / "design.png").stat().st_size > 10_000
 
 

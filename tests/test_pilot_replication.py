@@ -71,7 +71,7 @@ def test_a_replication_of_planted_populations_flags_only_a_reversed_effect(tmp_p
     assert doc["seeds"] == list(range(8)) and doc["implausible"] == ["k_v/filter"]
     table = rep.format_table()
     assert table.splitlines()[2 + measures.index("k_v") * 3].endswith("<- differs")
-    assert rep.plot(str(tmp_path / "rep.png")) is not None
+    assert rep.plot(path=str(tmp_path / "rep.png")) is not None
     assert (tmp_path / "rep.png").stat().st_size > 10_000
     with pytest.raises(SignalError, match="no effect 'k_x' x 'filter'; measures: "):
         rep.effect("k_x", "filter")

@@ -181,7 +181,7 @@ def test_batch_diagnosis_on_the_cluster_equals_one_process(cluster, tmp_path):
     alone = diagnose_each([a[0].parent, b[0]])
     spread = diagnose_each([a[0].parent, b[0]], scheduler=cluster)
     assert alone.rows() == spread.rows()
-    assert [d.to_json() for d in alone.diagnoses] == [d.to_json() for d in spread.diagnoses]
+    assert [d.to_dict() for d in alone.diagnoses] == [d.to_dict() for d in spread.diagnoses]
     effects = {r["measurement"]: r["effect"] for r in alone.rows()}
     assert effects["slow"] == "delay"  # the 60 ms hidden in the two-run session is named
 

@@ -6,14 +6,57 @@ motion noise, platform (full MuJoCo model or reduced Eq 5.11 model) and virtual 
 :mod:`twin.agard` (AGARD-AR-144 tests), :mod:`twin.pilot` (pilots in the loop) and
 :mod:`twin.diagnose` (what a recorded run says the twin gets wrong).
 
+What a newcomer needs is here, one call each (:mod:`twin.api`): :func:`configure`,
+:func:`simulate`, :func:`describing_function`, :func:`agard_test`, :func:`session`,
+:func:`compare`, :func:`diagnose_runs`, :func:`load_run`, :func:`workspace` and :func:`fly`. Each
+takes a configuration as a name (``"mpi"``), a ``twin-config/1`` path or a
+:class:`~twin.chain.config.MotionSystem` (what :func:`configure` returns). Every result they
+return follows :class:`Result` (``to_dict``, ``to_frame``, ``plot``; ``to_frd`` for a
+frequency response: :class:`FrequencyResult`). ``import twin`` loads no NumPy: each entry
+point imports the modules it runs (the ``twin`` command sets its BLAS threads first).
+
 Examples
 --------
->>> from twin.platform import geometry, kinematics
->>> geo = geometry.load_geometry("mpi")
->>> ws = kinematics.workspace(geo)
+>>> import twin
+>>> ws = twin.workspace("mpi")
 >>> round(float(ws["heave"].max - ws["heave"].min), 3)
 0.501
 
 """
 
+#: Set before the imports below: modules they import read it (run metadata).
 __version__ = "0.1.0"
+
+from twin.api import (
+    AGARD_TESTS,
+    agard_test,
+    compare,
+    config_names,
+    configure,
+    describing_function,
+    diagnose_runs,
+    fly,
+    load_run,
+    session,
+    simulate,
+    workspace,
+)
+from twin.results import FrequencyResult, Result
+
+__all__ = [
+    "AGARD_TESTS",
+    "FrequencyResult",
+    "Result",
+    "__version__",
+    "agard_test",
+    "compare",
+    "config_names",
+    "configure",
+    "describing_function",
+    "diagnose_runs",
+    "fly",
+    "load_run",
+    "session",
+    "simulate",
+    "workspace",
+]

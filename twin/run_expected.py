@@ -52,14 +52,14 @@ MIN_COMPARED_S = 2.0
 def nominal_pose(commands: Trajectory, config: MotionSystem) -> Trajectory:
     """Return the pose the configuration's linear blocks make of the commands.
 
-    The blocks' frequency response (:meth:`~twin.chain.config.MotionSystem.frequency_response`)
+    The blocks' frequency response (:meth:`~twin.chain.config.MotionSystem.response_at_hz`)
     applied by a zero-padded FFT to the commands' offsets from their first sample (held
     before it, as the chain starts in steady state).
     """
     x = commands.values - commands.values[0]
     nfft = 1 << int(np.ceil(np.log2(2 * commands.n)))
     f = np.fft.rfftfreq(nfft, 1.0 / commands.rate_hz)
-    y = np.fft.irfft(np.fft.rfft(x, nfft, axis=0) * config.frequency_response(f), nfft, axis=0)
+    y = np.fft.irfft(np.fft.rfft(x, nfft, axis=0) * config.response_at_hz(f), nfft, axis=0)
     return commands.replace(y[: commands.n] + commands.values[0])
 
 

@@ -52,6 +52,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 from itertools import pairwise
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
@@ -63,9 +64,14 @@ from twin.checks import number
 from twin.errors import SignalError
 from twin.frames import DOF_NAMES, acceleration_unit, dof_index
 from twin.measurement.measure import Measurement, driven_dof
-from twin.plotting import finish, pyplot
+from twin.plotting import AxesArg, finish, subplots
 from twin.profiles import JerkProfile, constant_acceleration, constant_speed
+from twin.results import frame
 from twin.trajectory import Trajectory
+
+if TYPE_CHECKING:
+    import pandas as pd
+    from matplotlib.figure import Figure
 
 FloatArray = NDArray[np.float64]
 
@@ -370,10 +376,27 @@ class BumpResult:
         lines.append(f"trend: |peak| ~ speed^{self.trend_exponent:.2f}")
         return "\n".join(lines)
 
-    def plot(self, path: str | None = None):
-        """Acceleration around each reversal (over ``|commanded|``), and ``|peak|`` vs speed."""
-        plt = pyplot()
-        fig, (ax_t, ax_v) = plt.subplots(1, 2, figsize=(10, 4))
+    def to_frame(self) -> pd.DataFrame:
+        """One row per velocity reversal (:meth:`Reversal.to_dict`)."""
+        return frame(r.to_dict() for r in self.reversals)
+
+    def plot(self, ax: AxesArg = None, *, path: str | None = None) -> Figure:
+        """Acceleration around each reversal (over ``|commanded|``), and ``|peak|`` vs speed.
+
+        Parameters
+        ----------
+        ax : sequence of two Axes, optional
+            Where to draw: the accelerations around the reversals and ``|peak|`` against
+            speed; a new figure by default.
+        path : str, optional
+            Save the figure here.
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+
+        """
+        fig, (ax_t, ax_v) = subplots(ax, 1, 2, figsize=(10, 4))
         speeds = sorted({_rounded(r.speed) for r in self.reversals}, reverse=True)
         colours = {s: f"C{k % 10}" for k, s in enumerate(speeds)}
         labelled = set()

@@ -21,18 +21,18 @@ Not run as a doctest (it takes some seconds; ``tests/test_compare.py`` runs it):
 
 from __future__ import annotations
 
-import json
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
 
-from twin.chain.config import MotionSystem, motion_system
+from twin.chain.config import MotionSystem, resolve
 from twin.chain.physics import FullPlatform
 from twin.chain.reduced import ReducedPlatform
 from twin.chain.simulate import Platform, make_platform, simulate
-from twin.errors import SignalError
+from twin.errors import SignalError, UsageError
 from twin.frames import DOF_NAMES, dof_index
 from twin.measurement.describing_function import (
     LagDelayFit,
@@ -40,10 +40,16 @@ from twin.measurement.describing_function import (
     fit_lag_delay,
     phase_deg,
 )
-from twin.plotting import finish, pyplot
+from twin.plotting import AxesArg, finish, subplots
 from twin.progress import ProgressFn
+from twin.results import frame, frd, pick
 from twin.signals import describing_signal
 from twin.thesis import TABLE_5_5
+
+if TYPE_CHECKING:
+    import control
+    import pandas as pd
+    from matplotlib.figure import Figure
 
 FloatArray = NDArray[np.float64]
 ComplexArray = NDArray[np.complex128]
@@ -153,11 +159,23 @@ class PlatformDynamics:
         """JSON-ready result: the platform and the rows of :meth:`table`."""
         return {"platform": self.platform, "fits": self.table()}
 
-    def plot(self, path: str | None = None):
+    def to_frame(self) -> pd.DataFrame:
+        """One row per DOF: the rows of :meth:`table`."""
+        return frame(self.table())
+
+    def to_frd(self, dof: str | None = None) -> control.FrequencyResponseData:
+        """Return the full model's describing function of ``dof`` (the only one by default)."""
+        r = self.responses[pick(dof, self.responses, "the platform dynamics")]
+        return frd(r.full, r.frequencies_hz, r.dof)
+
+    def plot(self, ax: AxesArg = None, *, path: str | None = None) -> Figure:
         """Bode plot per DOF: the full model's describing function and its lag-plus-delay fit.
 
         Parameters
         ----------
+        ax : sequence of 2 x n Axes, optional
+            Where to draw: gain (first row) and phase (second row), one column per DOF,
+            in row order; a new figure by default.
         path : str, optional
             Save the figure here.
 
@@ -166,9 +184,8 @@ class PlatformDynamics:
         matplotlib.figure.Figure
 
         """
-        plt = pyplot()
         n = len(self.fits)
-        fig, axes = plt.subplots(2, n, figsize=(3.2 * n, 5.5), squeeze=False, sharex=True)
+        fig, axes = subplots(ax, 2, n, figsize=(3.2 * n, 5.5), squeeze=False, sharex=True)
         for j, (dof, fit) in enumerate(self.fits.items()):
             r = self.responses[dof]
             f = r.frequencies_hz
@@ -293,10 +310,6 @@ class Comparison:
             "notes": self.notes,
         }
 
-    def to_json(self) -> str:
-        """Return :meth:`to_dict` as JSON text (alias)."""
-        return json.dumps(self.to_dict(), indent=2)
-
     def format_table(self) -> str:
         """Plain-text table: per DOF and frequency, full minus reduced."""
         out = [f"full vs reduced, configuration {self.config.name} (platform "
@@ -317,15 +330,47 @@ class Comparison:
         out.extend(f"note: {n}" for n in self.notes)
         return "\n".join(out)
 
-    def plot(self, path: str | None = None):
-        """Bode plot per DOF: full, reduced and analytic Eq 5.11; saved to ``path`` if given."""
-        plt = pyplot()
+    def to_frame(self) -> pd.DataFrame:
+        """One row per DOF and line: the columns of :meth:`to_dict`'s ``dofs``."""
+        rows = []
+        for dof, part in self.to_dict()["dofs"].items():  # type: ignore[union-attr]
+            n = len(part["frequency_hz"])
+            rows += [{"dof": dof, **{k: v[i] for k, v in part.items() if isinstance(v, list)},
+                      "rms_difference": part["rms_difference"]} for i in range(n)]  # fmt: skip
+        return frame(rows)
+
+    def to_frd(self, dof: str | None = None, model: str = "full") -> control.FrequencyResponseData:
+        """Return the ``model``'s (``full``/``reduced``) describing function of ``dof``.
+
+        ``dof`` may be left out where the comparison holds one DOF.
+        """
+        if model not in ("full", "reduced"):
+            raise UsageError(f"model {model!r}: expected 'full' or 'reduced'")
+        r = self.dofs[pick(dof, self.dofs, "the comparison")]
+        return frd(getattr(r, model), r.frequencies_hz, f"{r.dof} ({model})")
+
+    def plot(self, ax: AxesArg = None, *, path: str | None = None) -> Figure:
+        """Bode plot per DOF: full, reduced and analytic Eq 5.11; saved to ``path`` if given.
+
+        Parameters
+        ----------
+        ax : sequence of 2 x n Axes, optional
+            Where to draw: gain (first row) and phase (second row), one column per DOF,
+            in row order; a new figure by default.
+        path : str, optional
+            Save the figure here.
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+
+        """
         n = len(self.dofs)
-        fig, axes = plt.subplots(2, n, figsize=(3.2 * n, 5.5), squeeze=False, sharex=True)
+        fig, axes = subplots(ax, 2, n, figsize=(3.2 * n, 5.5), squeeze=False, sharex=True)
         for j, (dof, r) in enumerate(self.dofs.items()):
             f = r.frequencies_hz
             fa = np.geomspace(f.min(), max(f.max(), 10.0), 200)
-            ha = self.config.frequency_response(fa)[:, dof_index(dof)]
+            ha = self.config.response_at_hz(fa)[:, dof_index(dof)]
             axes[0, j].semilogx(fa, 20 * np.log10(np.abs(ha)), "k-", lw=0.8, label="Eq 5.11")
             axes[1, j].semilogx(fa, phase_deg(ha), "k-", lw=0.8)
             for h, style, label in ((r.full, "o", "full"), (r.reduced, "x", "reduced")):
@@ -360,7 +405,7 @@ def compare(
         Called with a message before each run.
 
     """
-    ms = motion_system(config) if isinstance(config, str) else config
+    ms = resolve(config)
     ms_quiet = ms.replace(name=ms.name, noise=False)
     full = make_platform(ms.platform, "full")
     reduced = ReducedPlatform(ms.platform, rate_hz=full.rate_hz)  # same grid, sample by sample
@@ -373,7 +418,7 @@ def compare(
         cmd = np.concatenate([a[1] for a in w_full])
         rms = float(np.sqrt(np.mean(diff**2)) / np.sqrt(np.mean(cmd**2)))
         out[dof] = DofResponse(dof, f, h_full, h_red, rms)
-        analytic[dof] = ms_quiet.frequency_response(f)[:, dof_index(dof)]
+        analytic[dof] = ms_quiet.response_at_hz(f)[:, dof_index(dof)]
         if progress:
             progress(f"{ms.name}: full and reduced [DOFs]", len(out), len(checked))
     notes = [] if not ms.noise else ["the configuration's noise was off for these runs"]

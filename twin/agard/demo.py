@@ -39,7 +39,7 @@ def _sweep(config: str, model: str, out: Path, done) -> list[DfResult]:
 
 def run_demo(out: Path, progress: ProgressFn | None = None, shown_as: Path | None = None) -> str:
     """Run the sweep into ``out``; return the printed table (naming ``shown_as`` or ``out``)."""
-    import matplotlib.pyplot as plt
+    from twin.plotting import subplots
 
     out.mkdir(parents=True, exist_ok=True)
     lock, count = threading.Lock(), [0]
@@ -72,7 +72,7 @@ def run_demo(out: Path, progress: ProgressFn | None = None, shown_as: Path | Non
             )
             payload[f"{config}-{model}-{r.dof}"] = r.to_dict()
     for i, dof in enumerate(DOFS):
-        fig, (ax_g, ax_p) = plt.subplots(2, 1, figsize=(6.5, 6), sharex=True)
+        fig, (ax_g, ax_p) = subplots(None, 2, 1, figsize=(6.5, 6), sharex=True)
         for j, ((config, model), rs) in enumerate(results.items()):
             draw_bode(ax_g, ax_p, rs[i], f"C{j}", f"{config} {model}", configure(config))
         ax_g.set_title(f"describing functions, {dof} (points: twin, 95 %; lines: Eq 5.11)",
@@ -80,7 +80,6 @@ def run_demo(out: Path, progress: ProgressFn | None = None, shown_as: Path | Non
         ax_g.legend(fontsize=8)
         fig.tight_layout()
         fig.savefig(out / f"df-{dof}.png", dpi=120)
-        plt.close(fig)
     (out / "df.json").write_text(json.dumps(payload, indent=2) + "\n", encoding="utf-8")
     lines.append(
         f"figures, results and recordings in {shown_as or out}/: df-pitch.png, df-heave.png, "

@@ -23,6 +23,7 @@ import re
 from collections.abc import Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
@@ -41,9 +42,15 @@ from twin.measurement.describing_function import (
     phase_deg,
 )
 from twin.measurement.measure import Bench, Measurement, driven_dof
-from twin.plotting import finish, pyplot
+from twin.plotting import AxesArg, finish, subplots
+from twin.results import frame, frd
 from twin.run_folder import signal_meta
 from twin.signals import describing_signal
+
+if TYPE_CHECKING:
+    import control
+    import pandas as pd
+    from matplotlib.figure import Figure
 
 FloatArray = NDArray[np.float64]
 ComplexArray = NDArray[np.complex128]
@@ -207,11 +214,29 @@ class DfResult(ResponseMixin):
         )
         return "\n".join(lines)
 
-    def plot(self, path: str | None = None, config=None, cross: bool = True):
+    def to_frame(self) -> pd.DataFrame:
+        """One row per excited line: frequency, measured and Eq 5.11 gain and phase, SNR."""
+        a = self.analytic()
+        return frame({
+            "frequency_hz": self.frequencies_hz, "gain": self.gain,
+            "gain_db": 20 * np.log10(self.gain), "phase_deg": self.phase_deg,
+            "gain_sd": self.noise, "snr_db": self.snr_db, "analytic_gain": np.abs(a),
+            "analytic_phase_deg": self.analytic_phase_deg(),
+        })  # fmt: skip
+
+    def to_frd(self) -> control.FrequencyResponseData:
+        """Return the measured describing function at its lines, as python-control data (rad/s)."""
+        return frd(self.response, self.frequencies_hz, self.dof)
+
+    def plot(
+        self, ax: AxesArg = None, *, path: str | None = None, config=None, cross: bool = True
+    ) -> Figure:
         """Bode plot: measured points with 95 % error bars, the analytic model, the fitted delay.
 
         Parameters
         ----------
+        ax : sequence of two Axes, optional
+            Where to draw: gain and phase; a new figure by default.
         path : str, optional
             Save the figure here.
         config : MotionSystem, optional
@@ -220,13 +245,12 @@ class DfResult(ResponseMixin):
             Also show the largest cross describing function.
 
         """
-        plt = pyplot()
-        fig, (ax_g, ax_p) = plt.subplots(2, 1, figsize=(6.5, 6), sharex=True)
+        fig, (ax_g, ax_p) = subplots(ax, 2, 1, figsize=(6.5, 6), sharex=True)
         model = "Eq 5.11 of the configuration" if config is not None else "Eq 5.11"
         draw_bode(ax_g, ax_p, self, "C0", f"measured {self.dof}", config, model)
         if config is not None:
             fa = dense_frequencies(self.frequencies_hz)
-            h0 = config.without_delay().frequency_response(fa)[:, dof_index(self.dof)]
+            h0 = config.without_delay().response_at_hz(fa)[:, dof_index(self.dof)]
             hf = h0 * np.exp(-2j * np.pi * fa * self.delay_s)
             label = f"fitted delay {self.delay_s * 1e3:.1f} ms"
             ax_p.semilogx(fa, phase_deg(hf), "C1--", lw=0.8, label=label)
@@ -255,7 +279,7 @@ def draw_bode(
     f, k = r.frequencies_hz, dof_index(r.dof)
     if config is not None:
         fa = dense_frequencies(f)
-        ha = config.transfer_function(k).frequency_response(fa)  # python-control
+        ha = config.transfer_function(k).response_at_hz(fa)  # python-control
         ax_g.semilogx(fa, 20 * np.log10(np.abs(ha)), "-", color=colour, lw=0.8, alpha=0.8,
                       label=model_label)  # fmt: skip
         ax_p.semilogx(fa, phase_deg(ha), "-", color=colour, lw=0.8, alpha=0.8)
@@ -437,7 +461,7 @@ def analyse_windows(
         DOF_NAMES[j]: np.concatenate([p[3][j] for p in parts])[order] for j in range(6) if j != k
     }
     f = f[order]
-    model = m.config.without_delay().frequency_response(f)[:, k]
+    model = m.config.without_delay().response_at_hz(f)[:, k]
     return _result(DOF_NAMES[k], f, h, cross, model, m.config.delays_s[k], m.source, noise)
 
 

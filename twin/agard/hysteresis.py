@@ -20,7 +20,7 @@ A delay opens a loop too: at low frequency a lag tau turns the output y(t) = x(t
 ellipse of width 2 A sin(2 pi f tau) at zero input. Both widths are therefore taken after the
 output has been advanced by the configuration's lag at the test frequency (its delay plus the
 platform filter's phase, -arg H(f) / (2 pi f), :meth:`~twin.chain.config.MotionSystem.
-frequency_response`; or a lag the user gives, e.g. the describing function's fitted delay).
+response_at_hz`; or a lag the user gives, e.g. the describing function's fitted delay).
 The raw width (output not advanced) and the lag's own width 2 A sin(2 pi f tau) are reported
 beside them, so that a pure delay is not called hysteresis.
 
@@ -44,6 +44,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
@@ -56,8 +57,13 @@ from twin.chain.config import MotionSystem
 from twin.checks import number
 from twin.errors import SignalError, SignalLimitError
 from twin.frames import DOF_NAMES, dof_index
-from twin.plotting import finish, pyplot
+from twin.plotting import AxesArg, finish, subplots
+from twin.results import frame
 from twin.signals import DescribingSignal, MultiSine, check_signal, periodic_signal
+
+if TYPE_CHECKING:
+    import pandas as pd
+    from matplotlib.figure import Figure
 
 FloatArray = NDArray[np.float64]
 
@@ -225,14 +231,30 @@ class HysteresisResult:
             lines.append(f"{'':7} {a:10.4g} skipped: {why}")
         return "\n".join(lines)
 
-    def plot(self, path: str | None = None):
+    def to_frame(self) -> pd.DataFrame:
+        """One row per amplitude's loop (:meth:`HysteresisLoop.to_dict`)."""
+        return frame(lp.to_dict() for lp in self.loops)
+
+    def plot(self, ax: AxesArg = None, *, path: str | None = None) -> Figure:
         """Plot output against input per amplitude, and output minus input below it.
 
         The output is advanced by the lag; the lower panels open the loop up.
+
+        Parameters
+        ----------
+        ax : sequence of 2 x n Axes, optional
+            Where to draw: the loops (first row) and output minus input (second row),
+            one column per amplitude, in row order; a new figure by default.
+        path : str, optional
+            Save the figure here.
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+
         """
-        plt = pyplot()
         n = max(1, len(self.loops))
-        fig, axes = plt.subplots(2, n, figsize=(4.2 * n, 6.5), squeeze=False, sharex="col")
+        fig, axes = subplots(ax, 2, n, figsize=(4.2 * n, 6.5), squeeze=False, sharex="col")
         u = position_unit(self.dof)
         for c, lp in enumerate(self.loops):
             top, bottom = axes[0, c], axes[1, c]
@@ -254,10 +276,10 @@ class HysteresisResult:
 def configured_lag(config: MotionSystem, dof: str, frequency_hz: float) -> float:
     """Return the configuration's lag at ``frequency_hz``: -arg H(f) / (2 pi f) [s].
 
-    H is the reduced model (:meth:`MotionSystem.frequency_response`: filter, delay,
+    H is the reduced model (:meth:`MotionSystem.response_at_hz`: filter, delay,
     resonance); at the hysteresis test's low frequencies the filter's phase is a lag too.
     """
-    h = config.frequency_response([frequency_hz])[0, dof_index(dof)]
+    h = config.response_at_hz([frequency_hz])[0, dof_index(dof)]
     return float(-np.angle(h) / (2 * np.pi * frequency_hz))
 
 

@@ -37,6 +37,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
@@ -51,10 +52,15 @@ from twin.checks import number
 from twin.errors import SignalError
 from twin.frames import DOF_NAMES, acceleration_unit, dof_index
 from twin.measurement.measure import Measurement, driven_dof
-from twin.plotting import finish, pyplot
+from twin.plotting import AxesArg, finish, subplots
 from twin.profiles import point_to_point
+from twin.results import frame
 from twin.runs import RecordedRun
 from twin.trajectory import Trajectory
+
+if TYPE_CHECKING:
+    import pandas as pd
+    from matplotlib.figure import Figure
 
 FloatArray = NDArray[np.float64]
 
@@ -375,10 +381,27 @@ class LimitsResult:
                      f"{c.acceleration:.3f}")  # fmt: skip
         return "\n".join(lines)
 
-    def plot(self, path: str | None = None):
-        """Commanded and reached pose per level, and reached against commanded peaks."""
-        plt = pyplot()
-        fig, axes = plt.subplots(1, 4, figsize=(13, 3.6))
+    def to_frame(self) -> pd.DataFrame:
+        """One row per level (:meth:`LevelResult.to_dict`, nested values as ``a.b``)."""
+        return frame(lv.to_dict() for lv in self.levels)
+
+    def plot(self, ax: AxesArg = None, *, path: str | None = None) -> Figure:
+        """Commanded and reached pose per level, and reached against commanded peaks.
+
+        Parameters
+        ----------
+        ax : sequence of four Axes, optional
+            Where to draw: pose per level, then the three panels of reached against
+            commanded peaks; a new figure by default.
+        path : str, optional
+            Save the figure here.
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+
+        """
+        fig, axes = subplots(ax, 1, 4, figsize=(13, 3.6))
         ax_p = axes[0]
         for i, lv in enumerate(self.levels):
             ax_p.plot(lv.t - lv.t[0], lv.commanded_pose, ":", color=f"C{i % 10}", lw=0.8)

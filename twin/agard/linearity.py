@@ -36,6 +36,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
@@ -49,8 +50,13 @@ from twin.errors import SignalError, SignalLimitError
 from twin.frames import DOF_NAMES, acceleration_unit
 from twin.measurement.describing_function import fourier_coefficients, neighbour_noise
 from twin.measurement.measure import Measurement, driven_dof
-from twin.plotting import finish, pyplot
+from twin.plotting import AxesArg, finish, subplots
+from twin.results import frame
 from twin.signals import check_signal, single_sine
+
+if TYPE_CHECKING:
+    import pandas as pd
+    from matplotlib.figure import Figure
 
 FloatArray = NDArray[np.float64]
 ComplexArray = NDArray[np.complex128]
@@ -273,10 +279,26 @@ class LinearityResult:
             lines.append(f"{s.frequency_hz:7.3g} {s.amplitude:12.4g} skipped: {s.reason}")
         return "\n".join(lines)
 
-    def plot(self, path: str | None = None):
-        """Gain and phase against amplitude, one line per frequency, with error bars."""
-        plt = pyplot()
-        fig, (ax_g, ax_p) = plt.subplots(2, 1, figsize=(6.5, 6), sharex=True)
+    def to_frame(self) -> pd.DataFrame:
+        """One row per frequency and amplitude: the ``points`` of :meth:`to_dict`."""
+        return frame(self.to_dict()["points"])  # type: ignore[arg-type]
+
+    def plot(self, ax: AxesArg = None, *, path: str | None = None) -> Figure:
+        """Gain and phase against amplitude, one line per frequency, with error bars.
+
+        Parameters
+        ----------
+        ax : sequence of two Axes, optional
+            Where to draw: gain and phase; a new figure by default.
+        path : str, optional
+            Save the figure here.
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+
+        """
+        fig, (ax_g, ax_p) = subplots(ax, 2, 1, figsize=(6.5, 6), sharex=True)
         for c, f in enumerate(np.unique(self.frequencies_hz)):
             at = np.flatnonzero(self.frequencies_hz == f)
             at = at[np.argsort(self.amplitudes[at])]

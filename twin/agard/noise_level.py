@@ -27,6 +27,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
@@ -35,7 +36,12 @@ from twin.agard.session import Session
 from twin.errors import SignalError
 from twin.frames import DOF_NAMES, acceleration_unit
 from twin.measurement.measure import Measurement, driven_dof
-from twin.plotting import finish, pyplot
+from twin.plotting import AxesArg, finish, subplots
+from twin.results import frame
+
+if TYPE_CHECKING:
+    import pandas as pd
+    from matplotlib.figure import Figure
 
 FloatArray = NDArray[np.float64]
 
@@ -234,10 +240,26 @@ class NoiseLevelResult:
             lines.append(f"{a:14.3f} skipped: {why}")
         return "\n".join(lines)
 
-    def plot(self, path: str | None = None):
-        """Bar chart of the noise ratios per amplitude (as Fig 3.5)."""
-        plt = pyplot()
-        fig, ax = plt.subplots(figsize=(7, 3.8))
+    def to_frame(self) -> pd.DataFrame:
+        """One row per amplitude (:meth:`NoiseLevelPoint.to_dict`, nested values as ``a.b``)."""
+        return frame(p.to_dict() for p in self.points)
+
+    def plot(self, ax: AxesArg = None, *, path: str | None = None) -> Figure:
+        """Bar chart of the noise ratios per amplitude (as Fig 3.5).
+
+        Parameters
+        ----------
+        ax : Axes, optional
+            Where to draw: the bar chart; a new figure by default.
+        path : str, optional
+            Save the figure here.
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+
+        """
+        fig, ax = subplots(ax, figsize=(7, 3.8))
         names = (
             "low_frequency_nonlinearity",
             "high_frequency_nonlinearity",

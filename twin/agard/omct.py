@@ -26,6 +26,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
@@ -36,7 +37,13 @@ from twin.errors import SignalError, TwinError
 from twin.frames import DOF_NAMES, dof_index
 from twin.measurement.describing_function import ResponseMixin, describing_function, phase_deg
 from twin.measurement.measure import Measurement, driven_dof
-from twin.plotting import finish, pyplot
+from twin.plotting import AxesArg, finish, subplots
+from twin.results import frame, frd
+
+if TYPE_CHECKING:
+    import control
+    import pandas as pd
+    from matplotlib.figure import Figure
 
 FloatArray = NDArray[np.float64]
 ComplexArray = NDArray[np.complex128]
@@ -192,11 +199,26 @@ class OmctResult(ResponseMixin):
             out["bounds"] = {"title": bounds.title, "path": bounds.path}
         return out
 
-    def plot(self, path: str | None = None, bounds: OmctBounds | None = None):
+    def to_frame(self) -> pd.DataFrame:
+        """One row per OMCT frequency: measured and Eq 5.11 gain and phase."""
+        return frame({
+            "frequency_rad_s": self.w_rad_s, "gain": self.gain, "phase_deg": self.phase_deg,
+            "analytic_gain": np.abs(self.analytic), "analytic_phase_deg": phase_deg(self.analytic),
+        })  # fmt: skip
+
+    def to_frd(self) -> control.FrequencyResponseData:
+        """Return the measured response at the OMCT frequencies, as python-control data (rad/s)."""
+        return frd(self.response, self.w_rad_s, self.label or self.dof, rad_s=True)
+
+    def plot(
+        self, ax: AxesArg = None, *, path: str | None = None, bounds: OmctBounds | None = None
+    ) -> Figure:
         """Gain and phase at the OMCT frequencies, with boundaries if given (Fig 5.12).
 
         Parameters
         ----------
+        ax : sequence of two Axes, optional
+            Gain and phase panels to draw on; a new figure by default.
         path : str, optional
             Save the figure here.
         bounds : OmctBounds, optional
@@ -207,7 +229,7 @@ class OmctResult(ResponseMixin):
         matplotlib.figure.Figure
 
         """
-        return plot_omct([self], bounds, path)
+        return plot_omct([self], bounds, ax=ax, path=path)
 
     def format_table(self, bounds: OmctBounds | None = None) -> str:
         """Plain-text table."""
@@ -231,11 +253,17 @@ class OmctResult(ResponseMixin):
 
 
 def plot_omct(
-    results: Sequence[OmctResult], bounds: OmctBounds | None = None, path: str | None = None
-):
-    """Gain and phase of several OMCT results on one figure, with boundaries (Fig 5.12)."""
-    plt = pyplot()
-    fig, (ax_g, ax_p) = plt.subplots(2, 1, figsize=(6.5, 6), sharex=True)
+    results: Sequence[OmctResult],
+    bounds: OmctBounds | None = None,
+    *,
+    ax: AxesArg = None,
+    path: str | None = None,
+) -> Figure:
+    """Gain and phase of several OMCT results on one figure, with boundaries (Fig 5.12).
+
+    ``ax``: gain and phase Axes to draw on (a new figure by default); ``path``: save here.
+    """
+    fig, (ax_g, ax_p) = subplots(ax, 2, 1, figsize=(6.5, 6), sharex=True, panels="gain, phase")
     if bounds is not None and results:
         w = np.geomspace(OMCT_RAD_S[0], OMCT_RAD_S[-1], 200)
         b = bounds.at(results[0].dof, w)
@@ -306,7 +334,7 @@ def run_omct(
         ws.append(wi)
         hs.append(h)
     w_arr = np.asarray(ws)
-    analytic = cfg.frequency_response(w_arr / (2 * np.pi))[:, dof_index(dof)]
+    analytic = cfg.response_at_hz(w_arr / (2 * np.pi))[:, dof_index(dof)]
     return OmctResult(
         dof,
         w_arr,

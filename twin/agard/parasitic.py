@@ -46,6 +46,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -56,8 +57,13 @@ from twin.errors import SignalError
 from twin.frames import DOF_NAMES, dof_index
 from twin.measurement.describing_function import fourier_coefficients, neighbour_noise
 from twin.measurement.measure import Measurement, driven_dof
-from twin.plotting import finish, pyplot
+from twin.plotting import AxesArg, finish, subplots
+from twin.results import frame
 from twin.signals import base_frequency, describing_signal, single_sine
+
+if TYPE_CHECKING:
+    import pandas as pd
+    from matplotlib.figure import Figure
 
 FloatArray = NDArray[np.float64]
 ComplexArray = NDArray[np.complex128]
@@ -275,14 +281,21 @@ class ParasiticResult:
         )
         return "\n".join(lines)
 
-    def plot(self, path: str | None = None):
+    def to_frame(self) -> pd.DataFrame:
+        """One row per driven and measured DOF (:meth:`Cell.to_dict`)."""
+        return frame({"driven": d, "measured": m, **c.to_dict()}
+                     for d, row in self.cells.items() for m, c in row.items())  # fmt: skip
+
+    def plot(self, ax: AxesArg = None, *, path: str | None = None) -> Figure:
         """Heat map of the coupling in dB (rows driven, columns measured), numbers in cells.
 
         Cells within :data:`ABOVE_NOISE_DB` of their noise floor are hatched and their
         number greyed; rows of undriven DOFs are blank; the diagonal is the driven DOF's
-        describing-function gain.
+        describing-function gain. ``ax``: one Axes to draw on (its figure gets the colour
+        bar; a new figure by default); ``path``: save the figure here.
         """
-        plt = pyplot()
+        from matplotlib.patches import Rectangle
+
         c = self.matrix("coupling_mean")
         with np.errstate(divide="ignore", invalid="ignore"):
             db = 20 * np.log10(c)
@@ -290,7 +303,7 @@ class ParasiticResult:
         np.fill_diagonal(off, np.nan)
         finite = off[np.isfinite(off)]
         lo, hi = (float(finite.min()), float(finite.max())) if finite.size else (-60.0, 0.0)
-        fig, ax = plt.subplots(figsize=(6.8, 5.6))
+        fig, ax = subplots(ax, figsize=(6.8, 5.6))
         image = ax.imshow(np.ma.masked_invalid(off), cmap="viridis", vmin=min(lo, hi - 1),
                           vmax=hi)  # fmt: skip
         fig.colorbar(image, ax=ax, label="coupling |Y / U| [dB, SI ratio]")
@@ -300,11 +313,11 @@ class ParasiticResult:
                 if not np.isfinite(c[i, j]):
                     continue
                 if i == j:
-                    ax.add_patch(plt.Rectangle((j - 0.5, i - 0.5), 1, 1, fc="white", ec="k"))
+                    ax.add_patch(Rectangle((j - 0.5, i - 0.5), 1, 1, fc="white", ec="k"))
                     text, colour = f"{db[i, j]:.1f}\nDF gain", "k"
                 else:
                     if noisy[i, j]:
-                        ax.add_patch(plt.Rectangle((j - 0.5, i - 0.5), 1, 1, fill=False,
+                        ax.add_patch(Rectangle((j - 0.5, i - 0.5), 1, 1, fill=False,
                                                    hatch="///", ec="w", lw=0))  # fmt: skip
                     text = f"{'~' if noisy[i, j] else ''}{db[i, j]:.1f}\n{100 * c[i, j]:.2g} %"
                     colour = "k" if image.norm(db[i, j]) > 0.5 else "w"

@@ -17,8 +17,6 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import matplotlib.pyplot as plt
-
 from twin.agard import (
     bump,
     df,
@@ -143,11 +141,8 @@ def _in_session(bench, dofs, tmp, rrd, progress, bounds) -> list[DofPart]:
 
 
 def _figure(fig, path: Path) -> str:
-    try:
-        with writing(path):
-            fig.savefig(path, dpi=120)
-    finally:
-        plt.close(fig)
+    with writing(path):
+        fig.savefig(path, dpi=120)
     return path.name
 
 

@@ -17,7 +17,6 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-import matplotlib.pyplot as plt
 import numpy as np
 
 from twin.agard import bump, df, hysteresis, limits, linearity, parasitic, threshold
@@ -276,11 +275,8 @@ class RunReport:
             for dof, r in rs.items():
                 fig = FIGURES.get(test, _plain_figure)(r, m)
                 path = folder / f"{test}-{dof}.png"
-                try:
-                    with writing(path):
-                        fig.savefig(path, dpi=120)  # type: ignore[attr-defined]
-                finally:
-                    plt.close(fig)  # type: ignore[arg-type]
+                with writing(path):
+                    fig.savefig(path, dpi=120)  # type: ignore[attr-defined]
                 figures[test, dof] = path.name
         with writing(folder / "report.json") as path:
             path.write_text(json.dumps(self.to_dict(), indent=2) + "\n", encoding="utf-8")

@@ -141,11 +141,10 @@ def plot_spreads(spreads: Iterable[Spread], path: str | None = None, unit: str =
     matplotlib.figure.Figure
 
     """
-    from twin.plotting import finish, pyplot
+    from twin.plotting import finish, subplots
 
-    plt = pyplot()
     spreads = list(spreads)
-    fig, ax = plt.subplots(figsize=(7, 0.6 + 0.55 * len(spreads)))
+    fig, ax = subplots(None, figsize=(7, 0.6 + 0.55 * len(spreads)))
     for row, s in enumerate(spreads):
         jitter = np.linspace(-0.15, 0.15, len(s.values))
         ax.plot(s.values, row + jitter, ".", color="0.6", ms=4)

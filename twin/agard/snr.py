@@ -18,6 +18,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from functools import cache
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -25,7 +26,12 @@ from numpy.typing import ArrayLike, NDArray
 from twin.agard.noise_level import NoiseLevelPoint, analyse_noise
 from twin.agard.session import Session
 from twin.frames import acceleration_unit, dof_index
-from twin.plotting import finish, pyplot
+from twin.plotting import AxesArg, finish, subplots
+from twin.results import frame
+
+if TYPE_CHECKING:
+    import pandas as pd
+    from matplotlib.figure import Figure
 
 FloatArray = NDArray[np.float64]
 
@@ -115,10 +121,34 @@ class SnrResult:
             lines.append(f"{len(self.skipped)} grid point(s) beyond the system limits not run")
         return "\n".join(lines)
 
-    def plot(self, path: str | None = None, levels: Sequence[float] = (0.05, 0.1, 0.2, 0.5, 1)):
-        """Contours of the noise ratio against the system limits (as Fig 3.6)."""
-        plt = pyplot()
-        fig, ax = plt.subplots(figsize=(6, 4.2))
+    def to_frame(self) -> pd.DataFrame:
+        """One row per grid point: frequency, amplitude and total noise ratio."""
+        return frame(self.to_dict()["points"])  # type: ignore[arg-type]
+
+    def plot(
+        self,
+        ax: AxesArg = None,
+        *,
+        path: str | None = None,
+        levels: Sequence[float] = (0.05, 0.1, 0.2, 0.5, 1),
+    ) -> Figure:
+        """Contours of the noise ratio against the system limits (as Fig 3.6).
+
+        Parameters
+        ----------
+        ax : Axes, optional
+            One Axes to draw on (its figure gets the colour bar); a new figure by default.
+        path : str, optional
+            Save the figure here.
+        levels : sequence of float
+            Noise ratios of the contours.
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+
+        """
+        fig, ax = subplots(ax, figsize=(6, 4.2))
         f = np.array([p.frequency_hz for p in self.points])
         a = np.array([p.amplitude for p in self.points])
         r = np.array([p.decomposition.ratios["total"] for p in self.points])

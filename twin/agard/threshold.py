@@ -13,6 +13,7 @@ on the same input, so measured and analytic 63 % times compare like for like; th
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
@@ -26,9 +27,14 @@ from twin.checks import number
 from twin.errors import SignalError
 from twin.frames import DOF_NAMES, acceleration_unit, dof_index
 from twin.measurement.measure import Measurement, driven_dof
-from twin.plotting import finish, pyplot
+from twin.plotting import AxesArg, finish, subplots
+from twin.results import frame
 from twin.signals import square_steps
 from twin.trajectory import Trajectory
+
+if TYPE_CHECKING:
+    import pandas as pd
+    from matplotlib.figure import Figure
 
 FloatArray = NDArray[np.float64]
 #: Least change of the commanded acceleration in one sample, over its range, that makes a step
@@ -218,10 +224,26 @@ class ThresholdResult:
             ]
         )
 
-    def plot(self, path: str | None = None):
-        """Commanded, measured and fitted responses (as Fig 3.8 / Fig 4.2)."""
-        plt = pyplot()
-        fig, ax = plt.subplots(figsize=(7, 3.5))
+    def to_frame(self) -> pd.DataFrame:
+        """One row per sample: time, commanded and measured response (the plotted traces)."""
+        return frame({"t_s": self.t, "commanded": self.commanded, "measured": self.measured})
+
+    def plot(self, ax: AxesArg = None, *, path: str | None = None) -> Figure:
+        """Commanded, measured and fitted responses (as Fig 3.8 / Fig 4.2).
+
+        Parameters
+        ----------
+        ax : Axes, optional
+            Where to draw: the responses; a new figure by default.
+        path : str, optional
+            Save the figure here.
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+
+        """
+        fig, ax = subplots(ax, figsize=(7, 3.5))
         ax.plot(self.t, self.commanded, "k-", lw=0.8, label="commanded")
         ax.plot(self.t, self.measured, lw=0.7, alpha=0.8, label="measured")
         f = self.fit

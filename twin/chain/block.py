@@ -57,8 +57,12 @@ class Block(ABC):
         out, _ = self.stream(sig.jets, self.start(sig.jets[:, 0], sig.rate_hz))
         return sig.replace(out)
 
-    def frequency_response(self, f: ArrayLike) -> ComplexArray:
-        """Continuous response at ``f`` [Hz], shape (len(f), 6) (linear blocks only)."""
+    def response_at_hz(self, f: ArrayLike) -> ComplexArray:
+        """Continuous response at ``f`` [Hz], shape (len(f), 6) (linear blocks only).
+
+        In Hz, as the name says: python-control's ``frequency_response`` takes rad/s (the
+        block's :meth:`transfer_function` is the python-control system).
+        """
         raise SignalError(f"{self.name} is not linear; it has no frequency response")
 
     def transfer_function(self, dof: int) -> Any:
@@ -98,7 +102,7 @@ class Gain(Block):
         out[:, :, np.array(self.mask)] *= self.gain
         return out, state
 
-    def frequency_response(self, f: ArrayLike) -> ComplexArray:
+    def response_at_hz(self, f: ArrayLike) -> ComplexArray:
         """``gain`` on the masked DOFs."""
         h = np.ones((np.size(f), 6), dtype=complex)
         h[:, np.array(self.mask)] = self.gain
@@ -157,7 +161,7 @@ class Lead(Block):
         out[..., 2] += T * jerk
         return out, (jets[:, -1].copy(), h)
 
-    def frequency_response(self, f: ArrayLike) -> ComplexArray:
+    def response_at_hz(self, f: ArrayLike) -> ComplexArray:
         """1 + T s per DOF."""
         s = 2j * np.pi * np.asarray(f, dtype=float)
         return 1.0 + np.outer(s, self.time_constants)

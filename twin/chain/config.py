@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import os
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -44,7 +45,7 @@ from twin.chain.lti import LinearModel
 from twin.chain.noise import MotionNoise
 from twin.chain.resonance import Resonance
 from twin.checks import check_keys, did_you_mean, flag, number, read_json
-from twin.errors import ConfigError, SignalError, UnknownPlatformError
+from twin.errors import ConfigError, SignalError, UnknownPlatformError, UsageError
 from twin.lifecycle import replacing_file
 from twin.platform.facts import PLATFORMS, load_facts
 from twin.platform.platform_physics import PlatformPhysics
@@ -245,7 +246,7 @@ class MotionSystem:
             return None
         return MotionNoise(imu_rate_hz, self.noise_highpass_hz, self.noise_scale)
 
-    def frequency_response(self, f: ArrayLike) -> NDArray[np.complex128]:
+    def response_at_hz(self, f: ArrayLike) -> NDArray[np.complex128]:
         """Return the reduced model (Eq 5.11 and the optional resonance) at ``f`` [Hz].
 
         An ``imu_alignment`` is left out (here and in :meth:`transfer_function`): it mixes the
@@ -261,7 +262,7 @@ class MotionSystem:
         h = np.ones((np.size(f), 6), dtype=complex)
         for block in self.blocks():
             if not isinstance(block, Backlash):
-                h = h * block.frequency_response(f)
+                h = h * block.response_at_hz(f)
         for ext in self.of("sensor_filter"):
             mask = _sensed(ext)
             h[:, mask] = h[:, mask] * ext.response(f)[:, None]
@@ -270,7 +271,7 @@ class MotionSystem:
     def transfer_function(self, dof: int | str) -> LinearModel:
         """Return one DOF's reduced model as a python-control transfer function and a delay.
 
-        The same model as :meth:`frequency_response` (the blocks' own transfer functions
+        The same model as :meth:`response_at_hz` (the blocks' own transfer functions
         multiplied, a ``sensor_filter`` on the DOF's IMU channel included; backlash has none).
         """
         import control
@@ -480,4 +481,43 @@ def motion_system(name: str) -> MotionSystem:
     raise UnknownPlatformError(
         f"unknown configuration {name!r}{did_you_mean(name, config_names())}; expected one of "
         f"{', '.join(config_names())} or a twin-config/1 .json file"
+    )
+
+
+def resolve(config: MotionSystem | str | os.PathLike[str]) -> MotionSystem:
+    """Return the configuration ``config`` names: the one resolver every entry point uses.
+
+    Parameters
+    ----------
+    config : MotionSystem, str or path
+        A :class:`MotionSystem` (returned as it is), a configuration name (``mpi``, ``srs``,
+        ``condition-1`` ...: :func:`motion_system`) or the path of a ``twin-config/1`` file
+        (as ``str`` or :class:`pathlib.Path`: :func:`load_config`).
+
+    Raises
+    ------
+    UnknownPlatformError
+        For an unknown name (the message lists the known ones).
+    ConfigError
+        For a file that is not a valid ``twin-config/1`` file.
+    UsageError
+        For anything else (an ``int``, None, ...).
+
+    Examples
+    --------
+    >>> resolve("srs").delay_s
+    0.025
+    >>> resolve(resolve("mpi")).name
+    'mpi'
+
+    """
+    if isinstance(config, MotionSystem):
+        return config
+    if isinstance(config, str):
+        return motion_system(config)
+    if isinstance(config, os.PathLike):
+        return load_config(config)
+    raise UsageError(
+        f"config: expected a configuration name ({', '.join(config_names())}), the path of a "
+        f"twin-config/1 file or a MotionSystem; got {type(config).__name__} {config!r}"
     )

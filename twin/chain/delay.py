@@ -57,7 +57,7 @@ class Delay(Block):
             return f"delay {d[0] * 1e3:.1f} ms"
         return "delay " + "/".join(f"{x * 1e3:.1f}" for x in d) + " ms"
 
-    def frequency_response(self, f: ArrayLike) -> ComplexArray:
+    def response_at_hz(self, f: ArrayLike) -> ComplexArray:
         """Response at frequencies ``f`` [Hz], shape (len(f), 6)."""
         w = 2 * np.pi * np.asarray(f, dtype=float)
         return np.exp(-1j * np.outer(w, self.per_dof))

@@ -43,7 +43,7 @@ class PlatformFilter(LtiBlock):
     Examples
     --------
     >>> f = PlatformFilter(1.0)
-    >>> round(20 * float(np.log10(abs(f.frequency_response([1.0])[0, 0]))), 2)  # -6 dB at f_b
+    >>> round(20 * float(np.log10(abs(f.response_at_hz([1.0])[0, 0]))), 2)  # -6 dB at f_b
     -6.02
 
     """

@@ -201,7 +201,7 @@ class LtiBlock(Block):
             new.append((states[:, -1].copy(), jets[:, -1, cols].copy()))
         return out, (h, new)
 
-    def frequency_response(self, f: ArrayLike) -> ComplexArray:
+    def response_at_hz(self, f: ArrayLike) -> ComplexArray:
         """num(s) / den(s) per DOF at ``f`` [Hz], shape (len(f), 6)."""
         s = 2j * np.pi * np.asarray(f, dtype=float)
         h = np.ones((s.size, 6), dtype=complex)
@@ -235,7 +235,7 @@ class LinearModel:
     >>> m = motion_system("mpi").transfer_function(4)      # pitch: 1 Hz filter, 35 ms
     >>> m.rational.poles().real.round(3).tolist(), round(m.delay_s, 3)
     ([-6.283, -6.283], 0.035)
-    >>> round(abs(complex(m.frequency_response([1.0])[0])), 3)   # -6 dB at the break
+    >>> round(abs(complex(m.response_at_hz([1.0])[0])), 3)   # -6 dB at the break
     0.5
 
     """
@@ -243,8 +243,12 @@ class LinearModel:
     rational: Any
     delay_s: float
 
-    def frequency_response(self, f: ArrayLike) -> NDArray[np.complex128]:
-        """Return the response at ``f`` [Hz] (python-control's evaluation times the delay)."""
+    def response_at_hz(self, f: ArrayLike) -> NDArray[np.complex128]:
+        """Return the response at ``f`` [Hz] (python-control's evaluation times the delay).
+
+        ``rational(2j * pi * f) * exp(-2j * pi * f * delay_s)``: python-control evaluates
+        :attr:`rational` at rad/s (``frequency_response(omega)``, ``rational(1j * omega)``).
+        """
         s = 2j * np.pi * np.asarray(f, dtype=float)
         return np.asarray(self.rational(s), dtype=complex).reshape(s.shape) * np.exp(
             -s * self.delay_s

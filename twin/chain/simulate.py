@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from twin.chain.config import MotionSystem, motion_system
+from twin.chain.config import MotionSystem, resolve
 from twin.chain.extensions import SensorFilterStream
 from twin.chain.imu import ImuRecord, ImuSpec, VirtualImu
 from twin.chain.jets import JetSignal
@@ -282,7 +282,7 @@ def prepare(
         A platform object to reuse (e.g. with an edited model); made from ``config`` if not.
 
     """
-    ms = motion_system(config) if isinstance(config, str) else config
+    ms = resolve(config)
     if not isinstance(seed, int | np.integer) or seed < 0:
         raise SignalError(f"seed must be an integer >= 0; got {seed!r}")
     check_physical(commands)

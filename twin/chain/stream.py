@@ -27,7 +27,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from twin.chain.block import Block
-from twin.chain.config import MotionSystem, motion_system
+from twin.chain.config import MotionSystem, resolve
 from twin.chain.limits import LimitReport
 from twin.chain.noise import NoiseStream
 from twin.chain.response import PlatformResponse
@@ -78,7 +78,7 @@ class ChainStream:
         noise_rate_hz: float = 819.2,
         report: LimitReport | None = None,
     ) -> None:
-        self.config = motion_system(config) if isinstance(config, str) else config
+        self.config = resolve(config)
         if self.config.platform != platform.platform:
             raise SignalError(
                 f"configuration {self.config.name!r} drives the {self.config.platform} platform, "

@@ -310,7 +310,7 @@ def _analyse(args: argparse.Namespace):
         return threshold.analyse_threshold(m, args.dof, fix), m.config
     w, h = omct.analyse_omct_point(m, args.dof)
     dof = DOF_NAMES[np.argmax(np.ptp(m.commands.values, axis=0))] if args.dof is None else args.dof
-    analytic = m.config.frequency_response([w / (2 * np.pi)])[:, dof_index(dof)]
+    analytic = m.config.response_at_hz([w / (2 * np.pi)])[:, dof_index(dof)]
     return omct.OmctResult(
         dof, np.array([w]), np.array([h]), analytic, m.source, m.source
     ), m.config
@@ -355,11 +355,11 @@ def _save(out: Path, test: str, result, payload: dict, config, bounds) -> None:
         tmp.write_text(json.dumps(payload, indent=2) + "\n", encoding="utf-8")
     png = str(out / f"{test}.png")
     if test == "df":
-        fig = result.plot(png, config=config)
+        fig = result.plot(path=png, config=config)
     elif test == "omct":
-        fig = result.plot(png, bounds=bounds)
+        fig = result.plot(path=png, bounds=bounds)
     else:
-        fig = result.plot(png)
+        fig = result.plot(path=png)
     plt.close(fig)
 
 

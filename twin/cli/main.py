@@ -106,8 +106,8 @@ def _cmd_compare(args: argparse.Namespace) -> int:
     cfg = common.configured(args.config, args)
     cmp = compare(cfg, dofs=args.dof or DOF_NAMES, progress=common.progress(args))
     if args.plot:
-        cmp.plot(args.plot)
-    print(cmp.to_json() if args.json else cmp.format_table())
+        cmp.plot(path=args.plot)
+    print(json.dumps(cmp.to_dict(), indent=2) if args.json else cmp.format_table())
     return 0
 
 

@@ -11,7 +11,6 @@ import numpy as np
 
 from twin.cli import common
 from twin.pilot import spread as spreads
-from twin.plotting import pyplot
 
 DEG2 = (180 / np.pi) ** 2
 #: Most runs of ``pilot run`` and per condition of ``pilot experiment fixed``
@@ -413,8 +412,7 @@ def _cmd_fixed(args: argparse.Namespace) -> int:
         r = run_experiment(runs=args.runs, seed=args.seed, progress=common.progress(args),
                            fit=True, scheduler=engine)  # fmt: skip
     if args.plot:
-        plt = pyplot()
-        plt.close(r.plot(args.plot))
+        r.plot(path=args.plot)
     print(json.dumps(r.to_dict(), indent=2) if args.json else r.format_table())
     return 0
 
@@ -447,10 +445,9 @@ def _cmd_subjects(args: argparse.Namespace) -> int:
             p = run_population(args.subjects, args.seed, common.progress(args), engine,
                                _adapted(args), spread=args.spread)  # fmt: skip
     if args.plot:
-        plt = pyplot()
-        plt.close(p.plot(args.plot))
+        p.plot(path=args.plot)
         plot = Path(args.plot)
-        plt.close(p.plot_conditions(str(plot.with_name(f"{plot.stem}-conditions.png"))))
+        p.plot_conditions(str(plot.with_name(f"{plot.stem}-conditions.png")))
     print(json.dumps(p.to_dict(), indent=2) if args.json else p.format_table())
     return 0
 
@@ -467,11 +464,10 @@ def _replication(args: argparse.Namespace) -> int:
     pooled = args.populations * args.subjects
     plan = design(results) if pooled >= MIN_POOL else None
     if args.plot:
-        plt = pyplot()
-        plt.close(rep.plot(args.plot))
+        rep.plot(path=args.plot)
         if plan is not None:
             plot = Path(args.plot)
-            plt.close(plan.plot(str(plot.with_name(f"{plot.stem}-subjects.png"))))
+            plan.plot(path=str(plot.with_name(f"{plot.stem}-subjects.png")))
     if args.json:  # the summary, and each population's ANOVA as a single one prints it
         per = [{"seed": r.seed, "anova": r.anova, "agreement": r.agreement()} for r in results]
         for entry, r in zip(per, results, strict=True):

@@ -23,7 +23,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from twin.agard.df import periodic_design
-from twin.chain.config import MotionSystem, motion_system
+from twin.chain.config import MotionSystem, resolve
 from twin.chain.imu import ImuSpec
 from twin.chain.simulate import MODELS, Run, default_imu, make_platform, prepare
 from twin.errors import RunFormatError, SignalError
@@ -349,7 +349,7 @@ def load_case(
     if config is None:
         nominal = measurements[0].config
     else:
-        nominal = motion_system(config) if isinstance(config, str) else config
+        nominal = resolve(config)
         if nominal.platform not in platforms:
             raise SignalError(
                 f"configuration {nominal.name!r} is of the {nominal.platform} platform; the runs "

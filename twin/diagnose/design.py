@@ -437,7 +437,7 @@ class Mimic:
             exts.append(make_extension(effect, names, theta[i : i + len(names)], self.dof))
             i += len(names)
         cfg = self.nominal.replace(extensions=(*self.nominal.extensions, *exts))
-        return cfg.frequency_response(f)[:, self.k]
+        return cfg.response_at_hz(f)[:, self.k]
 
     def fit(self, target: ComplexArray, lines: LineSet) -> FloatArray:
         """Return the parameters whose response is nearest ``target`` at ``lines``."""

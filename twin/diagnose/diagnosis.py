@@ -13,10 +13,10 @@ here, as it needs them)::
 
 from __future__ import annotations
 
-import json
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -52,10 +52,16 @@ from twin.diagnose.select import (
 from twin.diagnose.sensor_side import decide_side, side_text
 from twin.errors import SignalError, UsageError
 from twin.jsonable import plain
-from twin.plotting import finish, pyplot
+from twin.plotting import AxesArg, finish, subplots
 from twin.progress import ProgressFn
+from twin.results import frame, frd, pick
 from twin.run_checks import check_distinct, read_plausible_run
 from twin.runs import RecordedRun
+
+if TYPE_CHECKING:
+    import control
+    import pandas as pd
+    from matplotlib.figure import Figure
 
 
 @dataclass(eq=False)
@@ -98,11 +104,32 @@ class DofReport:
     findings: list[Finding]
     model: Model
 
-    def plot(self, path: str | None = None, max_hz: float = MAX_HZ):
+    def to_dict(self) -> dict[str, object]:
+        """Return the DOF's part of :meth:`Diagnosis.to_dict` (``nominal.dofs.DOF``)."""
+        return plain({"dof": self.dof, **self.to_json()})  # type: ignore[return-value]
+
+    def to_frame(self) -> pd.DataFrame:
+        """One row per excited line: measured over nominal gain and phase, significance."""
+        lo, hi = self.lines.ci_db()
+        return frame({
+            "frequency_hz": self.lines.f, "ratio_db": self.lines.db, "ratio_deg": self.lines.deg,
+            "ratio_db_low": lo, "ratio_db_high": hi, "ratio_deg_ci": self.lines.ci_deg(),
+            "statistic": self.lines.statistic, "significant": self.lines.significant,
+        })  # fmt: skip
+
+    def to_frd(self) -> control.FrequencyResponseData:
+        """Return the measured over nominal describing function at the lines."""
+        return frd(self.lines.ratio, self.lines.f, f"{self.dof} measured / nominal")
+
+    def plot(
+        self, ax: AxesArg = None, *, path: str | None = None, max_hz: float = MAX_HZ
+    ) -> Figure:
         """Plot the describing-function ratio measured / nominal, and the extended model's.
 
         Parameters
         ----------
+        ax : sequence of two Axes, optional
+            Where to draw: measured over nominal gain and phase; a new figure by default.
         path : str, optional
             Save the figure here.
         max_hz : float
@@ -113,8 +140,7 @@ class DofReport:
         matplotlib.figure.Figure
 
         """
-        plt = pyplot()
-        fig, (a1, a2) = plt.subplots(2, 1, figsize=(7, 6), sharex=True)
+        fig, (a1, a2) = subplots(ax, 2, 1, figsize=(7, 6), sharex=True)
         lo, hi = self.lines.ci_db()
         db = self.lines.db
         a1.errorbar(self.lines.f, db, yerr=[db - lo, hi - db], fmt="o",
@@ -387,19 +413,33 @@ class Diagnosis:
         """
         return plain(self._document())  # type: ignore[return-value]
 
-    def to_json(self) -> str:
-        """Return :meth:`to_dict` as JSON text (alias)."""
-        return json.dumps(self.to_dict(), indent=2)
+    def to_frame(self) -> pd.DataFrame:
+        """One row per finding: effect, DOFs, parameters, BIC improvement, ambiguity."""
+        import pandas as pd
 
-    def to_json_safe(self) -> dict[str, object]:
-        """Alias of :meth:`to_dict` (kept for existing callers)."""
-        return self.to_dict()
+        rows = [{"effect": f["effect"], "dofs": ",".join(f["dofs"]),
+                 "parameters": f["parameters"], "delta_bic": f["evidence"].get("delta_bic"),
+                 "ambiguous": f["ambiguous"]}
+                for f in self.to_dict()["findings"]]  # type: ignore[union-attr]  # fmt: skip
+        return pd.DataFrame(rows, columns=["effect", "dofs", "parameters", "delta_bic",
+                                           "ambiguous"])  # fmt: skip
 
-    def plot(self, path: str | None = None, dof: str | None = None):
+    def to_frd(self, dof: str | None = None) -> control.FrequencyResponseData:
+        """One DOF's measured over nominal describing function (:meth:`DofReport.to_frd`).
+
+        ``dof`` may be left out where one DOF was analysed.
+        """
+        return self.dofs[pick(dof, self.dofs, "the diagnosis")].to_frd()
+
+    def plot(
+        self, ax: AxesArg = None, *, path: str | None = None, dof: str | None = None
+    ) -> Figure:
         """Plot one DOF's describing-function ratios (see :meth:`DofReport.plot`).
 
         Parameters
         ----------
+        ax : sequence of two Axes, optional
+            Where to draw: measured over nominal gain and phase; a new figure by default.
         path : str, optional
             Save the figure here.
         dof : str, optional
@@ -412,7 +452,7 @@ class Diagnosis:
         """
         if dof is not None and dof not in self.dofs:
             raise UsageError(f"{dof!r} was not analysed; analysed: {', '.join(self.dofs)}")
-        return self.dofs[dof or next(iter(self.dofs))].plot(path, self.max_hz)
+        return self.dofs[dof or next(iter(self.dofs))].plot(ax, path=path, max_hz=self.max_hz)
 
 
 def check_options(max_hz: float, imu_noise: float | None = None) -> None:

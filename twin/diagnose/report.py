@@ -17,7 +17,6 @@ from twin.diagnose.residual_figure import plot_residual
 from twin.diagnose.select import describe_alternative, negligible_text, same_response_text
 from twin.diagnose.sensor_side import side_text
 from twin.lifecycle import replacing_dir
-from twin.plotting import pyplot
 
 #: What a payload's factor means, with and without the legs' forces among the evidence.
 PAYLOAD_IMU = ("The factor is on the cabin's mass and inertia together: from the IMU alone a "
@@ -223,10 +222,9 @@ def _dof_section(dof: str, r: DofReport) -> list[str]:
 
 
 def _figures(d: Diagnosis, folder: Path) -> None:
-    plt = pyplot()
     for dof, r in d.dofs.items():
-        plt.close(r.plot(str(folder / f"df_{dof}.png"), d.max_hz))
-        plt.close(plot_residual(d, dof, str(folder / f"residual_{dof}.png")))
+        r.plot(path=str(folder / f"df_{dof}.png"), max_hz=d.max_hz)
+        plot_residual(d, dof, str(folder / f"residual_{dof}.png"))
 
 
 def _recording(d: Diagnosis, path: Path) -> None:

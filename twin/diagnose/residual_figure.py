@@ -16,7 +16,7 @@ from numpy.typing import NDArray
 
 from twin.diagnose.residuals import segment
 from twin.frames import dof_index
-from twin.plotting import finish, pyplot
+from twin.plotting import finish, subplots
 
 FloatArray = NDArray[np.float64]
 #: Bins either side of a line left out of the between-lines spectrum: the Hann taper's own
@@ -54,8 +54,7 @@ def plot_residual(d, dof: str, path: str | None = None):
         near[np.clip(line_bins + k, 0, seg.f.size - 1)] = True
     between = np.flatnonzero(~near)
     unit = unit_of(dof)
-    plt = pyplot()
-    fig, (top, bottom) = plt.subplots(2, 1, figsize=(7, 6.5), sharex=True)
+    fig, (top, bottom) = subplots(None, 2, 1, figsize=(7, 6.5), sharex=True)
     models = (("nominal", ch.nominal, "C0", "o"), ("extended", r.model.predict(ch), "C1", "s"))
     for label, pred, colour, marker in models:
         resid = seg.measured - seg.spectrum(pred)

@@ -52,7 +52,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy import optimize
 
-from twin.chain.config import MotionSystem, motion_system
+from twin.chain.config import MotionSystem, resolve
 from twin.chain.noise import HIGHPASS_ORDER, shaping_response
 from twin.errors import SignalError
 from twin.pilot.forcing import ForcingFunction, pitch_task
@@ -134,7 +134,7 @@ class Task:
     @classmethod
     def pitch(cls, config: MotionSystem | str) -> Task:
         """Return the Chapter 6 pitch task through ``config``."""
-        cfg = motion_system(config) if isinstance(config, str) else config
+        cfg = resolve(config)
         fd, ft = pitch_task()
         return cls(cfg, fd, ft)
 

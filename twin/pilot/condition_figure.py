@@ -11,13 +11,17 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
 from scipy import stats
 
-from twin.plotting import pyplot, save
+from twin.plotting import AxesArg, save, subplots
 from twin.thesis import TABLE_6_3
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 FloatArray = NDArray[np.float64]
 #: Grey levels of the stacked variance parts (the thesis: t light, d dark, r white).
@@ -115,7 +119,13 @@ def draw_panel(ax, panel: Panel) -> None:
         ax.legend(fontsize=6, loc="upper right")
 
 
-def plot_conditions(panels: Sequence[Panel], title: str, path: str | None = None, columns: int = 4):
+def plot_conditions(
+    panels: Sequence[Panel],
+    title: str,
+    path: str | None = None,
+    columns: int = 4,
+    ax: AxesArg = None,
+) -> Figure:
     """Draw ``panels`` in a grid (Fig 6.5-6.9 style) and return the figure.
 
     Parameters
@@ -128,24 +138,28 @@ def plot_conditions(panels: Sequence[Panel], title: str, path: str | None = None
         Save the figure here.
     columns : int
         Panels per row.
+    ax : sequence of Axes, optional
+        Axes to draw on, ``columns`` per row, in row order (the last row filled with unused
+        ones); a new figure by default.
 
     """
-    plt = pyplot()
     rows = -(-len(panels) // columns)
-    fig, axes = plt.subplots(rows, columns, figsize=(3.4 * columns, 3.0 * rows + 0.6),
-                             squeeze=False)  # fmt: skip
-    for ax, panel in zip(axes.flat, panels, strict=False):
-        draw_panel(ax, panel)
-    for ax in list(axes.flat)[len(panels) :]:
-        ax.set_visible(False)
+    own = ax is None
+    fig, axes = subplots(ax, rows, columns, figsize=(3.4 * columns, 3.0 * rows + 0.6),
+                         squeeze=False, panels=f"{columns} per row")  # fmt: skip
+    for a, panel in zip(axes.flat, panels, strict=False):
+        draw_panel(a, panel)
+    for a in list(axes.flat)[len(panels) :]:
+        a.set_visible(False)
     handles = [
         axes.flat[0].errorbar([], [], yerr=[], fmt="o", color="k", mfc=face, capsize=3)
         for face in ("white", "k")
     ]
     fig.legend(handles, ["filter - (SRS dynamics)", "1 Hz filter (MPI)"], loc="upper right",
                fontsize=8, ncol=1)  # fmt: skip
-    fig.suptitle(title, fontsize=9, x=0.02, ha="left")
-    fig.tight_layout(rect=(0, 0, 1, 1 - 0.5 / fig.get_figheight()))
+    if own:  # the caller's figure is theirs to title and lay out
+        fig.suptitle(title, fontsize=9, x=0.02, ha="left")
+        fig.tight_layout(rect=(0, 0, 1, 1 - 0.5 / fig.get_figheight()))
     if path:
         save(fig, path, dpi=110)
     return fig

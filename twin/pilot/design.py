@@ -45,7 +45,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -54,7 +54,14 @@ from scipy import stats
 from twin.errors import SignalError
 from twin.pilot.population import FACTORS, MEASURES, PopulationResult
 from twin.pilot.replication import ALPHA, THESIS_SUBJECTS, agreement_probability, alike
+from twin.results import frame
 from twin.thesis import TABLES_6_4_TO_6_7
+
+if TYPE_CHECKING:
+    import pandas as pd
+    from matplotlib.figure import Figure
+
+    from twin.plotting import AxesArg
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -442,20 +449,40 @@ class Design:
         ]
         return "\n".join(lines)
 
-    def plot(self, path: str | None = None) -> Any:
+    def to_frame(self) -> pd.DataFrame:
+        """One row per main effect (measure and factor): the ``design`` of :meth:`to_dict`."""
+        design = self.to_dict()["design"]
+        return frame(
+            {"measure": m, "factor": f, **v} for m, by in design.items() for f, v in by.items()
+        )
+
+    def plot(self, ax: AxesArg = None, *, path: str | None = None) -> Figure:
         """Agreement against subjects per filter effect, the twin's beside the thesis'.
 
         One panel per filter effect and one for the acceptance: the twin's curve with its
         5-95 % band, the thesis' conclusions as the truth (dashed) and the flown share (dot),
         saved to ``path`` if given; returns the matplotlib figure.
+
+        Parameters
+        ----------
+        ax : sequence of Axes, optional
+            Where to draw: one per filter effect and one for the acceptance, four per
+            row, in row order (the count :attr:`panels` gives); a new figure by default.
+        path : str, optional
+            Save the figure here.
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+
         """
-        from twin.plotting import finish, pyplot
+        from twin.plotting import finish, subplots
 
         panels = [k for k, (_, f) in enumerate(self.effects) if f == "filter"]
         cols = 4
         rows = -(-(len(panels) + 1) // cols)
-        fig, axes = pyplot().subplots(rows, cols, figsize=(13, 2.4 * rows + 0.6), sharex=True,
-                                      sharey=True, squeeze=False)  # fmt: skip
+        fig, axes = subplots(ax, rows, cols, figsize=(13, 2.4 * rows + 0.6), sharex=True,
+                             sharey=True, squeeze=False)  # fmt: skip
         n = np.asarray(self.sizes)
         flat = axes.ravel()
         shown = self._flown_size() is not None

@@ -13,6 +13,7 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -23,8 +24,15 @@ from twin.pilot.forcing import pitch_task
 from twin.pilot.mle import fit_pitch_pilot
 from twin.pilot.pitch import PitchPilot, open_loops, simulate_pitch, variance_decomposition
 from twin.progress import ProgressFn
+from twin.results import frame
 from twin.tasks.engine import Engine, using
 from twin.thesis import TABLE_6_3
+
+if TYPE_CHECKING:
+    import pandas as pd
+    from matplotlib.figure import Figure
+
+    from twin.plotting import AxesArg
 
 FACTORS = ("filter", "delay", "noise")
 MEASURES = ("var_e", "var_u", "var_theta", "crossover_d", "phase_margin_d", "crossover_t",
@@ -66,11 +74,18 @@ class ExperimentResult:
         """JSON-ready result: ``conditions`` and ``effects``."""
         return {"conditions": self.conditions, "effects": self.effects}
 
-    def plot(self, path: str | None = None):
+    def to_frame(self) -> pd.DataFrame:
+        """One row per condition: its measures (nested values as ``a.b``)."""
+        return frame({"condition": n, **v} for n, v in self.conditions.items())
+
+    def plot(self, ax: AxesArg = None, *, path: str | None = None) -> Figure:
         """Measures per condition as Fig 6.5-6.9: variances, open loops, estimated parameters.
 
         Parameters
         ----------
+        ax : sequence of 16 Axes, optional
+            Where to draw: the panels of the measures, four per row, in row order; a new
+            figure by default.
         path : str, optional
             Save the figure here.
 
@@ -109,6 +124,7 @@ class ExperimentResult:
             "(bars: target / disturbance / remnant parts);\nopen loops of the pilot model; "
             "parameters estimated from each condition's first run",
             path,
+            ax=ax,
         )
 
     def format_table(self) -> str:

@@ -22,6 +22,7 @@ import dataclasses
 import itertools
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
@@ -35,8 +36,13 @@ from twin.pilot.pitch import PitchPilot, aircraft, motion_response
 from twin.pilot.profile import inward_point, likelihood_interval, profile_fit
 from twin.pilot.profile_wald import profile_wald_sd
 from twin.pilot.selection import selected_bounds
-from twin.plotting import finish, pyplot
+from twin.plotting import AxesArg, finish, subplots
 from twin.progress import ProgressFn
+from twin.results import frame
+
+if TYPE_CHECKING:
+    import pandas as pd
+    from matplotlib.figure import Figure
 
 FloatArray = NDArray[np.float64]
 #: p of the fit's chi-square below which the model is said not to describe the data.
@@ -186,11 +192,21 @@ class PilotFit:
         lo, hi = self.intervals[name]
         return lo <= value <= hi
 
-    def plot(self, path: str | None = None):
+    def to_frame(self) -> pd.DataFrame:
+        """One row per parameter: estimate, reported sd, and whether it is identifiable."""
+        est = dataclasses.asdict(self.pilot)
+        return frame([{"parameter": k, "estimate": est.get(k), "sd": sd,
+                       "sd_at_estimate": (self.crlb_at_estimate or {}).get(k),
+                       "identifiable": k not in self.unidentifiable}
+                      for k, sd in self.crlb.items()])  # fmt: skip
+
+    def plot(self, ax: AxesArg = None, *, path: str | None = None) -> Figure:
         """Estimated parameters with their reported sd (``crlb``), relative to the estimate.
 
         Parameters
         ----------
+        ax : Axes, optional
+            Where to draw: the parameters; a new figure by default.
         path : str, optional
             Save the figure here.
 
@@ -199,11 +215,10 @@ class PilotFit:
         matplotlib.figure.Figure
 
         """
-        plt = pyplot()
         names = list(self.crlb)
         values = np.array([getattr(self.pilot, n) for n in names], dtype=float)
         rel = np.array([self.crlb[n] for n in names]) / np.where(values == 0, np.nan, abs(values))
-        fig, ax = plt.subplots(figsize=(7, 3.5))
+        fig, ax = subplots(ax, figsize=(7, 3.5))
         ax.bar(names, rel * 100)
         ax.set_xlabel("parameter (Eq 6.5-6.7)")
         ax.set_ylabel("reported sd / |estimate| [%]")

@@ -12,6 +12,7 @@ study runs on one process or a Dask cluster with the same result.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
@@ -23,9 +24,14 @@ from twin.pilot.fit import fit_pilot, parameter_errors
 from twin.pilot.forcing import roll_task
 from twin.pilot.loop import remnant_scale_for, simulate_loop
 from twin.pilot.model import RollPilot
-from twin.plotting import finish, pyplot
+from twin.plotting import AxesArg, finish, subplots
 from twin.progress import ProgressFn
+from twin.results import frame
 from twin.tasks.engine import Engine, using
+
+if TYPE_CHECKING:
+    import pandas as pd
+    from matplotlib.figure import Figure
 
 FloatArray = NDArray[np.float64]
 ComplexArray = NDArray[np.complex128]
@@ -105,11 +111,21 @@ class MonteCarloResult:
             }
         return out
 
-    def plot(self, path: str | None = None):
+    def to_frame(self) -> pd.DataFrame:
+        """One row per input frequency: the standard deviations of ``|H|`` per method."""
+        d = self.to_dict()
+        cols: dict[str, object] = {"omega_rad_s": self.omega_rad_s}
+        for resp in ("pe", "px"):
+            cols |= {f"{resp}_{k}": v for k, v in d[resp].items()}  # type: ignore[union-attr]
+        return frame(cols)
+
+    def plot(self, ax: AxesArg = None, *, path: str | None = None) -> Figure:
         """Plot the standard deviation of ``|H|`` over the runs: FC against ARX (§2.5).
 
         Parameters
         ----------
+        ax : sequence of two Axes, optional
+            Where to draw: ``pe`` and ``px``; a new figure by default.
         path : str, optional
             Save the figure here.
 
@@ -118,8 +134,7 @@ class MonteCarloResult:
         matplotlib.figure.Figure
 
         """
-        plt = pyplot()
-        fig, axes = plt.subplots(1, 2, figsize=(9, 4), sharey=True)
+        fig, axes = subplots(ax, 1, 2, figsize=(9, 4), sharey=True)
         w = self.omega_rad_s
         for ax, resp in zip(axes, ("pe", "px"), strict=True):
             ax.loglog(w, self.sample_std_mag("fc", resp), "o", label="FC (Monte-Carlo)")

@@ -30,7 +30,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy import signal
 
-from twin.chain.config import MotionSystem, motion_system
+from twin.chain.config import MotionSystem, resolve
 from twin.chain.physics import FullPlatform
 from twin.chain.reduced import ReducedPlatform
 from twin.chain.response import PlatformResponse
@@ -166,7 +166,7 @@ def aircraft(w: ArrayLike) -> ComplexArray:
 
 def motion_response(config: MotionSystem, w: ArrayLike) -> ComplexArray:
     """Felt over simulated pitch attitude: the configuration's filter and delay (Eq 5.11)."""
-    return config.frequency_response(np.asarray(w, dtype=float) / (2 * np.pi))[:, PITCH]
+    return config.response_at_hz(np.asarray(w, dtype=float) / (2 * np.pi))[:, PITCH]
 
 
 @dataclass(frozen=True)
@@ -292,7 +292,7 @@ def simulate_pitch(
         delay below half a sample then acts one sample late).
 
     """
-    cfg = motion_system(config) if isinstance(config, str) else config
+    cfg = resolve(config)
     loop = pitch_loop(pilot, cfg, runs, seed, remnant_scale, rate_hz, model, progress,
                       feedthrough)  # fmt: skip
     out, start, t = fly(loop), loop.start, loop.t

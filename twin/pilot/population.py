@@ -57,7 +57,7 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Iterator
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -82,8 +82,15 @@ from twin.pilot.adapt import (
 from twin.pilot.pitch import PitchPilot, open_loops
 from twin.pilot.spread import DEFAULT_SPREAD, VISUAL_DELAY_SD, Spread, checked
 from twin.progress import ProgressFn
+from twin.results import frame
 from twin.tasks.engine import Engine, using
 from twin.thesis import TABLE_6_3, TABLES_6_4_TO_6_7
+
+if TYPE_CHECKING:
+    import pandas as pd
+    from matplotlib.figure import Figure
+
+    from twin.plotting import AxesArg
 
 FloatArray = NDArray[np.float64]
 
@@ -443,11 +450,17 @@ class PopulationResult:
                 )
         return "\n".join(lines)
 
-    def plot(self, path: str | None = None):
+    def to_frame(self) -> pd.DataFrame:
+        """One row per subject and condition: the measures (:attr:`rows`)."""
+        return frame(self.rows)
+
+    def plot(self, ax: AxesArg = None, *, path: str | None = None) -> Figure:
         """Predicted vs thesis main effects: signed F per measure and factor.
 
         Parameters
         ----------
+        ax : sequence of three Axes, optional
+            Where to draw: one per factor; a new figure by default.
         path : str, optional
             Where to save the figure.
 
@@ -459,7 +472,7 @@ class PopulationResult:
         from twin.plotting import finish
 
         measures = list(self.anova)
-        fig, axes = effect_axes(measures, 4.5)
+        fig, axes = effect_axes(measures, 4.5, ax=ax)
         y = np.arange(len(measures))
         for ax, f in zip(axes, FACTORS, strict=True):
             pred = [signed_f(self.anova[m][f]["F"], self.anova[m][f]["direction"])
@@ -519,7 +532,10 @@ def signed_log(f: ArrayLike) -> FloatArray:
 
 
 def effect_axes(
-    measures: list[str], height: float, xlabel: str = "sign(effect) log10(1 + F)"
+    measures: list[str],
+    height: float,
+    xlabel: str = "sign(effect) log10(1 + F)",
+    ax: AxesArg = None,
 ) -> tuple[Any, Any]:
     """Return a figure with one axis per factor of :data:`FACTORS`, measures down the side.
 
@@ -531,16 +547,19 @@ def effect_axes(
         Figure height [in].
     xlabel : str
         What the x axes show (:func:`signed_log` of F by default); they share one scale.
+    ax : sequence of Axes, optional
+        One Axes per factor to draw on; a new figure by default.
 
     Returns
     -------
     (matplotlib.figure.Figure, array of matplotlib.axes.Axes)
 
     """
-    from twin.plotting import pyplot
+    from twin.plotting import subplots
 
-    fig, axes = pyplot().subplots(1, len(FACTORS), figsize=(13, height), sharey=True,
-                                  sharex=True)  # fmt: skip
+    fig, axes = subplots(
+        ax, 1, len(FACTORS), figsize=(13, height), sharey=True, sharex=True, panels="one per factor"
+    )
     for ax, f in zip(axes, FACTORS, strict=True):
         ax.axvline(0, color="k", lw=0.5)
         ax.set_title(f"{f} ({FACTORS[f][1]} vs {FACTORS[f][0]})", fontsize=9)

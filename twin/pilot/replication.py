@@ -50,7 +50,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -77,8 +77,15 @@ from twin.pilot.population import (
 )
 from twin.pilot.spread import DEFAULT_SPREAD, Spread
 from twin.progress import ProgressFn
+from twin.results import frame
 from twin.tasks.engine import Engine, using
 from twin.thesis import TABLES_6_4_TO_6_7
+
+if TYPE_CHECKING:
+    import pandas as pd
+    from matplotlib.figure import Figure
+
+    from twin.plotting import AxesArg
 
 FloatArray = NDArray[np.float64]
 
@@ -426,11 +433,17 @@ class Replication:
                          f"thesis' size; with {self.subjects} it is approximate)")  # fmt: skip
         return "\n".join(lines)
 
-    def plot(self, path: str | None = None) -> Any:
+    def to_frame(self) -> pd.DataFrame:
+        """One row per main effect (:meth:`EffectReplication.to_dict`)."""
+        return frame(e.to_dict() for e in self.effects)
+
+    def plot(self, ax: AxesArg = None, *, path: str | None = None) -> Figure:
         """Standardised effects over populations (5-95 % and median) beside the thesis'.
 
         Parameters
         ----------
+        ax : sequence of three Axes, optional
+            Where to draw: one per factor; a new figure by default.
         path : str, optional
             A PNG (or any matplotlib format) to write the figure to.
 
@@ -442,8 +455,8 @@ class Replication:
         from twin.plotting import finish
 
         measures = list(dict.fromkeys(e.measure for e in self.effects))
-        fig, axes = effect_axes(measures, 0.35 * len(measures) + 2,
-                                "standardised effect d_z = sign sqrt(F / subjects)")  # fmt: skip
+        label = "standardised effect d_z = sign sqrt(F / subjects)"
+        fig, axes = effect_axes(measures, 0.35 * len(measures) + 2, label, ax)
         crit = float(stats.t.ppf(1 - ALPHA / 2, self.subjects - 1) / np.sqrt(self.subjects))
         for ax, factor in zip(axes, FACTORS, strict=True):
             for i, m in enumerate(measures):

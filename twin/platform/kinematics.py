@@ -19,6 +19,7 @@ Examples
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -27,6 +28,13 @@ from scipy.optimize import brentq
 from twin.errors import ForwardKinematicsError, OutOfStrokeError, PoseError
 from twin.frames import DOF_NAMES, angular_motion, euler_rate_matrix, rotation_matrix
 from twin.platform.geometry import Geometry
+from twin.results import frame
+
+if TYPE_CHECKING:
+    import pandas as pd
+    from matplotlib.figure import Figure
+
+    from twin.plotting import AxesArg
 
 FloatArray = NDArray[np.float64]
 
@@ -229,11 +237,20 @@ class ForwardResult:
             "residual_m": float(self.residual),
         }
 
-    def plot(self, path: str | None = None):
+    def to_frame(self) -> pd.DataFrame:
+        """One row per solved sample: the pose (m, rad) and the iterations it took."""
+        pose = np.atleast_2d(np.asarray(self.pose, dtype=float))
+        cols: dict[str, object] = {d: pose[:, k] for k, d in enumerate(DOF_NAMES)}
+        cols["iterations"] = np.broadcast_to(self.iterations_per_sample, pose.shape[:1])
+        return frame(cols)
+
+    def plot(self, ax: AxesArg = None, *, path: str | None = None) -> Figure:
         """Plot the solved poses per DOF against the sample number (translations and angles).
 
         Parameters
         ----------
+        ax : sequence of two Axes, optional
+            Where to draw: translations and angles; a new figure by default.
         path : str, optional
             Save the figure here.
 
@@ -242,11 +259,10 @@ class ForwardResult:
         matplotlib.figure.Figure
 
         """
-        from twin.plotting import finish, pyplot
+        from twin.plotting import finish, subplots
 
-        plt = pyplot()
         pose = np.asarray(self.pose).reshape(-1, 6)
-        fig, (ax_t, ax_r) = plt.subplots(2, 1, figsize=(6, 5), sharex=True)
+        fig, (ax_t, ax_r) = subplots(ax, 2, 1, figsize=(6, 5), sharex=True)
         for k, name in enumerate(DOF_NAMES):
             ax = ax_t if k < 3 else ax_r
             ax.plot(pose[:, k] if k < 3 else np.degrees(pose[:, k]), ".-", label=name)

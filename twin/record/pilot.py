@@ -74,12 +74,11 @@ def _open_loop_figure(pilot, cfg, w, loops):
     """Bode plot of the open loops [rad/s] with crossovers and phase margins marked."""
     from twin.measurement.describing_function import phase_deg
     from twin.pilot.pitch import open_loops
-    from twin.plotting import pyplot
+    from twin.plotting import subplots
 
     names = {"d": "disturbance", "t": "target"}
     ol = open_loops(pilot, cfg)
-    plt = pyplot()
-    fig, (ax_g, ax_p) = plt.subplots(2, 1, figsize=(6.5, 6), sharex=True)
+    fig, (ax_g, ax_p) = subplots(None, 2, 1, figsize=(6.5, 6), sharex=True)
     for k, h in loops.items():
         wc, pm = (ol.crossover_d, ol.phase_margin_d) if k == "d" else (
             ol.crossover_t, ol.phase_margin_t)  # fmt: skip

@@ -301,7 +301,7 @@ class Recorder:
                         DOF_COLOURS[dof_index(dof)], (low, high, dphase))]  # fmt: skip
         if config is not None:
             fa = dense_frequencies(f)
-            h = config.transfer_function(dof).frequency_response(fa)  # python-control
+            h = config.transfer_function(dof).response_at_hz(fa)  # python-control
             name = "eq_5_11" if not config.extensions else "model_with_extensions"
             curves.append(bode_curve(name, fa, h, (60, 60, 60)))
         else:

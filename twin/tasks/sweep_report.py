@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 
 from twin.lifecycle import replacing_dir
-from twin.plotting import finish, pyplot
+from twin.plotting import finish, subplots
 from twin.tasks.sweep import SweepError, SweepResult
 
 #: Table formats, by file suffix.
@@ -74,7 +74,7 @@ def write_sweep(result: SweepResult, out: str | Path, table_format: str = "csv")
             json.dumps(manifest, indent=2, default=_plain) + "\n", encoding="utf-8"
         )
         if len(table):
-            pyplot().close(plot_sweep(result, tmp / "sweep.png"))
+            plot_sweep(result, tmp / "sweep.png")
     return out / name
 
 
@@ -89,12 +89,13 @@ def plot_sweep(result: SweepResult, path: str | Path | None = None):
 
 
 def _plot_df(result: SweepResult, path):
-    plt = pyplot()
     dofs = list(dict.fromkeys(p["dof"] for p in result.points))
-    fig, axes = plt.subplots(2, len(dofs), figsize=(4.5 * len(dofs) + 1, 6.5), sharex=True,
-                             squeeze=False)  # fmt: skip
+    fig, axes = subplots(None, 2, len(dofs), figsize=(4.5 * len(dofs) + 1, 6.5), sharex=True,
+                         squeeze=False)  # fmt: skip
     others = [a for a in result.grid.axes if a != "dof"]
-    colours = plt.get_cmap("viridis")
+    from matplotlib import colormaps
+
+    colours = colormaps["viridis"]
     for j, dof in enumerate(dofs):
         mine = [(p, r) for p, r in zip(result.points, result.results, strict=True)
                 if p["dof"] == dof and r is not None]  # fmt: skip
@@ -132,8 +133,7 @@ PILOT_PANELS = (
 
 
 def _plot_pilot(result: SweepResult, path):
-    plt = pyplot()
-    fig, axes = plt.subplots(2, 3, figsize=(12, 6.5))
+    fig, axes = subplots(None, 2, 3, figsize=(12, 6.5))
     names = list(result.grid.axes) or ["config"]
     x_axis, others = names[0], names[1:]
     xs = list(dict.fromkeys(p[x_axis] for p in result.points))
