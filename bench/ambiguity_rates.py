@@ -83,7 +83,7 @@ CLEAN_SEEDS = 90_000
 
 def _designed(h: Hidden, old: list[Path], d: Diagnosis, work: Path) -> dict[str, object]:
     """Design the next run of an ambiguous diagnosis, play it through the truth, judge again."""
-    write_report(d, work / "diagnosis", figures=False, rrd=False)
+    write_report(d, work / "diagnosis", figures=False)
     plan = design_from(work / "diagnosis")
     new = play(h.truth, h.config, plan.signal, work / "designed", 7919 * h.seed + 3, imu=h.imu)
     again = diagnose([*old, new], seed=h.seed)

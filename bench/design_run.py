@@ -30,7 +30,7 @@ def main() -> None:
     truth = mpi.replace(extensions=(Extension("delay", {"extra_delay_s": 0.020}, ("heave",)),))
     runs = record_runs(truth, mpi, "heave", tmp / "runs", 3, signals=(2,))
     d = diagnose(runs, seed=3)
-    write_report(d, tmp / "diag", figures=False, rrd=False)
+    write_report(d, tmp / "diag", figures=False)
     alternatives = len(d.findings[0].evidence.get("alternatives") or [])
     t0 = time.perf_counter()
     design = design_from(tmp / "diag")

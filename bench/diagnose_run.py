@@ -31,6 +31,7 @@ from twin.diagnose.hidden import record_runs
 from twin.diagnose.report import write_report
 from twin.platform.payload import Payload
 from twin.platform.platform_physics import PlatformPhysics
+from twin.record.diagnosis import record_diagnosis
 from twin.runs import read_run
 
 #: Goals [s] per model for one 60 s run.
@@ -46,7 +47,9 @@ def main():
     duration = read_run(run[0]).commands.duration
     for model in ("reduced", "full"):
         d, t_diagnose = _timed(lambda m=model: diagnose(run, model=m))
-        _, t_report = _timed(lambda m=model, d=d: write_report(d, tmp / f"report-{m}"))
+        _, t_report = _timed(
+            lambda m=model, d=d: write_report(d, tmp / f"report-{m}", recording=record_diagnosis)
+        )
         goal = f"goal <= {GOALS[model]:g} s"
         print(f"diagnose one {duration:.0f} s run, {model:7s} model: {t_diagnose:5.2f} s "
               f"({goal}), report {t_report:4.2f} s; found: {_found(d)}")  # fmt: skip

@@ -8,10 +8,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from twin.agard.df import analyse_df, periodic_design
+from twin.agard.df import analyse_df
 from twin.chain.config import motion_system
 from twin.errors import RunFormatError, SignalError
 from twin.measurement.measure import Bench, from_run
+from twin.measurement.periodic import periodic_design
 from twin.signals import describing_signal
 
 G = 9.80665

@@ -257,9 +257,12 @@ def test_sweep_cli_writes_table_points_manifest_and_figure(tmp_path, capsys):
 def test_agard_report_dofs_as_tasks_equal_one_session(cluster, tmp_path):
     from twin.agard.report import write_report
     from twin.measurement.measure import Bench, configure
+    from twin.record import bench_recorder
 
     bench = Bench(configure("srs"), "reduced", 0)
-    alone = write_report(bench, ["heave", "pitch"], tmp_path / "a", rrd=str(tmp_path / "a.rrd"))
+    alone = write_report(
+        bench, ["heave", "pitch"], tmp_path / "a", bench_recorder(bench, tmp_path / "a.rrd")
+    )
     spread = write_report(bench, ["heave", "pitch"], tmp_path / "b", scheduler=cluster)
     assert json.dumps(alone) == json.dumps(spread)
     assert (tmp_path / "a" / "summary.md").read_text() == (

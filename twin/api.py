@@ -187,8 +187,11 @@ def session(
     """
     from twin.agard.session import Session
     from twin.measurement.measure import Bench
+    from twin.record import bench_recorder
 
-    return Session(Bench(resolve(config), model, seed, imu), out, rrd, progress)
+    bench = Bench(resolve(config), model, seed, imu)
+    recorder = bench_recorder(bench, rrd) if rrd is not None else None
+    return Session(bench, out, recorder, progress)
 
 
 def describing_function(

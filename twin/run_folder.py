@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from contextlib import nullcontext
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
@@ -23,11 +23,31 @@ from twin.trajectory import interp_columns
 
 if TYPE_CHECKING:
     from twin.chain.config import MotionSystem
+    from twin.chain.imu import ImuRecord
+    from twin.chain.response import PlatformResponse
     from twin.chain.simulate import Run, Simulation
-    from twin.record import Recorder
 
 #: Progress messages of :func:`execute` per run (at most).
 PROGRESS_STEPS = 10
+
+
+class RunRecorder(Protocol):
+    """Where a run's chunks go as they are simulated, besides its folder.
+
+    A Rerun recording (:class:`twin.record.Recorder`) is one; the caller builds it and
+    hands it to :func:`execute` or to an AGARD session (:class:`twin.agard.session.Session`).
+    """
+
+    def log(
+        self, response: PlatformResponse, imu: ImuRecord | None = None, offset_s: float = 0.0
+    ) -> None:
+        """Take one chunk of a run, its times shifted by ``offset_s`` [s]."""
+
+    def close(self) -> None:
+        """Finish the recording."""
+
+    def abort(self) -> None:
+        """Delete a partial recording."""
 
 
 def signal_meta(sig: DescribingSignal | StepSignal) -> dict[str, object]:
@@ -126,7 +146,7 @@ def execute(
     meta: dict | None = None,
     folder: Path | None = None,
     overwrite: bool = False,
-    recorder: Recorder | None = None,
+    recorder: RunRecorder | None = None,
     progress: ProgressFn | None = None,
     offset_s: float = 0.0,
 ) -> Simulation:
@@ -142,8 +162,8 @@ def execute(
         Destination ``twin-run/1`` folder (written atomically by :class:`~twin.runs.RunWriter`).
     overwrite : bool
         Replace an existing folder.
-    recorder : Recorder, optional
-        Rerun sink.
+    recorder : RunRecorder, optional
+        Where each chunk goes as well (a Rerun recording); the caller closes it.
     progress : callable, optional
         Called with a message about every tenth of the run.
     offset_s : float

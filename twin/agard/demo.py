@@ -4,20 +4,21 @@ Pitch and heave, signals 1 and 2, on the MPI twin (full MuJoCo model and reduced
 the SRS twin (full). Prints a short table (fitted delay against the configured one, worst gain
 and phase difference from Eq 5.11 at the lines whose signal-to-noise ratio is at least 20 dB),
 and writes Bode figures, the results as JSON and one Rerun recording per bench into the
-output folder.
+output folder (given a way to record: :func:`twin.record.bench_recorder`).
 """
 
 from __future__ import annotations
 
 import json
 import threading
+from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import numpy as np
 
 from twin.agard.df import DfResult, draw_bode, run_df
-from twin.agard.session import Session
+from twin.agard.session import Session, SessionRecorder
 from twin.measurement.measure import Bench, configure
 from twin.progress import ProgressFn
 
@@ -27,9 +28,16 @@ DOFS = ("pitch", "heave")
 GOOD_SNR_DB = 20.0
 
 
-def _sweep(config: str, model: str, out: Path, done) -> list[DfResult]:
+#: Builds a bench's recording saved to a path (:func:`twin.record.bench_recorder`).
+RecorderFactory = Callable[[Bench, Path], SessionRecorder]
+
+
+def _sweep(
+    config: str, model: str, out: Path, done, recorder: RecorderFactory | None
+) -> list[DfResult]:
     bench = Bench(configure(config), model)
-    with Session(bench, rrd=str(out / f"{config}-{model}.rrd")) as s:
+    rec = None if recorder is None else recorder(bench, out / f"{config}-{model}.rrd")
+    with Session(bench, recorder=rec) as s:
         results = []
         for dof in DOFS:
             results.append(run_df(s, dof))
@@ -37,8 +45,16 @@ def _sweep(config: str, model: str, out: Path, done) -> list[DfResult]:
         return results
 
 
-def run_demo(out: Path, progress: ProgressFn | None = None, shown_as: Path | None = None) -> str:
-    """Run the sweep into ``out``; return the printed table (naming ``shown_as`` or ``out``)."""
+def run_demo(
+    out: Path,
+    progress: ProgressFn | None = None,
+    shown_as: Path | None = None,
+    recorder: RecorderFactory | None = None,
+) -> str:
+    """Run the sweep into ``out``; return the printed table (naming ``shown_as`` or ``out``).
+
+    ``recorder`` builds each bench's recording, ``OUT/<config>-<model>.rrd`` (none without).
+    """
     from twin.plotting import subplots
 
     out.mkdir(parents=True, exist_ok=True)
@@ -51,7 +67,7 @@ def run_demo(out: Path, progress: ProgressFn | None = None, shown_as: Path | Non
                 progress("describing-function sweeps", count[0], len(BENCHES) * len(DOFS))
 
     with ThreadPoolExecutor(2) as pool:  # MuJoCo releases the GIL: both cores
-        jobs = {(c, m): pool.submit(_sweep, c, m, out, done) for c, m in BENCHES}
+        jobs = {(c, m): pool.submit(_sweep, c, m, out, done, recorder) for c, m in BENCHES}
         results = {key: job.result() for key, job in jobs.items()}
     lines = [
         "Table 5.2 describing-function sweep (signals 1 + 2, IMU post-processed as App. C)",
@@ -81,8 +97,12 @@ def run_demo(out: Path, progress: ProgressFn | None = None, shown_as: Path | Non
         fig.tight_layout()
         fig.savefig(out / f"df-{dof}.png", dpi=120)
     (out / "df.json").write_text(json.dumps(payload, indent=2) + "\n", encoding="utf-8")
-    lines.append(
-        f"figures, results and recordings in {shown_as or out}/: df-pitch.png, df-heave.png, "
-        "df.json, " + ", ".join(f"{c}-{m}.rrd" for c, m in BENCHES)
-    )
+    if recorder is None:
+        lines.append(f"figures and results in {shown_as or out}/: df-pitch.png, df-heave.png, "
+                     "df.json")  # fmt: skip
+    else:
+        lines.append(
+            f"figures, results and recordings in {shown_as or out}/: df-pitch.png, df-heave.png, "
+            "df.json, " + ", ".join(f"{c}-{m}.rrd" for c, m in BENCHES)
+        )
     return "\n".join(lines)

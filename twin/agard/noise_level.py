@@ -36,6 +36,7 @@ from twin.agard.session import Session
 from twin.errors import SignalError
 from twin.frames import DOF_NAMES, acceleration_unit
 from twin.measurement.measure import Measurement, driven_dof
+from twin.measurement.periodic import periodic_design
 from twin.plotting import AxesArg, finish, subplots
 from twin.results import frame
 
@@ -170,8 +171,6 @@ def analyse_noise(m: Measurement, dof: str | None = None) -> NoiseLevelPoint:
     if "frequencies_hz" in sig and "window_s" in sig:
         freqs, window = sig["frequencies_hz"], tuple(sig["window_s"])
     else:
-        from twin.agard.df import periodic_design
-
         f_arr, window = periodic_design(m, k)
         freqs = list(f_arr)
     if len(freqs) != 1:

@@ -37,6 +37,7 @@ from twin.errors import SignalError, TwinError
 from twin.frames import DOF_NAMES, dof_index
 from twin.measurement.describing_function import ResponseMixin, describing_function, phase_deg
 from twin.measurement.measure import Measurement, driven_dof
+from twin.measurement.periodic import periodic_design
 from twin.plotting import AxesArg, finish, subplots
 from twin.results import frame, frd
 
@@ -297,8 +298,6 @@ def default_amplitude(dof: str, w_rad_s: float, platform: str, fraction: float =
 
 def analyse_omct_point(m: Measurement, dof: str | None = None) -> tuple[float, complex]:
     """Return the describing function of a single-sine run: (w [rad/s], H)."""
-    from twin.agard.df import periodic_design
-
     k = driven_dof(m, dof)
     f, window = periodic_design(m, k)
     if f.size != 1:

@@ -51,12 +51,13 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from twin.agard.df import joined_sources, periodic_design
+from twin.agard.df import joined_sources
 from twin.agard.session import Session
 from twin.errors import SignalError
 from twin.frames import DOF_NAMES, dof_index
 from twin.measurement.describing_function import fourier_coefficients, neighbour_noise
 from twin.measurement.measure import Measurement, driven_dof
+from twin.measurement.periodic import periodic_design
 from twin.plotting import AxesArg, finish, subplots
 from twin.results import frame
 from twin.signals import base_frequency, describing_signal, single_sine
@@ -567,7 +568,7 @@ def analyse_parasitic(
     """Return the parasitic motion of one single-DOF periodic run (e.g. a run folder's).
 
     The design (lines and window) comes from the run's ``meta.json`` or is inferred from the
-    commands (:func:`twin.agard.df.periodic_design`).
+    commands (:func:`twin.measurement.periodic.periodic_design`).
 
     Parameters
     ----------

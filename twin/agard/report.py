@@ -29,7 +29,7 @@ from twin.agard import (
     snr,
     threshold,
 )
-from twin.agard.session import Session
+from twin.agard.session import Session, SessionRecorder
 from twin.frames import dof_index
 from twin.lifecycle import replacing_dir, writing
 from twin.measurement.measure import Bench
@@ -51,7 +51,7 @@ def write_report(
     bench: Bench,
     dofs: Sequence[str],
     out: Path,
-    rrd: str | None = None,
+    recorder: SessionRecorder | None = None,
     progress: ProgressFn | None = None,
     bounds_path: str | Path | None = None,
     scheduler: Engine | str | None = None,
@@ -60,13 +60,14 @@ def write_report(
 
     Each DOF's suite is a task (:mod:`twin.tasks`) run in a folder of its own and sent back
     as files, so DOFs run side by side on a ``scheduler`` (default this process) with the
-    same results. A recording (``rrd``) is one stream of runs: with it, the DOFs run one after
-    another in this process whatever the scheduler.
+    same results. A recording (``recorder``, e.g. :func:`twin.record.bench_recorder`; closed
+    here) is one stream of runs: with it, the DOFs run one after another in this process
+    whatever the scheduler.
     """
     bounds = omct.read_bounds(bounds_path or omct.EXAMPLE_BOUNDS)
     with replacing_dir(out, "report.json") as tmp:
-        if rrd is not None or len(dofs) < 2:
-            parts = _in_session(bench, dofs, tmp, rrd, progress, bounds)
+        if recorder is not None or len(dofs) < 2:
+            parts = _in_session(bench, dofs, tmp, recorder, progress, bounds)
         else:
             with using(scheduler) as engine:
                 scratch = tmp if engine.spec.on_this_machine else None
@@ -123,7 +124,7 @@ def dof_suite(
     return dataclasses.replace(part, files=files)
 
 
-def _in_session(bench, dofs, tmp, rrd, progress, bounds) -> list[DofPart]:
+def _in_session(bench, dofs, tmp, recorder, progress, bounds) -> list[DofPart]:
     """Run every DOF's suite in one session (one recording), one after another."""
     tests = TESTS_PER_DOF * len(dofs)
 
@@ -132,7 +133,7 @@ def _in_session(bench, dofs, tmp, rrd, progress, bounds) -> list[DofPart]:
             progress(message if done is None else f"{message} {done:g}/{total:g}")
 
     parts = []
-    with Session(bench, tmp, rrd, beside) as s:
+    with Session(bench, tmp, recorder, beside) as s:
         for i, dof in enumerate(dofs):
             s.count = i * RUNS_PER_DOF
             parts.append(_suite(s, dof, tmp, bounds, lambda k, i=i: progress and progress(

@@ -366,7 +366,7 @@ def analyse_designed(m: Measurement) -> RunReport:
     Raises
     ------
     SignalError
-        A run whose design cannot be found (see :func:`twin.agard.df.periodic_design`).
+        A run whose design cannot be found (see :func:`twin.measurement.periodic.periodic_design`).
 
     """
     kind = m.meta.get("signal", {}).get("kind", "periodic")

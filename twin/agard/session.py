@@ -10,16 +10,31 @@ measurement session.
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING, Protocol
 
 from twin.chain.simulate import Simulation
 from twin.errors import SignalLimitError
 from twin.lifecycle import CloseOrAbort
 from twin.measurement.measure import Bench, Measurement
 from twin.progress import ProgressFn
-from twin.run_folder import execute, run_meta
+from twin.run_folder import RunRecorder, execute, run_meta
 from twin.schedule import Schedule
 from twin.signals import DescribingSignal, StepSignal, single_sine
 from twin.trajectory import Trajectory
+
+if TYPE_CHECKING:
+    from twin.chain.config import MotionSystem
+
+
+class SessionRecorder(RunRecorder, Protocol):
+    """A session's recording: every run's chunks, and the describing functions found.
+
+    :class:`twin.record.Recorder` is one (:func:`twin.record.bench_recorder` builds it for a
+    bench).
+    """
+
+    def log_describing_function(self, result, config: MotionSystem | None = None) -> None:
+        """Add a describing function (a :class:`twin.agard.df.DfResult`) to the recording."""
 
 
 class Session(CloseOrAbort):
@@ -31,8 +46,10 @@ class Session(CloseOrAbort):
         What is measured.
     out : str or Path, optional
         Folder for the run folders (``OUT/runs/NN-name``).
-    rrd : str, optional
-        Rerun recording of every run, one after the other.
+    recorder : SessionRecorder, optional
+        Where every run goes as well, one after the other (a Rerun recording,
+        :func:`twin.record.bench_recorder`); the session closes it, or aborts it when a run
+        fails.
     progress : callable, optional
         Called with a message before each run, and with the count of a test's runs when the
         test announced them (:meth:`expect`).
@@ -43,7 +60,7 @@ class Session(CloseOrAbort):
         self,
         bench: Bench,
         out: str | Path | None = None,
-        rrd: str | None = None,
+        recorder: SessionRecorder | None = None,
         progress: ProgressFn | None = None,
     ) -> None:
         self.bench = bench
@@ -52,21 +69,9 @@ class Session(CloseOrAbort):
         self.count = 0
         self._job: tuple[str, int, int] | None = None  # what, first run, runs
         self._offset = 0.0
-        self.recorder = None
+        self.recorder = recorder
         #: The last run's simulation (poses, leg lengths and forces beside the measurement).
         self.simulation: Simulation | None = None
-        if rrd is not None:
-            from twin.platform.geometry import load_geometry
-            from twin.record import Recorder
-
-            imu = bench.imu.position_m if bench.imu is not None else None
-            self.recorder = Recorder(
-                load_geometry(bench.config.platform),
-                bench.name,
-                rrd=rrd,
-                kind="agard",
-                imu_position_m=imu,
-            )
 
     def expect(self, runs: int, what: str) -> None:
         """Announce the next ``runs`` runs as one job (progress counts them, with an ETA)."""

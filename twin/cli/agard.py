@@ -193,6 +193,15 @@ def _bench(args: argparse.Namespace, target: str):
     return Bench(config, model, seed, common.imu_of(config, args))
 
 
+def _recorder(bench, rrd: str | None):
+    """Return the Rerun recording of a session on ``bench`` saved to ``rrd`` (None: none)."""
+    if rrd is None:
+        return None
+    from twin.record import bench_recorder
+
+    return bench_recorder(bench, rrd)
+
+
 def _simulate(args: argparse.Namespace, out: Path | None):
     """Run a test on a configuration (runs into ``out``); return (result, config)."""
     from twin.agard import (
@@ -213,7 +222,7 @@ def _simulate(args: argparse.Namespace, out: Path | None):
     if args.dof is None and args.test != "parasitic":
         raise SignalError(f"give --dof for a configuration ({', '.join(DOF_NAMES)})")
     bench = _bench(args, args.config)
-    with Session(bench, out, args.rrd, common.progress(args)) as s:
+    with Session(bench, out, _recorder(bench, args.rrd), common.progress(args)) as s:
         if args.test == "df":
             return df.run_df(s, args.dof), bench.config
         if args.test == "noise":
@@ -374,8 +383,14 @@ def _cmd_report(args: argparse.Namespace) -> int:
     out = Path(args.out or common.default_out("agard-report", f"{bench.config.name}-{bench.model}"))
     check_output_dir(out, "report.json")
     with common.engine(args) as engine:
-        report = write_report(bench, args.dof or ["pitch", "heave"], out, args.rrd,
-                              common.progress(args), scheduler=engine)  # fmt: skip
+        recorder = _recorder(bench, args.rrd)
+        try:
+            report = write_report(bench, args.dof or ["pitch", "heave"], out, recorder,
+                                  common.progress(args), scheduler=engine)  # fmt: skip
+        except BaseException:
+            if recorder is not None:
+                recorder.abort()
+            raise
     print(
         json.dumps(report, indent=2)
         if args.json
@@ -415,7 +430,7 @@ def _scheduled(args: argparse.Namespace, tests: tuple[str, ...] | None) -> int:
             with contextlib.suppress(DataError):  # no actuators.csv: no position record
                 positions = PositionRecord.from_run(args.config)
         else:
-            with Session(bench, tmp, args.rrd, common.progress(args)) as s:
+            with Session(bench, tmp, _recorder(bench, args.rrd), common.progress(args)) as s:
                 m = s.measure_schedule(schedule)  # type: ignore[arg-type]
                 positions = PositionRecord.from_simulation(s.simulation)  # type: ignore[arg-type]
         if schedule is None:
@@ -433,9 +448,10 @@ def _scheduled(args: argparse.Namespace, tests: tuple[str, ...] | None) -> int:
 
 def _cmd_demo(args: argparse.Namespace) -> int:
     from twin.agard.demo import run_demo
+    from twin.record import bench_recorder
 
     final = Path(args.out or common.default_out("agard-demo"))
     with replacing_dir(final, "df.json") as tmp:  # complete, or not there
-        text = run_demo(tmp, common.progress(args), shown_as=final)
+        text = run_demo(tmp, common.progress(args), shown_as=final, recorder=bench_recorder)
     print(text)
     return 0

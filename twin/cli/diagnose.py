@@ -100,6 +100,7 @@ def _cmd_each(args: argparse.Namespace) -> int:
     from twin.cli.sweep import EXIT_PARTIAL
     from twin.diagnose.batch import diagnose_each, write_batch
     from twin.errors import UsageError
+    from twin.record.diagnosis import record_diagnosis
 
     if args.validate or args.save_config:
         raise UsageError("--each diagnoses every measurement on its own: --validate and "
@@ -115,7 +116,7 @@ def _cmd_each(args: argparse.Namespace) -> int:
     check_output_dir(out, "batch.json")
     with common.engine(args) as engine:
         b = diagnose_each(args.runs, config, engine, common.progress(args), **options)
-    table = write_batch(b, out, figures=not args.no_figures)
+    table = write_batch(b, out, not args.no_figures, None if args.no_figures else record_diagnosis)
     if args.json:
         print((out / "batch.json").read_text(encoding="utf-8"), end="")
     else:
@@ -131,6 +132,7 @@ def _cmd_each(args: argparse.Namespace) -> int:
 def _cmd_diagnose(args: argparse.Namespace) -> int:
     from twin.diagnose.diagnosis import check_options, diagnose
     from twin.diagnose.report import write_report
+    from twin.record.diagnosis import record_diagnosis
 
     with common.options_named({"max_hz": "--max-hz", "imu_noise": "--imu-noise"}):
         check_options(args.max_hz, args.imu_noise)  # before any work, also of a batch
@@ -143,7 +145,7 @@ def _cmd_diagnose(args: argparse.Namespace) -> int:
         args.runs, _nominal(args), args.model, args.validate, args.max_hz, args.seed, args.dof,
         progress=common.progress(args), imu_noise=args.imu_noise, physics=args.physics,
     )  # fmt: skip
-    write_report(d, out, figures=not args.no_figures, rrd=not args.no_figures)
+    write_report(d, out, not args.no_figures, None if args.no_figures else record_diagnosis)
     if args.save_config:
         d.extended_config.save(args.save_config)
     if args.json:

@@ -26,6 +26,7 @@ from typing import Any
 
 from twin.chain.config import MotionSystem
 from twin.diagnose.diagnosis import Diagnosis, diagnose
+from twin.diagnose.report import Recording, write_report
 from twin.errors import RunFormatError
 from twin.lifecycle import replacing_dir
 from twin.progress import ProgressFn
@@ -181,15 +182,19 @@ def _unique(names: list[str]) -> list[str]:
     return out
 
 
-def write_batch(result: BatchResult, out: str | Path, figures: bool = True) -> Path:
-    """Write the batch folder (see the module docstring); return ``batch.csv``'s path."""
-    from twin.diagnose.report import write_report
+def write_batch(
+    result: BatchResult, out: str | Path, figures: bool = True, recording: Recording | None = None
+) -> Path:
+    """Write the batch folder (see the module docstring); return ``batch.csv``'s path.
 
+    ``figures`` and ``recording`` as :func:`twin.diagnose.report.write_report`'s, for each
+    measurement's report.
+    """
     out = Path(out)
     with replacing_dir(out, "batch.json") as tmp:
         for name, d in zip(result.names, result.diagnoses, strict=True):
             if d is not None:
-                write_report(d, tmp / name, figures=figures, rrd=figures)
+                write_report(d, tmp / name, figures=figures, recording=recording)
                 d.extended_config.save(tmp / name / "extended.json")
         rows = result.rows()
         with open(tmp / "batch.csv", "w", newline="", encoding="utf-8") as fh:

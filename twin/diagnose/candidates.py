@@ -33,10 +33,11 @@ from numpy.typing import NDArray
 from scipy import optimize
 
 from twin.chain.extensions import DOF_CHANNEL, EFFECTS, LINEAR, Extension
-from twin.diagnose.data import Case, Channel, simulate_measurement
+from twin.diagnose.data import Case, Channel
 from twin.diagnose.evidence import Lines
 from twin.errors import SignalError
 from twin.frames import dof_index
+from twin.measurement.measure import simulate_measurement
 from twin.run_checks import MAX_EXTRA_DELAY_S
 from twin.threads import concurrently
 

@@ -22,18 +22,24 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from twin.agard.df import periodic_design
 from twin.chain.config import MotionSystem, resolve
 from twin.chain.imu import ImuSpec
-from twin.chain.simulate import MODELS, Run, default_imu, make_platform, prepare
+from twin.chain.simulate import MODELS, default_imu
 from twin.errors import RunFormatError, SignalError
 from twin.frames import DOF_NAMES, dof_index
-from twin.measurement.measure import Measurement, from_imu, from_run
+from twin.measurement.measure import (
+    Measurement,
+    clean_config,
+    from_run,
+    simulate_measurement,
+    simulate_measurements,
+)
+from twin.measurement.periodic import periodic_design
 from twin.progress import ProgressFn
 from twin.run_checks import check_distinct, read_plausible_run
 from twin.runs import RecordedRun
 from twin.threads import concurrently
-from twin.trajectory import Trajectory, interp_columns
+from twin.trajectory import Trajectory
 
 FloatArray = NDArray[np.float64]
 #: Noise realisations simulated per run and noise source for the nominal noise spectra.
@@ -160,15 +166,6 @@ class Case:
         return [c for c in self.channels if c.dof == dof]
 
 
-def clean_config(config: MotionSystem) -> MotionSystem:
-    """Return the configuration without noise (for noise-free predictions)."""
-    return config.replace(
-        name=config.name,
-        noise=False,
-        extensions=tuple(e for e in config.extensions if e.effect != "noise"),
-    )
-
-
 def nominal_imu(meta: dict, platform: str) -> ImuSpec:
     """Return the platform's ADIS16355 at the mount and rate of a run's ``meta.json``."""
     spec = default_imu(platform)
@@ -204,53 +201,6 @@ def driven_dofs(m: Measurement, dofs: Sequence[str] | None = None) -> list[int]:
             if top > 0 and v >= DRIVEN_FRACTION * top
         ]
     return sorted(out)
-
-
-def simulate_measurement(
-    config: MotionSystem, commands: Trajectory, t: FloatArray, model: str, seed: int, imu: ImuSpec
-) -> FloatArray:
-    """Run commands through a configuration; the post-processed accelerations at ``t``.
-
-    Returns
-    -------
-    ndarray, shape (len(t), 6)
-        As :attr:`twin.measurement.measure.Measurement.measured`, interpolated onto ``t`` when the
-        simulated IMU's grid differs (a recorded IMU may start elsewhere on the clock).
-
-    """
-    return simulate_measurements(config, commands, t, model, [(seed, imu)])[0]
-
-
-def simulate_measurements(
-    config: MotionSystem,
-    commands: Trajectory,
-    t: FloatArray,
-    model: str,
-    readings: Sequence[tuple[int, ImuSpec]],
-) -> list[FloatArray]:
-    """:func:`simulate_measurement` for each (seed, IMU) pair, the platform simulated once.
-
-    Without heave noise the motion is the same for every pair (only the IMU's noise differs:
-    :meth:`twin.chain.simulate.Run.read_by_imus`, the same bits); with it each pair is its
-    own simulation. The full platform leaves the actuators' forces out (read by no
-    measurement).
-    """
-
-    def run_of(seed: int, imu: ImuSpec) -> Run:
-        plat = make_platform(config.platform, model, physics=config.physics, leg_forces=False)
-        return prepare(config, commands, model, seed, imu, platform=plat)
-
-    run = run_of(*readings[0])
-    if run.noise is None:
-        sims = run.read_by_imus(readings)
-    else:
-        sims = [run.collect()] + [run_of(s, i).collect() for s, i in readings[1:]]
-    out = []
-    for sim in sims:
-        m = from_imu(sim.commands, sim.imu, f"{config.name} ({model})", config, {})
-        same = m.t.shape == t.shape and np.allclose(m.t, t, atol=1e-9)
-        out.append(m.measured if same else interp_columns(t, m.t, m.measured))
-    return out
 
 
 def measurement_channels(

@@ -58,14 +58,14 @@ from twin.chain.extensions import DOF_CHANNEL, EFFECTS, Extension
 from twin.chain.imu import ImuSpec
 from twin.chain.simulate import default_imu, prepare
 from twin.diagnose.candidates import DYNAMIC, Model, fit_set, numeric_names
-from twin.diagnose.data import Case, Channel, clean_config, measurement_channels, nominal_imu
+from twin.diagnose.data import Case, Channel, measurement_channels, nominal_imu
 from twin.diagnose.detect import expected_delta_bic, expected_noise_delta_bic, fisher_std
 from twin.diagnose.evidence import Lines, lines, nominal_line_sd
 from twin.diagnose.residuals import segment
 from twin.diagnose.select import BIC_MARGIN
 from twin.errors import SignalError
 from twin.frames import DOF_NAMES
-from twin.measurement.measure import from_imu
+from twin.measurement.measure import clean_config, from_imu
 from twin.run_folder import execute, run_meta, signal_meta
 from twin.signals import WINDOW_S, DescribingSignal, describing_signal, periodic_signal, table_5_2
 

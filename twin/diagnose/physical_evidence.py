@@ -33,14 +33,14 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from twin.agard.df import periodic_design
 from twin.chain.config import MotionSystem
 from twin.chain.imu import ImuRecord, ImuSpec
 from twin.chain.simulate import prepare
-from twin.diagnose.data import clean_config, driven_dofs
+from twin.diagnose.data import driven_dofs
 from twin.diagnose.evidence import in_window, line_design, neighbour_sd
 from twin.frames import DOF_NAMES
-from twin.measurement.measure import Measurement, from_imu
+from twin.measurement.measure import Measurement, clean_config, from_imu
+from twin.measurement.periodic import periodic_design
 from twin.runs import RecordedRun
 from twin.trajectory import interp_columns
 

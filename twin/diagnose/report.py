@@ -6,6 +6,7 @@ Written to a temporary folder and renamed when complete, so a failure leaves not
 from __future__ import annotations
 
 import json
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -227,14 +228,27 @@ def _figures(d: Diagnosis, folder: Path) -> None:
         plot_residual(d, dof, str(folder / f"residual_{dof}.png"))
 
 
-def _recording(d: Diagnosis, path: Path) -> None:
-    from twin.record.diagnosis import record_diagnosis
-
-    record_diagnosis(d, path)
+#: Writes a diagnosis' recording to a path (:func:`twin.record.diagnosis.record_diagnosis`).
+Recording = Callable[[Diagnosis, Path], object]
 
 
-def write_report(d: Diagnosis, out: str | Path, figures: bool = True, rrd: bool = True) -> Path:
-    """Write ``summary.md``, ``diagnosis.json``, figures and ``diagnosis.rrd`` to ``out``."""
+def write_report(
+    d: Diagnosis, out: str | Path, figures: bool = True, recording: Recording | None = None
+) -> Path:
+    """Write ``summary.md``, ``diagnosis.json``, figures and ``diagnosis.rrd`` to ``out``.
+
+    Parameters
+    ----------
+    d : Diagnosis
+        What is reported.
+    out : str or Path
+        The report folder (replaced whole, or left as it was).
+    figures : bool
+        Draw ``df_<dof>.png`` and ``residual_<dof>.png``.
+    recording : callable, optional
+        Writes ``diagnosis.rrd`` (called with ``d`` and the file's path); none without.
+
+    """
     out = Path(out)
     with replacing_dir(out, "diagnosis.json") as tmp:
         (tmp / "summary.md").write_text(summary(d), encoding="utf-8")
@@ -243,6 +257,6 @@ def write_report(d: Diagnosis, out: str | Path, figures: bool = True, rrd: bool 
         )
         if figures:
             _figures(d, tmp)
-        if rrd:
-            _recording(d, tmp / "diagnosis.rrd")
+        if recording is not None:
+            recording(d, tmp / "diagnosis.rrd")
     return out

@@ -49,6 +49,7 @@ from twin.ingest.columns import (
     recognise,
 )
 from twin.ingest.timebase import Regular, check_stamps, decimate, regularise
+from twin.measurement.measure import clean_config, from_imu, simulate_measurement
 from twin.ownership import reading
 from twin.progress import ProgressFn
 from twin.run_checks import IMU_RATE_HZ, MAX_EXTRA_DELAY_S, check_plausible
@@ -418,8 +419,6 @@ def _search(ref_t0: float, ref: FloatArray, other_t0: float, other: FloatArray,
 
 def _measurement(commands: Trajectory, imu: Regular, offset: float, config: MotionSystem):
     """Post-processed measured accelerations on the command clock (IMU cropped to commands)."""
-    from twin.measurement.measure import from_imu
-
     t = imu.t - offset
     inside = (t >= commands.t[0]) & (t <= commands.t[-1])
     if inside.sum() / imu.rate_hz < MIN_OVERLAP_S:
@@ -433,8 +432,6 @@ def _measurement(commands: Trajectory, imu: Regular, offset: float, config: Moti
 
 def _nominal_prediction(config: MotionSystem, commands: Trajectory, t: FloatArray,
                         imu_rate: float) -> FloatArray:  # fmt: skip
-    from twin.diagnose.data import clean_config, simulate_measurement
-
     imu = default_imu(config.platform)
     spec = type(imu)(rate_hz=imu_rate, accel_range=imu.accel_range, gyro_range=imu.gyro_range)
     return simulate_measurement(clean_config(config), commands, t, "reduced", 0, spec.ideal())

@@ -19,6 +19,7 @@ platform, with a seed and an IMU. The same analyses run on a recorded ``twin-run
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -27,13 +28,13 @@ from numpy.typing import NDArray
 
 from twin.chain.config import MotionSystem, motion_system
 from twin.chain.imu import ImuRecord, ImuSpec, postprocess
-from twin.chain.simulate import MODELS, Run, Simulation, prepare
+from twin.chain.simulate import MODELS, Run, Simulation, make_platform, prepare
 from twin.errors import RunFormatError, SignalError, UnknownPlatformError
 from twin.frames import DOF_NAMES, dof_index
 from twin.run_checks import read_plausible_run
 from twin.runs import RecordedRun
 from twin.signals import check_signal
-from twin.trajectory import Trajectory
+from twin.trajectory import Trajectory, interp_columns
 
 FloatArray = NDArray[np.float64]
 G = 9.81
@@ -106,6 +107,62 @@ def from_imu(
     measured = np.hstack([p.accel[keep] + np.array([0.0, 0.0, G]),
                           p.angular_acceleration[keep]])  # fmt: skip
     return Measurement(t, acc, measured, commands, source, config, meta)
+
+
+def clean_config(config: MotionSystem) -> MotionSystem:
+    """Return the configuration without noise (for noise-free predictions)."""
+    return config.replace(
+        name=config.name,
+        noise=False,
+        extensions=tuple(e for e in config.extensions if e.effect != "noise"),
+    )
+
+
+def simulate_measurement(
+    config: MotionSystem, commands: Trajectory, t: FloatArray, model: str, seed: int, imu: ImuSpec
+) -> FloatArray:
+    """Run commands through a configuration; the post-processed accelerations at ``t``.
+
+    Returns
+    -------
+    ndarray, shape (len(t), 6)
+        As :attr:`twin.measurement.measure.Measurement.measured`, interpolated onto ``t`` when the
+        simulated IMU's grid differs (a recorded IMU may start elsewhere on the clock).
+
+    """
+    return simulate_measurements(config, commands, t, model, [(seed, imu)])[0]
+
+
+def simulate_measurements(
+    config: MotionSystem,
+    commands: Trajectory,
+    t: FloatArray,
+    model: str,
+    readings: Sequence[tuple[int, ImuSpec]],
+) -> list[FloatArray]:
+    """:func:`simulate_measurement` for each (seed, IMU) pair, the platform simulated once.
+
+    Without heave noise the motion is the same for every pair (only the IMU's noise differs:
+    :meth:`twin.chain.simulate.Run.read_by_imus`, the same bits); with it each pair is its
+    own simulation. The full platform leaves the actuators' forces out (read by no
+    measurement).
+    """
+
+    def run_of(seed: int, imu: ImuSpec) -> Run:
+        plat = make_platform(config.platform, model, physics=config.physics, leg_forces=False)
+        return prepare(config, commands, model, seed, imu, platform=plat)
+
+    run = run_of(*readings[0])
+    if run.noise is None:
+        sims = run.read_by_imus(readings)
+    else:
+        sims = [run.collect()] + [run_of(s, i).collect() for s, i in readings[1:]]
+    out = []
+    for sim in sims:
+        m = from_imu(sim.commands, sim.imu, f"{config.name} ({model})", config, {})
+        same = m.t.shape == t.shape and np.allclose(m.t, t, atol=1e-9)
+        out.append(m.measured if same else interp_columns(t, m.t, m.measured))
+    return out
 
 
 def run_config(run: RecordedRun | str | Path) -> MotionSystem:

@@ -2,8 +2,9 @@
 
 One module per recording kind, each with its layout (blueprint):
 
-- :mod:`twin.record.platform`: platform runs (``twin simulate --rrd``, ``twin agard``), the
-  platform in 3D from its MJCF, the pose, legs and IMU as series, describing functions;
+- :mod:`twin.record.platform`: platform runs (``twin simulate --rrd``, ``twin agard``: an
+  AGARD session's from :func:`bench_recorder`), the platform in 3D from its MJCF, the pose,
+  legs and IMU as series, describing functions;
 - :mod:`twin.record.pilot`: pilot-in-the-loop runs (``twin pilot run --rrd``);
 - :mod:`twin.record.diagnosis`: a diagnosis (``twin diagnose``: measured, nominal and extended
   responses overlaid);
@@ -14,7 +15,14 @@ responses on the ``frequency_mHz`` timeline and figures as images), :mod:`twin.r
 (reading an ``.rrd`` back, for checks and tests).
 """
 
-from twin.record.platform import Recorder, blueprint
+from twin.record.platform import Recorder, bench_recorder, blueprint
 from twin.record.read import read_archetypes, read_entities, read_timelines
 
-__all__ = ["Recorder", "blueprint", "read_archetypes", "read_entities", "read_timelines"]
+__all__ = [
+    "Recorder",
+    "bench_recorder",
+    "blueprint",
+    "read_archetypes",
+    "read_entities",
+    "read_timelines",
+]

@@ -19,6 +19,8 @@ import numpy as np
 import rerun as rr
 import rerun.blueprint as rrb
 
+from twin.diagnose.residual_figure import plot_residual, unit_of
+from twin.diagnose.residuals import line_ratios
 from twin.record.spectra import Curve, bode_curve, log_curves, log_figure, response_views
 from twin.record.stream import TIMELINE, Recording, send_series, series_style
 
@@ -44,9 +46,6 @@ def diagnosis_blueprint(dofs: tuple[str, ...]) -> rrb.Blueprint:
 
 def record_diagnosis(d, path: str | Path) -> Path:
     """Save a :class:`~twin.diagnose.diagnosis.Diagnosis` to ``path`` (see module docstring)."""
-    from twin.diagnose.residual_figure import plot_residual, unit_of
-    from twin.diagnose.residuals import line_ratios
-
     dofs = tuple(d.dofs)
     with Recording("twin diagnose", diagnosis_blueprint(dofs), rrd=path) as recording:
         rec = recording.rec

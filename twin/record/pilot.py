@@ -17,6 +17,9 @@ import numpy as np
 import rerun as rr
 import rerun.blueprint as rrb
 
+from twin.measurement.describing_function import phase_deg
+from twin.pilot.pitch import open_loop_responses, open_loops
+from twin.plotting import subplots
 from twin.record.spectra import bode_curve, log_curves, log_figure, response_views
 from twin.record.stream import TIMELINE, Recording, send_series, series_style
 
@@ -48,8 +51,6 @@ def pilot_blueprint() -> rrb.Blueprint:
 
 def record_pilot(path: str | Path, runs, pilot, run: int = 0) -> Path:
     """Save run ``run`` of :class:`twin.pilot.pitch.PitchRuns` and the open loops to ``path``."""
-    from twin.pilot.pitch import open_loop_responses
-
     cfg = runs.config
     with Recording(f"pilot {cfg.name}", pilot_blueprint(), rrd=path) as recording:
         rec = recording.rec
@@ -72,10 +73,6 @@ def record_pilot(path: str | Path, runs, pilot, run: int = 0) -> Path:
 
 def _open_loop_figure(pilot, cfg, w, loops):
     """Bode plot of the open loops [rad/s] with crossovers and phase margins marked."""
-    from twin.measurement.describing_function import phase_deg
-    from twin.pilot.pitch import open_loops
-    from twin.plotting import subplots
-
     names = {"d": "disturbance", "t": "target"}
     ol = open_loops(pilot, cfg)
     fig, (ax_g, ax_p) = subplots(None, 2, 1, figsize=(6.5, 6), sharex=True)

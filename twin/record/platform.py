@@ -38,8 +38,9 @@ from twin.chain.imu import ImuRecord
 from twin.chain.response import PlatformResponse
 from twin.frames import DOF_NAMES, MJ_FROM_THESIS, dof_index, rotation_matrix
 from twin.measurement.describing_function import dense_frequencies
+from twin.measurement.measure import Bench
 from twin.platform.facts import PLATFORMS
-from twin.platform.geometry import Geometry
+from twin.platform.geometry import Geometry, load_geometry
 from twin.platform.kinematics import leg_vectors
 from twin.platform.visual import Shape, imu_site, platform_shapes
 from twin.record.spectra import Curve, bode_curve, log_curves, log_figure, response_views
@@ -323,3 +324,15 @@ class Recorder:
     def abort(self) -> None:
         """Close and delete a partly written ``.rrd``."""
         self.recording.abort()
+
+
+def bench_recorder(bench: Bench, rrd: str | Path) -> Recorder:
+    """Return the recording of an AGARD session on ``bench``, saved to ``rrd``.
+
+    The bench's platform in 3D with its IMU's mount, every run one after the other and the
+    describing functions found (:class:`twin.agard.session.Session` takes it).
+    """
+    imu = bench.imu.position_m if bench.imu is not None else None
+    return Recorder(
+        load_geometry(bench.config.platform), bench.name, rrd=rrd, kind="agard", imu_position_m=imu
+    )
