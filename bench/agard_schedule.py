@@ -23,7 +23,7 @@ from pathlib import Path
 from twin.chain.config import motion_system
 from twin.chain.simulate import prepare
 from twin.cli.main import main as twin
-from twin.schedule import read_schedule
+from twin.formats.schedule import read_schedule
 
 GOAL_S = 60.0
 #: Angular frequencies [rad/s] and largest acceleration amplitude of each set [m/s^2].

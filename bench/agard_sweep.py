@@ -9,8 +9,8 @@ machine) and the reduced model, with the runs on both cores and on one.
 import time
 
 from twin.agard.df import sweep
+from twin.chain.signals import describing_signal
 from twin.measurement.measure import Bench, configure
-from twin.signals import describing_signal
 
 
 def main():

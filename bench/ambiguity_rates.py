@@ -37,7 +37,7 @@ from __future__ import annotations
 import os
 
 for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
-    os.environ.setdefault(_var, "1")  # one BLAS thread per worker process (twin.threads)
+    os.environ.setdefault(_var, "1")  # one BLAS thread per worker process (twin.core.threads)
 
 import argparse  # noqa: E402
 import json  # noqa: E402

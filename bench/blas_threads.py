@@ -15,14 +15,14 @@ import subprocess
 import sys
 import time
 
-from twin.threads import BLAS_THREAD_VARIABLES
+from twin.core.threads import BLAS_THREAD_VARIABLES
 
 #: Counts the threads of the process once NumPy has loaded (OpenBLAS starts its pool then).
 COUNT = "import numpy, os; print(len(os.listdir('/proc/self/task')))"
 #: One full-model run of 20 s on the MPI platform.
 RUN = (
     "import numpy as np; from twin.chain.simulate import simulate; "
-    "from twin.trajectory import Trajectory; t = np.arange(2001) / 100.0; "
+    "from twin.chain.trajectory import Trajectory; t = np.arange(2001) / 100.0; "
     "v = np.zeros((t.size, 6)); v[:, 2] = -0.02 * np.sin(2 * np.pi * 0.3 * t); "
     "v[:, 4] = 0.02 * np.sin(2 * np.pi * 0.7 * t); "
     "simulate('mpi', Trajectory(100.0, v), 'full', seed=1)"
@@ -44,7 +44,7 @@ def threads(code: str, blas: str | None = None) -> int:
 
 def worker_blas_setting() -> str:
     """OPENBLAS_NUM_THREADS inside a worker of the twin's local Dask cluster."""
-    from twin.tasks.engine import Engine
+    from twin.core.tasks.engine import Engine
 
     with Engine("local:1") as engine:
         return next(iter(engine.client().run(os.environ.get, "OPENBLAS_NUM_THREADS").values()))

@@ -29,10 +29,10 @@ from twin.chain.simulate import default_imu
 from twin.diagnose.diagnosis import diagnose
 from twin.diagnose.hidden import record_runs
 from twin.diagnose.report import write_report
+from twin.formats.runs import read_run
 from twin.platform.payload import Payload
 from twin.platform.platform_physics import PlatformPhysics
-from twin.record.diagnosis import record_diagnosis
-from twin.runs import read_run
+from twin.viz.record.diagnosis import record_diagnosis
 
 #: Goals [s] per model for one 60 s run.
 GOALS = {"reduced": 10.0, "full": 20.0}

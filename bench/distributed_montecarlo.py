@@ -13,8 +13,8 @@ import time
 
 import numpy as np
 
-from twin.pilot.montecarlo import monte_carlo
-from twin.tasks.engine import Engine
+from twin.core.tasks.engine import Engine
+from twin.pilot.studies.montecarlo import monte_carlo
 
 BATCH = 500
 

@@ -15,17 +15,17 @@ import time
 from pathlib import Path
 
 from twin.chain.config import motion_system
+from twin.chain.signals import describing_signal
 from twin.chain.simulate import default_imu, prepare
+from twin.core.threads import SIMULATION_THREADS, cpu_count
 from twin.diagnose.data import nominal_imu
 from twin.diagnose.diagnosis import diagnose
 from twin.diagnose.hidden import record_runs
 from twin.diagnose.physical import calibrate
+from twin.formats.run_checks import read_plausible_run
 from twin.measurement.measure import from_run
 from twin.platform.payload import Payload
 from twin.platform.platform_physics import PlatformPhysics
-from twin.run_checks import read_plausible_run
-from twin.signals import describing_signal
-from twin.threads import SIMULATION_THREADS, cpu_count
 
 
 def main() -> None:

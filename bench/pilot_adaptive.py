@@ -6,7 +6,7 @@
    (direction and p < 0.05 where it found an effect, p >= 0.05 where not), beside how often
    it would if the true effect were the thesis' own F, the twin's standardised effects over
    populations (median, 5-95 %) and whether the thesis is a plausible draw of them
-   (:mod:`twin.pilot.replication`; figure ``out/bench-chapter6-replication.png``);
+   (:mod:`twin.pilot.studies.replication`; figure ``out/bench-chapter6-replication.png``);
    once with the default run-to-run variation of the adapted parameters (10 %), once (10
    populations) with half of it, as the variation is an assumption and the ANOVA's power
    depends on it.
@@ -22,11 +22,11 @@
    parameter, among the estimates where it counted as identifiable, the fraction within 2
    Cramer-Rao sd of the truth, with the bound at the truth (the bound proper: does the
    estimator attain it?) and with the bound the fit reports (widened to cover the minima the
-   data do not rule out, :mod:`twin.pilot.minima`, over the profile of a parameter on an end
+   data do not rule out, :mod:`twin.pilot.identification.minima`, over the profile of a parameter on an end
    of its range and over the fit with a weak parameter on the end it cannot be told from,
-   and for the selection where the data rule a minimum out, :mod:`twin.pilot.selection`;
+   and for the selection where the data rule a minimum out, :mod:`twin.pilot.identification.selection`;
    printed with how often, and by how much, it is wider than the bound at the estimate);
-   and the fraction of all estimates whose likelihood-ratio interval (:mod:`twin.pilot.profile`)
+   and the fraction of all estimates whose likelihood-ratio interval (:mod:`twin.pilot.identification.profile`)
    holds the truth (goal >= 90 %). Each with its 95 % Wilson interval: 50 estimates pin a
    coverage down to about +-8 %, 200 to about +-4 %. Once with one run per estimate, once
    with five repetitions averaged (the thesis' five per condition, §6.3.4). With
@@ -36,7 +36,7 @@
    half u's sd added (five repetitions averaged), and a pilot the defaults are not (a lead
    with no lag, t_lag on the end of its range) on the same nuisance, one run each.
 5. Subjects who also adapt their visual delay (``--visual-delay-only``, about 25 min): the
-   speed-accuracy trade-off of :func:`twin.pilot.adapt.visual_noise_ratio` (an assumption):
+   speed-accuracy trade-off of :func:`twin.pilot.models.adapt.visual_noise_ratio` (an assumption):
    section 2's per-subject count and a replication over 10 populations, tau_v among the
    measures (Table 6.7: F 35.8, lower behind the filter). And Table 6.7's tau_m (F 140.1,
    "close to zero" behind the filter): the adapted pilot of conditions 1 and 5 flown 20 times
@@ -46,7 +46,7 @@
    t_lead, K_v and tau_v per condition and the d_z of their differences beside the thesis'.
 6. Designing the next experiment on the twin's subjects (``--design-only``; about 40 min
    with ``--design-subjects 18``):
-   section 1's 20 populations pooled (180 subjects, :mod:`twin.pilot.design`) tell how often
+   section 1's 20 populations pooled (180 subjects, :mod:`twin.pilot.studies.design`) tell how often
    an experiment of N subjects agrees with the thesis on each effect, and from how many
    subjects it agrees on all of the acceptance's at once (every filter effect of the JSON
    contract found, delay and noise not found on either crossover) in 80 %; then
@@ -58,13 +58,13 @@
    cell): ``SPREAD_POPULATIONS`` populations of nine (``--profile-populations``, from
    ``--profile-seed``) for each motion perception spread, visual-delay sd and run-to-run
    variation of ``SPREAD_GRID`` (``--profile-motion``, ``--profile-visual-delay``,
-   ``--profile-run-to-run``; :mod:`twin.pilot.spread`'s defaults are chosen here); per cell
+   ``--profile-run-to-run``; :mod:`twin.pilot.studies.spread`'s defaults are chosen here); per cell
    the log predictive density of the thesis' 36 effects
-   (:attr:`twin.pilot.replication.Replication.log_density`: higher, the thesis' results are
+   (:attr:`twin.pilot.studies.replication.Replication.log_density`: higher, the thesis' results are
    likelier draws of the twin), how many are plausible draws, the filter effects' d_z beside
    the thesis', and how often nine subjects meet the acceptance at once (the design's); then
    every cell against the best on the same populations and on halves of them
-   (:mod:`twin.pilot.compare_settings`).
+   (:mod:`twin.pilot.studies.compare_settings`).
 
 ``--motion-spread SD`` and ``--visual-delay-spread S`` set the subjects' spreads for every
 section but 7 (``--motion-spread 0 --visual-delay-spread 0.03``: the subjects before either,
@@ -81,15 +81,17 @@ import numpy as np
 from statsmodels.stats.proportion import proportion_confint
 
 from twin.chain.config import motion_system
-from twin.errors import SignalError
-from twin.pilot.adapt import ADAPTED, EQUALISATION, SPEED_ACCURACY, adapt
-from twin.pilot.compare_settings import log_density_difference
-from twin.pilot.design import ACCEPTANCE, MAX_SUBJECTS, Design, design
-from twin.pilot.experiment import pitch_remnant_scale
-from twin.pilot.identified import MAX_FEEDTHROUGH
-from twin.pilot.mle import PARAMETERS, bound_at, fit_pitch_pilot
-from twin.pilot.pitch import Feedthrough, PitchPilot, simulate_pitch
-from twin.pilot.population import (
+from twin.core.errors import SignalError
+from twin.core.tasks.engine import Engine
+from twin.core.thesis import TABLES_6_4_TO_6_7
+from twin.pilot.identification.mle import PARAMETERS, bound_at, fit_pitch_pilot
+from twin.pilot.models.adapt import ADAPTED, EQUALISATION, SPEED_ACCURACY, adapt
+from twin.pilot.models.pitch import Feedthrough, PitchPilot, simulate_pitch
+from twin.pilot.studies.compare_settings import log_density_difference
+from twin.pilot.studies.design import ACCEPTANCE, MAX_SUBJECTS, Design, design
+from twin.pilot.studies.experiment import pitch_remnant_scale
+from twin.pilot.studies.identified import MAX_FEEDTHROUGH
+from twin.pilot.studies.population import (
     ADAPTATION_SD,
     PopulationResult,
     Subject,
@@ -98,10 +100,8 @@ from twin.pilot.population import (
     run_population,
     subjects,
 )
-from twin.pilot.replication import run_populations
-from twin.pilot.spread import DEFAULT_SPREAD, MOTION_NOISE_SD, VISUAL_DELAY_SD, Spread
-from twin.tasks.engine import Engine
-from twin.thesis import TABLES_6_4_TO_6_7
+from twin.pilot.studies.replication import run_populations
+from twin.pilot.studies.spread import DEFAULT_SPREAD, MOTION_NOISE_SD, VISUAL_DELAY_SD, Spread
 
 REPETITIONS, POPULATIONS, SUBJECTS = 5, 20, 9
 #: Where section 1 draws the replication (``out/`` is not tracked).
@@ -166,7 +166,7 @@ def main(
 
 def populations(sd: float, n: int, adapted: tuple[str, ...] = ADAPTED) -> list[PopulationResult]:
     """Section 1: agreement with Tables 6.4-6.7 over seeded populations, beside the agreement
-    the thesis' own F predicts (:mod:`twin.pilot.replication`); returns the populations."""
+    the thesis' own F predicts (:mod:`twin.pilot.studies.replication`); returns the populations."""
     rep, results = run_populations(n, SUBJECTS, 0, scheduler="local:2", run_to_run_sd=sd,
                                    spread=SETTINGS["spread"],
                                    adapted=adapted)  # fmt: skip
@@ -185,7 +185,7 @@ def populations(sd: float, n: int, adapted: tuple[str, ...] = ADAPTED) -> list[P
 def spread_profile(grid: dict[str, tuple[float, ...]], n: int, seed: int = 0) -> None:
     """Section 7: the subjects' spreads and run-to-run variation profiled against Tables
     6.4-6.7, ``n`` populations of nine a cell from ``seed``; then each cell against the best
-    on halves of the populations (:mod:`twin.pilot.compare_settings`; from 4 populations)."""
+    on halves of the populations (:mod:`twin.pilot.studies.compare_settings`; from 4 populations)."""
     filters = [(m, "filter") for m in TABLES_6_4_TO_6_7 if m not in ("tau_v", "tau_m")]
     head = " ".join(f"{m[:9]:>9s}" for m, _ in filters)
     print(f"\n{n} populations of {SUBJECTS} a cell, seeds {seed}-{seed + n - 1}")
@@ -298,7 +298,7 @@ def measured_as_the_thesis(subject: Subject, feedthrough: float = 0.0) -> dict[s
     of its condition-1 control power) and identified as the thesis did: the MLE on the
     averaged repetitions. With ``feedthrough`` > 0 the subject also has a passive path from
     the felt motion to the stick, that share of its condition-1 motion response at 3 rad/s
-    (:class:`twin.pilot.pitch.Feedthrough`, the same in both conditions; not adapted to).
+    (:class:`twin.pilot.models.pitch.Feedthrough`, the same in both conditions; not adapted to).
     Returns per condition the estimates, what was unidentifiable and chi-square per degree
     of freedom."""
     effect = filter_effect(subject)
@@ -561,11 +561,11 @@ if __name__ == "__main__":
     )
     parser.add_argument("--motion-spread", type=float, default=MOTION_NOISE_SD, metavar="SD",
                         help="the subjects' spread in motion perception for every section but "
-                             "7 (default: twin.pilot.spread.MOTION_NOISE_SD; 0 with "
+                             "7 (default: twin.pilot.studies.spread.MOTION_NOISE_SD; 0 with "
                              "--visual-delay-spread 0.03: the subjects before either)")  # fmt: skip
     parser.add_argument("--visual-delay-spread", type=float, default=VISUAL_DELAY_SD,
                         metavar="S", help="the subjects' visual-delay sd in s for every "
-                        "section but 7 (default: twin.pilot.spread.VISUAL_DELAY_SD)")  # fmt: skip
+                        "section but 7 (default: twin.pilot.studies.spread.VISUAL_DELAY_SD)")  # fmt: skip
     parser.add_argument("--no-intervals", action="store_true",
                         help="fit without the likelihood-ratio intervals (and their rule): "
                              "about 6x faster")  # fmt: skip

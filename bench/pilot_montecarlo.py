@@ -10,8 +10,8 @@ factors.
 import sys
 import time
 
-from twin.pilot.montecarlo import monte_carlo
-from twin.pilot.pitch import PitchPilot, simulate_pitch
+from twin.pilot.models.pitch import PitchPilot, simulate_pitch
+from twin.pilot.studies.montecarlo import monte_carlo
 
 
 def main():

@@ -10,7 +10,7 @@ share, what stays is the model's.
 import time
 
 from twin.agard.compare import platform_dynamics
-from twin.thesis import TABLE_5_5
+from twin.core.thesis import TABLE_5_5
 
 
 def main() -> None:

@@ -26,10 +26,10 @@ import numpy as np
 from mujoco import rollout
 
 from twin.chain.physics import FullPlatform
+from twin.chain.signals import describing_signal
 from twin.chain.simulate import default_imu, prepare
+from twin.chain.trajectory import Trajectory
 from twin.platform.facts import load_model
-from twin.signals import describing_signal
-from twin.trajectory import Trajectory
 
 STATE = mujoco.mjtState.mjSTATE_FULLPHYSICS
 
@@ -92,7 +92,7 @@ def long_commands(duration_s):
 
 def memory_case(duration_s, sink):
     """Run one reduced ``mpi`` run of ``duration_s`` into ``sink``; print peak RSS [MB]."""
-    from twin.runs import RunWriter
+    from twin.formats.runs import RunWriter
 
     cmd = long_commands(duration_s)
     run = prepare("mpi", cmd, "reduced", seed=1)
@@ -101,7 +101,7 @@ def memory_case(duration_s, sink):
     with tempfile.TemporaryDirectory() as tmp:
         recorder = None
         if sink == "rrd":
-            from twin.record import Recorder
+            from twin.viz.record import Recorder
 
             recorder = Recorder(run.platform.geometry, "bench", rrd=str(Path(tmp) / "r.rrd"))
         if sink == "none":

@@ -181,7 +181,7 @@ def omct() -> None:
 
 def chapter_2() -> None:
     """Ch 2: FC against ARX over 1000 closed-loop runs (§2.5)."""
-    from twin.pilot.montecarlo import monte_carlo
+    from twin.pilot.studies.montecarlo import monte_carlo
 
     monte_carlo(runs=1000, seed=0).plot(path=str(OUT / "ch2-montecarlo.png"))
 

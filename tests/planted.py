@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from twin.pilot.population import COMPARED, levels
-from twin.thesis import TABLE_6_3, TABLES_6_4_TO_6_7
+from twin.core.thesis import TABLE_6_3, TABLES_6_4_TO_6_7
+from twin.pilot.studies.population import COMPARED, levels
 
 #: Noise per cell of the planted rows; a factor's marginal means (four cells each) then differ
 #: by noise of sd NOISE * sqrt(1 / 2) per subject.

@@ -16,13 +16,13 @@ import pytest
 from twin.chain.config import motion_system
 from twin.chain.physics import FullPlatform
 from twin.chain.simulate import simulate
-from twin.errors import ConfigError, ModelFileError, PhysicsDivergedError
-from twin.frames import rotation_matrix
+from twin.chain.trajectory import Trajectory
+from twin.core.errors import ConfigError, ModelFileError, PhysicsDivergedError
+from twin.core.frames import rotation_matrix
 from twin.platform.actuators import TOML_KEYS, LegPhysics, ReferenceState, shape_reference
 from twin.platform.build import read_build_parameters
 from twin.platform.facts import PLATFORMS, model_dir
 from twin.platform.kinematics import leg_vectors
-from twin.trajectory import Trajectory
 
 G = 9.81
 
@@ -188,7 +188,7 @@ def test_actuator_tables_are_checked():
 
 def test_full_runs_write_leg_forces_and_reduced_runs_do_not(tmp_path):
     from twin.cli.main import main
-    from twin.runs import read_run
+    from twin.formats.runs import read_run
 
     for model in ("full", "reduced"):
         out = tmp_path / model
@@ -259,7 +259,7 @@ def test_a_configurations_physics_reaches_the_full_model_and_round_trips(tmp_pat
 
     from twin.chain.config import load_config
     from twin.cli.main import main
-    from twin.runs import read_run
+    from twin.formats.runs import read_run
 
     physics = {"legs": {"coulomb_n": [0, 800, 0, 0, 0, 0]},
                "payload": {"mass_kg": 150.0, "position_m": [0.3, 0.0, -0.5],

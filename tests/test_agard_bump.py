@@ -7,8 +7,9 @@ import pytest
 
 from twin.agard.bump import analyse_bump, bump_signal, run_bump
 from twin.agard.session import Session
+from twin.chain.signals import rest
 from twin.chain.simulate import default_imu
-from twin.errors import SignalError, SignalLimitError
+from twin.core.errors import SignalError, SignalLimitError
 from twin.measurement.measure import Bench, Measurement, configure, from_run
 from twin.platform.actuators import LegPhysics
 from twin.platform.facts import load_model
@@ -16,7 +17,6 @@ from twin.platform.geometry import load_geometry
 from twin.platform.kinematics import jacobian
 from twin.platform.payload import cabin_mass_properties
 from twin.platform.platform_physics import PlatformPhysics
-from twin.signals import rest
 
 HEAVE = 2
 

@@ -121,7 +121,7 @@ def test_rrd_records_every_run_of_a_test(capsys, tmp_path):
     """An agard recording: every run on the platform, and the describing function against
     frequency (measured points with 95 % bounds, the configuration's Eq 5.11 as a line) with
     its figure."""
-    from twin.record import read_archetypes, read_entities, read_timelines
+    from twin.viz.record import read_archetypes, read_entities, read_timelines
 
     rrd = tmp_path / "df.rrd"
     assert main(["agard", "df", "srs", "--dof", "heave", "--model", "reduced", "--rrd",

@@ -16,7 +16,7 @@ from twin.agard.hysteresis import (
 )
 from twin.agard.positions import PositionRecord
 from twin.agard.session import Session
-from twin.errors import DataError, SignalError
+from twin.core.errors import DataError, SignalError
 from twin.measurement.measure import Bench, configure
 from twin.platform.actuators import LegPhysics
 from twin.platform.geometry import load_geometry

@@ -14,12 +14,12 @@ from twin.agard.limits import (
 )
 from twin.agard.positions import PositionRecord
 from twin.agard.session import Session
-from twin.errors import SignalError
+from twin.core.errors import SignalError
+from twin.formats.run_checks import read_plausible_run
 from twin.measurement.measure import Bench, Measurement, configure, from_run
 from twin.platform.facts import load_facts
 from twin.platform.geometry import load_geometry
 from twin.platform.kinematics import jacobian, workspace
-from twin.run_checks import read_plausible_run
 
 HEAVE = 2
 

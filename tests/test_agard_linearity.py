@@ -13,15 +13,15 @@ from twin.agard.linearity import (
     schedule,
 )
 from twin.agard.session import Session
+from twin.chain.signals import single_sine
 from twin.chain.simulate import default_imu
-from twin.errors import SignalError
+from twin.chain.trajectory import Trajectory
+from twin.core.errors import SignalError
 from twin.measurement.measure import Bench, configure
 from twin.platform.actuators import LegPhysics
 from twin.platform.geometry import load_geometry
 from twin.platform.kinematics import inverse
 from twin.platform.platform_physics import PlatformPhysics
-from twin.signals import single_sine
-from twin.trajectory import Trajectory
 
 #: Total delay of the mpi configuration [s] (platform.toml delay_s, §5.5.2).
 MPI_DELAY_S = 0.035

@@ -22,12 +22,12 @@ from twin.agard.parasitic import (
 )
 from twin.agard.session import Session
 from twin.chain.extensions import Extension
+from twin.chain.signals import single_sine
 from twin.chain.simulate import default_imu
+from twin.core.errors import SignalError
+from twin.core.frames import DOF_NAMES
 from twin.diagnose.physical_vocabulary import PhysicalCause, configured
-from twin.errors import SignalError
-from twin.frames import DOF_NAMES
 from twin.measurement.measure import Bench, configure
-from twin.signals import single_sine
 
 G = 9.81
 F_HZ, AMPLITUDE = 0.5, 0.3  # the module's default sine
@@ -158,7 +158,7 @@ def test_a_yawed_imu_with_noise_stands_above_it():
 
 def _long_run():
     """One run: 5 s at rest, then two single sines of surge one after the other (a schedule)."""
-    from twin.trajectory import Trajectory
+    from twin.chain.trajectory import Trajectory
 
     bench = Bench(configure("srs"), "reduced")
     a = single_sine("surge", 0.5, AMPLITUDE, window_s=10.0)

@@ -12,10 +12,10 @@ from twin.agard.noise_level import analyse_noise
 from twin.agard.omct import OMCT_RAD_S, plot_omct, read_bounds, run_omct
 from twin.agard.session import Session
 from twin.agard.threshold import run_threshold
+from twin.chain.signals import single_sine
 from twin.chain.simulate import default_imu
+from twin.core.thesis import CHAPTER_3_4, TABLE_5_6_MPI_IMU
 from twin.measurement.measure import Bench, configure
-from twin.signals import single_sine
-from twin.thesis import CHAPTER_3_4, TABLE_5_6_MPI_IMU
 
 MODELS = ["reduced", pytest.param("full", marks=pytest.mark.slow)]
 

@@ -3,8 +3,7 @@
 import numpy as np
 import pytest
 
-from twin.errors import SignalError, SignalLimitError
-from twin.signals import (
+from twin.chain.signals import (
     STEP_PATTERN,
     base_frequency,
     check_signal,
@@ -13,6 +12,7 @@ from twin.signals import (
     single_sine,
     square_steps,
 )
+from twin.core.errors import SignalError, SignalLimitError
 
 
 def test_premeasurement_periods_follow_eq_3_3():

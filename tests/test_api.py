@@ -3,8 +3,8 @@
 - the entry points of :mod:`twin` work on the cheap path (reduced model, short signals) and take
   a configuration as a name, a ``twin-config/1`` file or a ``MotionSystem`` with the same result;
   everything after their obvious arguments is keyword-only;
-- every class of the package with ``to_dict`` or ``plot`` is a :class:`twin.results.Result`
-  (frequency responses a :class:`~twin.results.FrequencyResult` too) or is named below as a
+- every class of the package with ``to_dict`` or ``plot`` is a :class:`twin.core.results.Result`
+  (frequency responses a :class:`~twin.core.results.FrequencyResult` too) or is named below as a
   part or a setting, with the reason; the instances of ``test_results_surface`` are checked
   end to end (``to_frame``, ``plot`` on given axes, ``to_frd`` in rad/s);
 - a method named as python-control's is not ours: ``response_at_hz`` at ``f`` equals
@@ -29,9 +29,9 @@ import pytest
 from matplotlib.figure import Figure
 
 import twin
-from twin.errors import UnknownPlatformError, UsageError
-from twin.results import FrequencyResult, Result
-from twin.trajectory import Trajectory
+from twin.chain.trajectory import Trajectory
+from twin.core.errors import UnknownPlatformError, UsageError
+from twin.core.results import FrequencyResult, Result
 
 ROOT = Path(__file__).parents[1]
 
@@ -80,8 +80,8 @@ def test_only_the_obvious_arguments_are_positional(name):
 
 def test_the_namespace_s_defaults_are_those_of_the_functions_it_calls():
     from twin.agard.compare import compare
+    from twin.core.frames import DOF_NAMES
     from twin.diagnose.diagnosis import diagnose
-    from twin.frames import DOF_NAMES
 
     ours, theirs = (
         inspect.signature(twin.diagnose_runs).parameters,
@@ -183,7 +183,7 @@ def test_workspace_takes_a_platform_or_any_configuration_of_it():
 
 
 def test_fly_flies_the_pitch_task_with_the_nominal_pilot_by_default():
-    from twin.pilot.pitch import PitchPilot, simulate_pitch
+    from twin.pilot.models.pitch import PitchPilot, simulate_pitch
 
     runs = twin.fly("condition-8", seed=1)
     same = simulate_pitch(PitchPilot(), "condition-8", seed=1)
@@ -231,18 +231,18 @@ NOT_RESULTS = {
     "twin.agard.noise_level.NoiseLevelPoint": "a row of NoiseLevelResult.to_frame()",
     "twin.agard.parasitic.Cell": "a row of ParasiticResult.to_frame()",
     "twin.agard.scheduled.RunReport": "a set of results (each a Result, each plotted)",
-    "twin.pilot.replication.EffectReplication": "a row of Replication.to_frame()",
+    "twin.pilot.studies.replication.EffectReplication": "a row of Replication.to_frame()",
     "twin.chain.limits.LimitReport": "part of a Simulation (limit counts)",
     "twin.ingest.importer.Clock": "part of ImportReport (a clock fit)",
     "twin.ingest.importer.ImportReport": "what twin import made of logs (text and JSON)",
     "twin.ingest.timebase.Regular": "part of ImportReport (a resampling)",
-    "twin.pilot.adapt.Adapted": "a pilot (parameters), not a result",
-    "twin.pilot.felt_motion.MotionMatch": "part of an identification (its motion chain)",
-    "twin.pilot.spread.Spread": "a setting (subjects' spreads)",
+    "twin.pilot.models.adapt.Adapted": "a pilot (parameters), not a result",
+    "twin.pilot.identification.felt_motion.MotionMatch": "part of an identification (its motion chain)",
+    "twin.pilot.studies.spread.Spread": "a setting (subjects' spreads)",
     "twin.platform.actuators.LegPhysics": "a setting (actuator physics)",
     "twin.platform.payload.Payload": "a setting (a payload)",
     "twin.platform.platform_physics.PlatformPhysics": "a setting (physics of a configuration)",
-    "twin.tasks.outcome.Failure": "a failed task (an error report)",
+    "twin.core.tasks.outcome.Failure": "a failed task (an error report)",
 }
 
 #: Results that are frequency responses (``to_frd``).
@@ -413,7 +413,7 @@ print("ok")
 
 
 def test_import_twin_is_light_and_leaves_numpy_to_the_entry_points():
-    """The ``twin`` command imports the package before it sets one BLAS thread (twin.threads)."""
+    """The ``twin`` command imports the package before it sets one BLAS thread (twin.core.threads)."""
     code = (
         "import sys, twin\n"
         "print(sorted(m for m in ('numpy', 'scipy', 'mujoco', 'matplotlib', 'pandas', 'control')"

@@ -18,8 +18,8 @@ import pytest
 from cli_contract import fails_in_one_line as _one_line
 
 from twin.cli.main import EXIT_BROKEN_PIPE, EXIT_BUG, error_line, main
-from twin.errors import DataError
-from twin.ownership import MANIFEST
+from twin.core.errors import DataError
+from twin.core.ownership import MANIFEST
 
 REST = ["simulate", "srs", "--model", "reduced", "--signal", "rest-1", "--quiet"]
 
@@ -65,9 +65,9 @@ def _full_disk_on(monkeypatch: pytest.MonkeyPatch, name: str) -> None:
 
     (A real full disk refuses the buffered rows again when the file is closed.)
     """
-    import twin.runs
+    import twin.formats.runs
 
-    write_rows = twin.runs._write_rows
+    write_rows = twin.formats.runs._write_rows
     full = OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
 
     def write_or_fail(fh, t, values, block=8192):
@@ -85,7 +85,7 @@ def _full_disk_on(monkeypatch: pytest.MonkeyPatch, name: str) -> None:
         fh.write("0.01,0.5")  # part of a row, left in the buffer
         raise full
 
-    monkeypatch.setattr(twin.runs, "_write_rows", write_or_fail)
+    monkeypatch.setattr(twin.formats.runs, "_write_rows", write_or_fail)
 
 
 def test_a_full_disk_leaves_nothing_and_names_the_file(tmp_path, capsys, monkeypatch):
@@ -209,8 +209,8 @@ def test_odd_numbers_on_the_command_line(capsys, tmp_path):
 
 def test_options_are_named_as_typed_not_by_the_librarys_names(capsys, run):
     """The command line names the option (--max-hz), the library its parameter (max_hz)."""
+    from twin.core.errors import SignalError
     from twin.diagnose.diagnosis import diagnose
-    from twin.errors import SignalError
 
     cases = [
         (["pilot", "adapt", "mpi", "--weight", "-1"], "argument --weight: must be a number in "
@@ -280,7 +280,7 @@ def test_non_physical_commands_are_refused_before_running(tmp_path, capsys, run)
 
 
 def test_identify_says_a_run_without_excitation_has_none(tmp_path, capsys):
-    from twin.pilot.records import write_pilot_csv
+    from twin.pilot.models.records import write_pilot_csv
 
     t = np.arange(9000) / 100.0
     zero = np.zeros_like(t)
@@ -334,7 +334,8 @@ def test_a_reader_that_goes_away_ends_the_command_quietly(monkeypatch, capsys):
 def test_the_command_line_bounds_are_the_library_bounds():
     """The parser keeps its own copies (it must not import the heavy modules)."""
     from twin.cli import pilot as cli_pilot
-    from twin.pilot import montecarlo, pitch
+    from twin.pilot.models import pitch
+    from twin.pilot.studies import montecarlo
 
     assert cli_pilot.MAX_RUNS == pitch.MAX_RUNS
     assert cli_pilot.MAX_MC_RUNS == montecarlo.MAX_RUNS

@@ -8,10 +8,10 @@ from twin.chain.delay import Delay
 from twin.chain.filter import PlatformFilter
 from twin.chain.noise import MotionNoise
 from twin.chain.resonance import Resonance
-from twin.errors import SignalError, UnknownPlatformError
+from twin.chain.signals import describing_signal
+from twin.core.errors import SignalError, UnknownPlatformError
+from twin.core.thesis import NOISE_SIGMA, TABLE_6_3
 from twin.measurement.describing_function import describing_function
-from twin.signals import describing_signal
-from twin.thesis import NOISE_SIGMA, TABLE_6_3
 
 
 def _df(block, dof="heave", signal=2):

@@ -15,8 +15,8 @@ from twin.chain.physics import FullPlatform
 from twin.chain.reduced import ReducedPlatform
 from twin.chain.simulate import prepare
 from twin.chain.stream import ChainStream
-from twin.errors import SignalError
-from twin.trajectory import Trajectory
+from twin.chain.trajectory import Trajectory
+from twin.core.errors import SignalError
 
 
 def _commands(seconds: float, rate: float = 100.0) -> Trajectory:
@@ -99,7 +99,7 @@ def test_open_and_closed_loop_drive_the_same_chain_to_numerical_precision(model,
 def test_the_pilot_flies_the_configurations_extensions():
     # a gain extension of 0.5 on pitch and heave halves the felt attitude (no noise, no
     # delay difference): the pilot loop composes the configuration's own blocks
-    from twin.pilot.pitch import PitchPilot, simulate_pitch
+    from twin.pilot.models.pitch import PitchPilot, simulate_pitch
 
     base = motion_system("srs")
     half = base.replace(extensions=(Extension("gain", {"gain": 0.5}, ("pitch", "heave")),))
@@ -130,7 +130,7 @@ def test_every_block_has_its_transfer_function_in_python_control():
     import control
 
     from twin.chain.block import Backlash
-    from twin.errors import SignalError
+    from twin.core.errors import SignalError
 
     cfg = everything()
     f = np.geomspace(0.02, 30.0, 120)

@@ -118,9 +118,9 @@ def test_counted_progress_draws_one_bar_with_an_eta_and_steps_beside_it():
 
 
 def test_execute_reports_progress_at_most_ten_times(tmp_path):
+    from twin.chain.signals import builtin_signal
     from twin.chain.simulate import prepare
-    from twin.run_folder import execute, run_meta
-    from twin.signals import builtin_signal
+    from twin.formats.run_folder import execute, run_meta
 
     run = prepare("srs", builtin_signal("rest-2", 100.0), "reduced", 0)
     steps: list[tuple] = []

@@ -234,7 +234,7 @@ def test_an_option_of_the_other_experiment_names_the_command(capsys):
 
 def test_experiment_fixed_is_the_former_default_experiment(monkeypatch, capsys):
     """``pilot experiment fixed`` calls the library as ``pilot experiment`` did (5 runs)."""
-    from twin.pilot import experiment
+    from twin.pilot.studies import experiment
 
     seen = {}
 

@@ -4,9 +4,9 @@ import numpy as np
 import pytest
 
 from twin.agard.compare import compare, platform_dynamics
-from twin.frames import DOF_NAMES
+from twin.core.frames import DOF_NAMES
+from twin.core.thesis import TABLE_5_5
 from twin.platform.facts import load_facts
-from twin.thesis import TABLE_5_5
 
 #: Full-MuJoCo reproductions of Table 5.5 and Fig 5.6-5.8 (about 30 s): the slow suite.
 pytestmark = pytest.mark.slow

@@ -16,9 +16,9 @@ import pytest
 from cli_contract import fails_in_one_line as _fails
 
 from twin.cli.main import main
-from twin.errors import UsageError
-from twin.lifecycle import replacing_dir, replacing_file
-from twin.ownership import MANIFEST, output_policy, owned
+from twin.core.errors import UsageError
+from twin.core.lifecycle import replacing_dir, replacing_file
+from twin.core.ownership import MANIFEST, output_policy, owned
 
 SIM = ["simulate", "srs", "--model", "reduced", "--quiet"]
 

@@ -6,7 +6,7 @@ import pytest
 
 from twin.agard.df import DfResult
 from twin.chain.config import motion_system
-from twin.frames import dof_index
+from twin.core.frames import dof_index
 
 LINES_HZ = np.array([0.1, 0.2, 0.25, 0.45, 0.65, 0.85, 1.35, 2.3, 3.35, 5.5, 7.1])
 

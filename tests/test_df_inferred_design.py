@@ -10,10 +10,10 @@ import pytest
 
 from twin.agard.df import analyse_df
 from twin.chain.config import motion_system
-from twin.errors import RunFormatError, SignalError
+from twin.chain.signals import describing_signal
+from twin.core.errors import RunFormatError, SignalError
 from twin.measurement.measure import Bench, from_run
 from twin.measurement.periodic import periodic_design
-from twin.signals import describing_signal
 
 G = 9.80665
 LINES = (0.25, 0.65, 1.35, 2.3, 3.35)  # equal position amplitudes: 0.25 Hz is weak in acceleration

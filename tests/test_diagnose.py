@@ -15,9 +15,9 @@ import pytest
 from twin.chain.config import motion_system
 from twin.chain.extensions import Extension
 from twin.cli.main import main
+from twin.core.errors import RunFormatError
 from twin.diagnose.diagnosis import diagnose
 from twin.diagnose.hidden import clean, record, record_runs
-from twin.errors import RunFormatError
 
 
 def _clean_finds(seed: int, tmp_path) -> list[str]:
@@ -167,7 +167,7 @@ def test_cli_json_report_config_and_validation(delay_runs, tmp_path, capsys):
     os.umask(umask)
     assert (tmp_path / "rep").stat().st_mode & 0o777 == 0o777 & ~umask  # as mkdir would
     # the recording overlays measured, nominal and extended responses, in time and frequency
-    from twin.record import read_archetypes, read_timelines
+    from twin.viz.record import read_archetypes, read_timelines
 
     kinds = read_archetypes(tmp_path / "rep" / "diagnosis.rrd")
     timelines = read_timelines(tmp_path / "rep" / "diagnosis.rrd")

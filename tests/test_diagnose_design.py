@@ -16,16 +16,16 @@ import pytest
 
 from twin.chain.config import motion_system
 from twin.chain.extensions import Extension
+from twin.chain.signals import check_signal
 from twin.chain.simulate import prepare
 from twin.cli.main import main
 from twin.diagnose.design import design_from
 from twin.diagnose.diagnosis import diagnose
 from twin.diagnose.hidden import record_runs
 from twin.diagnose.select import BIC_MARGIN
-from twin.run_folder import execute, run_meta
-from twin.runs import read_commands
-from twin.schedule import read_schedule
-from twin.signals import check_signal
+from twin.formats.run_folder import execute, run_meta
+from twin.formats.runs import read_commands
+from twin.formats.schedule import read_schedule
 
 MPI = motion_system("mpi")
 TRUTH = MPI.replace(extensions=(Extension("delay", {"extra_delay_s": 0.020}, ("heave",)),))

@@ -12,7 +12,7 @@ from twin.agard.session import Session
 from twin.chain.config import load_config, motion_system
 from twin.chain.extensions import EFFECTS, Extension, backlash
 from twin.chain.simulate import default_imu
-from twin.errors import SignalError, UnknownPlatformError
+from twin.core.errors import SignalError, UnknownPlatformError
 from twin.measurement.measure import Bench
 
 LINEAR_CASES = [

@@ -19,15 +19,15 @@ from cli_contract import fails_in_one_line, run_cli
 from twin.chain.config import motion_system
 from twin.chain.extensions import Extension
 from twin.chain.simulate import default_imu, simulate
+from twin.chain.trajectory import Trajectory
 from twin.cli.main import main
+from twin.core.errors import SignalError
 from twin.diagnose.hidden_physics import HiddenPhysics, draw, judged, record
 from twin.diagnose.physical import rotated
 from twin.diagnose.physical_evidence import _projector
 from twin.diagnose.physical_vocabulary import PhysicalCause, configured, merged_config
 from twin.diagnose.select import Finding
-from twin.errors import SignalError
 from twin.platform.facts import load_model
-from twin.trajectory import Trajectory
 
 
 def test_a_payload_cause_makes_the_cabin_that_much_heavier_at_its_centre_of_gravity():

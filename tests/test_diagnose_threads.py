@@ -5,14 +5,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-import twin.threads
+import twin.core.threads
 from twin.chain.config import motion_system
+from twin.chain.signals import describing_signal
 from twin.chain.simulate import prepare
 from twin.diagnose.candidates import Model, make_extension
 from twin.diagnose.data import Case, measurement_channels, nominal_imu
+from twin.formats.run_folder import signal_meta
 from twin.measurement.measure import from_imu
-from twin.run_folder import signal_meta
-from twin.signals import describing_signal
 
 
 def _measurement(platform: str, dof: str):
@@ -30,7 +30,7 @@ def _same(a, b) -> bool:
 @pytest.fixture
 def one_thread(monkeypatch):
     def use_one():
-        monkeypatch.setattr(twin.threads, "SIMULATION_THREADS", 1)
+        monkeypatch.setattr(twin.core.threads, "SIMULATION_THREADS", 1)
 
     return use_one
 

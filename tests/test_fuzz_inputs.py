@@ -55,7 +55,7 @@ from group_signals import (
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from twin.ownership import MANIFEST
+from twin.core.ownership import MANIFEST
 
 FAST = 20
 SLOW = 300
@@ -103,7 +103,7 @@ def valid(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
     motion_system("mpi").save(root / "config.json")
     pilot = root / "pilot.csv"  # 6 s: read in full, then refused as too short for the analysis
     cols = {k: np.sin(t * (i + 1)) * 0.01 for i, k in enumerate(("ft", "fd", "e", "u", "theta"))}
-    from twin.pilot.records import write_pilot_csv
+    from twin.pilot.models.records import write_pilot_csv
 
     write_pilot_csv(pilot, {"t": t, **cols, "theta_felt": cols["theta"]})
     from twin.agard.omct import EXAMPLE_BOUNDS
@@ -612,7 +612,7 @@ def test_every_misspelt_key_of_a_model_file_is_refused_naming_it(
     name: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     """The model folder's files (``TWIN_MODELS_DIR``): a misspelt key was ignored."""
-    from twin.errors import ModelFileError
+    from twin.core.errors import ModelFileError
     from twin.platform.build import read_build_parameters
     from twin.platform.facts import load_facts, model_dir
 

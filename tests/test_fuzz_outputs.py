@@ -21,7 +21,7 @@ import numpy as np
 import pytest
 from cli_contract import assert_answered, run_cli
 
-from twin.ownership import MANIFEST
+from twin.core.ownership import MANIFEST
 
 
 def _hashes(folder: Path) -> dict[str, str]:

@@ -4,7 +4,7 @@ import mujoco
 import numpy as np
 import pytest
 
-from twin.errors import ModelFileError, UnknownPlatformError
+from twin.core.errors import ModelFileError, UnknownPlatformError
 from twin.platform.facts import load_facts
 from twin.platform.geometry import geometry_from_model, load_geometry
 

@@ -1,7 +1,7 @@
 """imu_alignment: the IMU mounted with its axes rotated on the cabin (cross-axis leakage).
 
 Every expected value is written out here by hand: the rotation matrices below are spelt
-element by element (not :func:`twin.frames.rotation_matrix`), gravity is the thesis' 9.81
+element by element (not :func:`twin.core.frames.rotation_matrix`), gravity is the thesis' 9.81
 m/s^2, and the leakage factors are the sines and cosines of the mount's angles. Convention:
 R = Rz(yaw) Ry(pitch) Rx(roll) takes the IMU's axes to the cabin's, the IMU reads R^T v of a
 cabin-axes vector v, so an IMU pitched nose-up by d on a cabin at rest reads ax = +g sin d.
@@ -14,17 +14,17 @@ import json
 import numpy as np
 import pytest
 
-import twin.run_checks as checks
+import twin.formats.run_checks as checks
 from twin.chain.config import MotionSystem, load_config, motion_system
 from twin.chain.extensions import Extension
 from twin.chain.imu import ImuSpec
+from twin.chain.signals import rest
 from twin.chain.simulate import Simulation, default_imu, simulate
+from twin.chain.trajectory import Trajectory
 from twin.cli.main import main
-from twin.errors import ConfigError, RunFormatError, SignalError
-from twin.run_checks import read_plausible_run
-from twin.runs import read_run
-from twin.signals import rest
-from twin.trajectory import Trajectory
+from twin.core.errors import ConfigError, RunFormatError, SignalError
+from twin.formats.run_checks import read_plausible_run
+from twin.formats.runs import read_run
 
 G = 9.81
 IDEAL = default_imu("srs").ideal()

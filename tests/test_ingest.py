@@ -18,13 +18,13 @@ from twin.chain.config import motion_system
 from twin.chain.imu import G, ImuSpec
 from twin.chain.simulate import default_imu
 from twin.cli.main import main
+from twin.core.errors import DataError, UsageError
 from twin.diagnose.data import load_case
 from twin.diagnose.hidden import record_runs
-from twin.errors import DataError, UsageError
+from twin.formats.runs import read_run
 from twin.ingest import import_run
 from twin.ingest.columns import split_unit, target_of
 from twin.ingest.timebase import regularise
-from twin.runs import read_run
 
 EXTRA_DELAY_S = 0.030
 MOUNT = (0.12, -0.05, -0.30)
@@ -232,8 +232,8 @@ def test_cli_json(truth_run: Path, tmp_path: Path, capsys) -> None:
 @pytest.fixture(scope="module")
 def weak_run(tmp_path_factory) -> Path:
     """Heave lines at 10-15 Hz behind the MPI's 1 Hz filter: about 1 % of the command remains."""
+    from twin.chain.signals import MultiSine, periodic_signal
     from twin.diagnose.hidden import play
-    from twin.signals import MultiSine, periodic_signal
 
     mpi = motion_system("mpi")
     ms = MultiSine(np.array([10.0, 12.0, 15.0]), np.array([0.5, 0.5, 0.5]))  # within limits

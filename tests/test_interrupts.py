@@ -21,7 +21,7 @@ import pytest
 from group_signals import ctrl_c, finish, left_behind, start, wait_until, writing_a_run
 
 from twin.cli.main import main
-from twin.interrupts import handling_ctrl_c
+from twin.core.interrupts import handling_ctrl_c
 
 INTERRUPTED = "twin: interrupted\n"
 
@@ -93,7 +93,7 @@ def _python(code: str) -> str:
 def test_ctrl_c_is_handled_once_then_ignored_while_the_command_ends():
     out = _python("""
         import os, signal, time
-        from twin.interrupts import GRACE_S, handling_ctrl_c
+        from twin.core.interrupts import GRACE_S, handling_ctrl_c
 
         def ctrl_c():
             os.kill(os.getpid(), signal.SIGINT)
@@ -122,7 +122,7 @@ def test_ctrl_c_is_handled_once_then_ignored_while_the_command_ends():
 def test_a_ctrl_c_while_deferred_comes_after_and_processes_started_meanwhile_ignore_it():
     out = _python("""
         import os, signal, subprocess, sys
-        from twin.interrupts import deferred
+        from twin.core.interrupts import deferred
 
         child = "import signal; print(signal.getsignal(signal.SIGINT) is signal.SIG_IGN)"
         try:
@@ -141,10 +141,10 @@ def test_a_ctrl_c_while_deferred_comes_after_and_processes_started_meanwhile_ign
 def test_the_worker_setup_ignores_ctrl_c_and_simulates_one_run_at_a_time():
     out = _python("""
         import signal
-        import twin.threads
-        from twin.tasks.worker_setup import dask_setup
+        import twin.core.threads
+        from twin.core.tasks.worker_setup import dask_setup
         dask_setup(None)
-        print(signal.getsignal(signal.SIGINT) is signal.SIG_IGN, twin.threads.SIMULATION_THREADS)
+        print(signal.getsignal(signal.SIGINT) is signal.SIG_IGN, twin.core.threads.SIMULATION_THREADS)
     """)
     assert out == "True 1\n"
 

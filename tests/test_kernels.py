@@ -1,4 +1,4 @@
-"""The compiled kernels give the bits of the NumPy expressions they replace (twin.kernels).
+"""The compiled kernels give the bits of the NumPy expressions they replace (twin.chain.kernels).
 
 Each test spells the NumPy original out (the expression the chain used before the kernel) and
 compares bit patterns, signed zeros included, on random data, non-contiguous views and
@@ -11,15 +11,15 @@ import numpy as np
 import pytest
 from scipy.interpolate import CubicSpline
 
-from twin import kernels
+from twin.chain import kernels
 from twin.chain.imu import specific_force
 from twin.chain.jets import hermite_eval, hermite_samples
 from twin.chain.reduced import ReducedPlatform
 from twin.chain.response import GRAVITY_BASE, PlatformResponse
-from twin.frames import angular_motion, rotation_matrix
+from twin.chain.trajectory import Trajectory, interp_columns
+from twin.core.frames import angular_motion, rotation_matrix
 from twin.platform.geometry import load_geometry
 from twin.platform.kinematics import leg_rates
-from twin.trajectory import Trajectory, interp_columns
 
 
 def same_bits(a: np.ndarray, b: np.ndarray) -> bool:

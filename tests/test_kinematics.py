@@ -5,8 +5,8 @@ import pytest
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
-from twin.errors import ForwardKinematicsError, OutOfStrokeError, PoseError
-from twin.frames import euler_rate_matrix, rotation_matrix
+from twin.core.errors import ForwardKinematicsError, OutOfStrokeError, PoseError
+from twin.core.frames import euler_rate_matrix, rotation_matrix
 from twin.platform.geometry import load_geometry
 from twin.platform.kinematics import (
     actuator_trajectory,

@@ -4,8 +4,8 @@ import mujoco
 import numpy as np
 import pytest
 
-from twin.errors import ModelFileError
-from twin.frames import rotation_matrix
+from twin.core.errors import ModelFileError
+from twin.core.frames import rotation_matrix
 from twin.platform.build import read_build_parameters, render
 from twin.platform.facts import PLATFORMS, load_model, model_dir, model_path
 from twin.platform.geometry import load_geometry

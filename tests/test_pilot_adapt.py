@@ -1,4 +1,4 @@
-"""The adaptive pilot (twin.pilot.adapt) and the Chapter 6 statistics (twin.pilot.population)."""
+"""The adaptive pilot (twin.pilot.models.adapt) and the Chapter 6 statistics (twin.pilot.studies.population)."""
 
 from __future__ import annotations
 
@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from twin.cli.main import main
-from twin.errors import SignalError
-from twin.pilot.adapt import (
+from twin.core.errors import SignalError
+from twin.pilot.models.adapt import (
     ADAPTED,
     EQUALISATION,
     SPEED_ACCURACY,
@@ -21,8 +21,8 @@ from twin.pilot.adapt import (
     stable,
     visual_noise_ratio,
 )
-from twin.pilot.pitch import PitchPilot, simulate_pitch
-from twin.pilot.population import COMPARED, FACTORS, MEASURES, anova, levels
+from twin.pilot.models.pitch import PitchPilot, simulate_pitch
+from twin.pilot.studies.population import COMPARED, FACTORS, MEASURES, anova, levels
 
 
 @pytest.fixture(scope="module")
@@ -78,7 +78,7 @@ def test_a_pilot_with_fixed_limitations_keeps_its_neuromuscular_system():
 
 def test_a_population_refuses_bad_choices_before_flying():
     """Checked before any subject flies: the run-to-run variation and the adapted names."""
-    from twin.pilot.population import run_population
+    from twin.pilot.studies.population import run_population
 
     for sd in (float("nan"), -0.1, 1.5):
         with pytest.raises(SignalError, match=r"log-normal sd in \[0, 1\]"):
@@ -200,8 +200,8 @@ def test_subjects_differ_in_how_well_they_perceive_motion():
     """Each subject's motion noise (relative to its visual) is log-normal with the stated
     spread, drawn from its own stream: the other draws are those of a population drawn
     without it (its delays, neuromuscular system and priorities from the first stream)."""
-    from twin.pilot.population import SUBJECT_SPREAD, subjects
-    from twin.pilot.spread import MOTION_NOISE_SD, Spread
+    from twin.pilot.studies.population import SUBJECT_SPREAD, subjects
+    from twin.pilot.studies.spread import MOTION_NOISE_SD, Spread
 
     many = subjects(400, seed=3)
     logs = np.log([s.motion_noise for s in many])
@@ -226,8 +226,8 @@ def test_subjects_differ_in_visual_delay_by_the_spread_set():
     """The visual delay's sd is a setting: its draws are the same standard deviates scaled,
     so one seed's subjects are the same people more or less alike in visual delay, and all
     their other draws are unchanged."""
-    from twin.pilot.population import subjects
-    from twin.pilot.spread import Spread
+    from twin.pilot.studies.population import subjects
+    from twin.pilot.studies.spread import Spread
 
     many = subjects(400, seed=5, spread=Spread(visual_delay=0.02))
     tau_v = np.array([s.limitations.tau_v for s in many])
@@ -261,14 +261,14 @@ def test_subjects_differ_in_visual_delay_by_the_spread_set():
     ],
 )
 def test_a_spread_out_of_range_is_refused_naming_it(kwargs, message):
-    from twin.pilot.population import subjects
-    from twin.pilot.spread import Spread
+    from twin.pilot.studies.population import subjects
+    from twin.pilot.studies.spread import Spread
 
     with pytest.raises(SignalError, match=message):
         Spread(**kwargs)
     assert Spread(-0.0, -0.0).to_dict() == {"motion_spread": 0.0, "visual_delay_sd": 0.0}
     assert str(Spread(-0.0, -0.0).motion) == "0.0"
-    with pytest.raises(TypeError, match=r"spread must be a twin\.pilot\.spread\.Spread"):
+    with pytest.raises(TypeError, match=r"spread must be a twin\.pilot\.studies\.spread\.Spread"):
         subjects(3, 0, 0.5)
 
 
@@ -276,7 +276,7 @@ def test_a_repetition_flies_with_the_subjects_motion_perception():
     """Without run-to-run variation a repetition is the adapted pilot, and its predicted
     performance is the adaptation's: the subject's motion noise is carried into both (a
     repetition predicted without it would differ)."""
-    from twin.pilot.population import Subject, _repetition
+    from twin.pilot.studies.population import Subject, _repetition
 
     subject = Subject(1, PitchPilot(), 0.03, 0.01, motion_noise=2.4)
     task = Task.pitch("condition-1")
@@ -293,8 +293,8 @@ def test_a_repetition_flies_with_the_subjects_motion_perception():
 def test_population_measures_follow_what_was_adapted():
     """tau_v is among the ANOVA's measures (beside Table 6.7's F 35.8) only where the subjects
     adapt it; a subject's rows carry it either way."""
-    from twin.pilot.population import population_result
-    from twin.pilot.spread import Spread
+    from twin.pilot.studies.population import population_result
+    from twin.pilot.studies.spread import Spread
 
     rng = np.random.default_rng(4)
     flown = [[{"subject": s, "condition": n, "filter": fb, "delay": dl, "noise": nz,
@@ -377,14 +377,14 @@ def test_nine_adaptive_subjects_predict_the_filter_effects_of_chapter_6():
     have the thesis' direction with p < 0.05, and delay and noise have no significant effect
     on the disturbance crossover; on the target crossover they have none in at least 3 of 5.
 
-    And as a replication (twin.pilot.replication): the median effect over the populations has
+    And as a replication (twin.pilot.studies.replication): the median effect over the populations has
     the thesis' direction for every filter effect of Tables 6.4-6.7, including the three that
     single populations miss most (var(u), the target crossover, zeta_nm); the thesis' target
     crossover effect is a plausible draw of the twin's populations (predictive p >= 0.05;
     over 20 populations p = 0.33, docs). And the default population (seed 0) meets the
     issue's acceptance at once."""
-    from twin.pilot.design import ACCEPTANCE
-    from twin.pilot.replication import run_populations
+    from twin.pilot.studies.design import ACCEPTANCE
+    from twin.pilot.studies.replication import run_populations
 
     rep, results = run_populations(5, 9, 0, scheduler="local:2")
     checked = {(m, "filter") for m in ("var_e", "crossover_disturbance_rad_s", "k_v", "k_m",
@@ -418,8 +418,8 @@ def test_nearly_every_adapted_subject_flies_with_less_control_activity_behind_th
     variation, fly with less control activity behind the filter - at least 8 of 9 - and a
     lower target crossover - at least 7 of 9; their neuromuscular frequency falls (Table 6.7,
     F 53.11) in all nine."""
-    from twin.pilot.population import filter_effect, subjects
-    from twin.tasks.engine import Engine
+    from twin.core.tasks.engine import Engine
+    from twin.pilot.studies.population import filter_effect, subjects
 
     subs = subjects(9, 0)
     with Engine("local:2") as engine:
@@ -440,8 +440,8 @@ def test_behind_the_filter_the_motion_delay_is_not_identifiable():
     (as the thesis' did) and tau_m not identifiable, whatever value the fit lands on; where
     the pilot uses motion (condition 1) tau_m is identified within two bounds of its own."""
     from twin.chain.config import motion_system
-    from twin.pilot.experiment import pitch_remnant_scale
-    from twin.pilot.mle import fit_pitch_pilot
+    from twin.pilot.identification.mle import fit_pitch_pilot
+    from twin.pilot.studies.experiment import pitch_remnant_scale
 
     for n in (1, 5):
         truth = adapt(f"condition-{n}").pilot

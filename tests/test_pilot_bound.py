@@ -1,4 +1,4 @@
-"""The Cramer-Rao bound at a given pilot (:func:`twin.pilot.mle.bound_at`)."""
+"""The Cramer-Rao bound at a given pilot (:func:`twin.pilot.identification.mle.bound_at`)."""
 
 import dataclasses
 
@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 
 from twin.chain.config import motion_system
-from twin.errors import SignalError
-from twin.pilot.experiment import pitch_remnant_scale
-from twin.pilot.mle import PARAMETERS, _bounds, bound_at, fit_pitch_pilot
-from twin.pilot.pitch import PitchPilot, simulate_pitch
+from twin.core.errors import SignalError
+from twin.pilot.identification.mle import PARAMETERS, _bounds, bound_at, fit_pitch_pilot
+from twin.pilot.models.pitch import PitchPilot, simulate_pitch
+from twin.pilot.studies.experiment import pitch_remnant_scale
 
 TRUTH = PitchPilot(tau_v=0.275)  # visual + display delay on the 10 ms simulation grid
 CFG = motion_system("condition-8")
@@ -87,7 +87,7 @@ def test_an_estimate_on_an_end_of_its_range_is_one_the_data_do_not_move_off():
     it there costs less than 0.01 in chi-square: t_lag 2e-6 s from zero (the solver creeps
     towards an end where the likelihood is flat), zeta_nm on its lower end 0.02 (not zero) and
     omega_nm on its upper end; k_m 4e-3 from zero is not, where the data pin it there."""
-    from twin.pilot.mle import LOWER, UPPER, _on_bound
+    from twin.pilot.identification.mle import LOWER, UPPER, _on_bound
 
     x = np.array([1.5, 0.2, 2e-6, 0.275, 4e-3, 0.2, UPPER[6], LOWER[7]])
     sd = np.array([1.0, 1.0, 1.0, 1.0, 1e-4, 1.0, 1.0, 1.0])
@@ -106,7 +106,7 @@ def test_an_end_competes_where_the_data_hardly_see_a_parameter_and_cannot_rule_t
     0.02 (costs 0.09), omega_nm 39 on a range to 40 (costs 0.04), t_lead 0.2 with sd 0.1
     (costs 4, more than 3.84: ruled out); not k_v (weak, but on its end already), k_m (its
     sd is a tenth of its distance to zero) nor tau_m (not seen at all: infinite bound)."""
-    from twin.pilot.mle import LOWER, _ends_not_ruled_out
+    from twin.pilot.identification.mle import LOWER, _ends_not_ruled_out
 
     x = np.array([LOWER[0], 0.2, 0.04, 0.275, 0.3, 0.2, 39.0, 0.05])
     sd = np.array([1.0, 0.1, 0.05, 0.01, 0.03, np.inf, 5.0, 0.1])
@@ -139,7 +139,7 @@ def test_a_lag_on_its_bound_is_not_identifiable_and_widens_what_moves_with_it():
     fit = fit_pitch_pilot(r.ft, r.fd, r.u[0], CFG)
     assert fit.competing == ()  # the widening below is the profile point's alone
     assert list(fit.on_range_bound) == ["t_lag"]
-    # t_lead's sd is also taken along the likelihood's valley (twin.pilot.profile_wald), with
+    # t_lead's sd is also taken along the likelihood's valley (twin.pilot.identification.profile_wald), with
     # t_lag free to leave zero there: wider here, enough to flag it from this one run
     assert set(fit.unidentifiable) - {"t_lead"} == {"t_lag"}
     assert fit.crlb["t_lag"] == np.inf
@@ -227,7 +227,7 @@ def test_a_minimum_the_data_rule_out_widens_the_bound_for_the_selection():
     pair's other basin is ruled out (chi-square 15 above the best, Vuong's test prefers the
     best), nothing competes, and the estimate came out low, as those that pass do: t_lead
     0.173 s with a bound of 0.013 s at the estimate, which misses the truth (0.2) by more than
-    two. Widened for the selection (:mod:`twin.pilot.selection`) it holds the truth; t_lag,
+    two. Widened for the selection (:mod:`twin.pilot.identification.selection`) it holds the truth; t_lag,
     whose estimate lies near the limit where the other basin would compete again, is no
     longer counted as identified."""
     r = simulate_pitch(TRUTH, CFG, 5, seed=23, remnant_scale=pitch_remnant_scale(TRUTH, 0.15))

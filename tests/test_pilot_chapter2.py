@@ -3,14 +3,14 @@
 import numpy as np
 import pytest
 
-from twin.pilot.arx import ArxOrders, decimate, fit_arx
-from twin.pilot.fc import fc_estimate
-from twin.pilot.fit import parameter_errors
-from twin.pilot.forcing import roll_task
-from twin.pilot.loop import remnant_scale_for, simulate_loop
-from twin.pilot.model import ESTIMATED, RollPilot
-from twin.pilot.montecarlo import monte_carlo
-from twin.thesis import TABLE_2_3
+from twin.core.thesis import TABLE_2_3
+from twin.pilot.identification.arx import ArxOrders, decimate, fit_arx
+from twin.pilot.identification.fc import fc_estimate
+from twin.pilot.identification.fit import parameter_errors
+from twin.pilot.models.forcing import roll_task
+from twin.pilot.models.loop import remnant_scale_for, simulate_loop
+from twin.pilot.models.model import ESTIMATED, RollPilot
+from twin.pilot.studies.montecarlo import monte_carlo
 
 FD, FT = roll_task()
 PILOT = RollPilot()
@@ -124,8 +124,8 @@ def test_fc_analytic_variance_against_monte_carlo():
     is 0.2-3x: low lines over-predicted, high lines, where interpolation dominates, under);
     the analytic bias (Eq 2.4, 2.6) is below 1 % of |H| at the six upper lines (3.5-16 rad/s,
     high signal-to-noise) and largest at the low lines."""
-    from twin.pilot.fc import fc_variance
-    from twin.pilot.model import roll_dynamics
+    from twin.pilot.identification.fc import fc_variance
+    from twin.pilot.models.model import roll_dynamics
 
     g = remnant_scale_for(PILOT, FD, FT, 0.1)
     d = simulate_loop(PILOT, FD, FT, 400, seed=7, remnant_scale=g)
@@ -146,9 +146,9 @@ def test_remnant_filtered_in_blocks_has_the_bits_of_the_filter_stepped_sample_by
     bits as the transposed direct form II stepped one sample at a time with one draw each."""
     from scipy import signal
 
-    from twin.errors import SignalError
-    from twin.pilot.loop import REMNANT_BLOCK, Remnant, _Filter
-    from twin.pilot.model import REMNANT_FILTER
+    from twin.core.errors import SignalError
+    from twin.pilot.models.loop import REMNANT_BLOCK, Remnant, _Filter
+    from twin.pilot.models.model import REMNANT_FILTER
 
     runs, n = 3, 2 * REMNANT_BLOCK + 17
     rng = np.random.default_rng(11)
@@ -178,7 +178,7 @@ def test_the_loop_in_blocks_has_the_bits_of_the_loop_stepped_sample_by_sample(
     last short block; a pilot whose delay rounds to no sample is stepped (the last case)."""
     from dataclasses import replace
 
-    from twin.pilot import loop
+    from twin.pilot.models import loop
 
     pilot = replace(PILOT, tau_v=tau_v, tau_m=tau_m)
     t = np.arange(2 * loop.REMNANT_BLOCK + 37) / 100.0

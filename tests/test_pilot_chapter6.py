@@ -4,9 +4,9 @@ import numpy as np
 import pytest
 
 from twin.chain.config import motion_system
-from twin.pilot.experiment import run_experiment
-from twin.pilot.forcing import pitch_task
-from twin.pilot.pitch import PitchPilot, open_loops, simulate_pitch
+from twin.pilot.models.forcing import pitch_task
+from twin.pilot.models.pitch import PitchPilot, open_loops, simulate_pitch
+from twin.pilot.studies.experiment import run_experiment
 
 
 def test_forcing_functions_follow_table_6_2():
@@ -62,8 +62,8 @@ def test_mle_recovers_the_pilot():
     remnant, one run: gains within 15 %, delays within 20 ms, omega_nm within 10 %, zeta_nm
     within 30 % (the lead-lag pair trades off and is not checked); the VAF drops to 75-90 %
     as the thesis' 89 % (Fig 6.6)."""
-    from twin.pilot.experiment import pitch_remnant_scale
-    from twin.pilot.mle import fit_pitch_pilot
+    from twin.pilot.identification.mle import fit_pitch_pilot
+    from twin.pilot.studies.experiment import pitch_remnant_scale
 
     truth = PitchPilot(tau_v=0.275)  # visual + display delay on the 10 ms simulation grid
     start = PitchPilot(k_v=1.0, t_lead=0.4, t_lag=0.3, k_m=0.2, omega_nm=9.0, zeta_nm=0.4)
@@ -102,8 +102,8 @@ def test_mle_escapes_the_local_optimum_and_names_what_it_cannot_identify():
     0.20, t_lead = t_lag = 0.27 with CRLB sd 400+, k_v 1.66 for 1.5 at 5 sd). Now the delays are
     found, every parameter is either within 2.5 CRLB sd of the truth or listed as not
     identifiable, and the minimum the run does not rule out is reported."""
-    from twin.pilot.experiment import pitch_remnant_scale
-    from twin.pilot.mle import fit_pitch_pilot
+    from twin.pilot.identification.mle import fit_pitch_pilot
+    from twin.pilot.studies.experiment import pitch_remnant_scale
 
     truth = PitchPilot(tau_v=0.275)  # visual + display delay on the 10 ms simulation grid
     cfg = motion_system("condition-8")
@@ -125,9 +125,9 @@ def test_mle_on_repetitions_narrows_the_bound_as_averaging_should():
     """Five repetitions of condition 8 (15 % remnant), averaged at the lines as the thesis
     averaged its five: the gains' bounds shrink by about sqrt(5) (between 1.6x and 3.2x) and
     the estimates stay within 2.5 of them; a constant u is refused."""
-    from twin.errors import SignalError
-    from twin.pilot.experiment import pitch_remnant_scale
-    from twin.pilot.mle import fit_pitch_pilot
+    from twin.core.errors import SignalError
+    from twin.pilot.identification.mle import fit_pitch_pilot
+    from twin.pilot.studies.experiment import pitch_remnant_scale
 
     truth = PitchPilot(tau_v=0.275)
     cfg = motion_system("condition-8")
@@ -144,8 +144,8 @@ def test_mle_on_repetitions_narrows_the_bound_as_averaging_should():
 
 def test_mle_refuses_a_window_that_is_not_whole_periods():
     """81.92 s at 120 Hz is 9830.4 samples: the lines leak into every bin. One clear error."""
-    from twin.errors import SignalError
-    from twin.pilot.mle import fit_pitch_pilot
+    from twin.core.errors import SignalError
+    from twin.pilot.identification.mle import fit_pitch_pilot
 
     r = simulate_pitch(PitchPilot(), "condition-1", 1, seed=0, rate_hz=120.0)
     with pytest.raises(SignalError, match="whole periods"):
@@ -157,8 +157,8 @@ def test_conditions_are_grouped_as_the_thesis_figures_with_confidence_intervals(
     the bar is the 95 % CI of the mean (t quantile), none for a single value."""
     from scipy import stats
 
-    from twin.pilot.condition_figure import OFFSET, group_labels, mean_ci, position
-    from twin.thesis import TABLE_6_3
+    from twin.core.thesis import TABLE_6_3
+    from twin.pilot.studies.condition_figure import OFFSET, group_labels, mean_ci, position
 
     groups = {}
     for n, (fb, delay, noise) in TABLE_6_3.items():
@@ -192,9 +192,9 @@ def test_the_pitch_loop_in_blocks_has_the_bits_of_the_loop_stepped(change, model
 
     from configurations import everything
 
-    from twin.errors import SignalError
-    from twin.pilot.pitch import pitch_loop
-    from twin.pilot.pitch_loop import fly, fly_stepped
+    from twin.core.errors import SignalError
+    from twin.pilot.models.pitch import pitch_loop
+    from twin.pilot.models.pitch_loop import fly, fly_stepped
 
     pilot = replace(PitchPilot(), **change)
     # past a remnant block (1000 samples); fewer where the chain is stepped every sample

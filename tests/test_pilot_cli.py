@@ -5,13 +5,13 @@ import json
 import pytest
 
 from twin.cli.main import main
-from twin.ownership import MANIFEST
+from twin.core.ownership import MANIFEST
 
 
 def test_run_writes_a_csv_that_identify_reads(capsys, tmp_path):
     """A pilot recording holds the loop's signals [deg] and the open loops against frequency
     with their figure; the CSV is read back by identify."""
-    from twin.record import read_archetypes, read_entities, read_timelines
+    from twin.viz.record import read_archetypes, read_entities, read_timelines
 
     csv, rrd = tmp_path / "run.csv", tmp_path / "run.rrd"
     assert main(["pilot", "run", "condition-1", "--out", str(csv), "--rrd", str(rrd),
@@ -84,10 +84,10 @@ def test_repetitions_are_written_one_file_each_and_identified_together(capsys, t
     import numpy as np
 
     from twin.chain.config import motion_system
-    from twin.pilot.experiment import pitch_remnant_scale
-    from twin.pilot.mle import fit_pitch_pilot
-    from twin.pilot.pitch import PitchPilot, simulate_pitch
-    from twin.pilot.records import read_pilot_csv, write_pilot_csv
+    from twin.pilot.identification.mle import fit_pitch_pilot
+    from twin.pilot.models.pitch import PitchPilot, simulate_pitch
+    from twin.pilot.models.records import read_pilot_csv, write_pilot_csv
+    from twin.pilot.studies.experiment import pitch_remnant_scale
 
     out = tmp_path / "rep.csv"
     assert main(["pilot", "run", "condition-8", "--runs", "3", "--out", str(out), "--quiet"]) == 0
@@ -201,7 +201,7 @@ def test_identify_intervals_are_printed_and_in_the_json(capsys, tmp_path):
 
 
 def test_an_interval_end_at_the_fit_range_is_called_open():
-    from twin.pilot.identify_runs import interval_text
+    from twin.pilot.identification.identify_runs import interval_text
 
     assert interval_text("omega_nm", 9.5, 12.0) == "[9.5000, 12.0000]"
     assert interval_text("omega_nm", 3.0, 12.0) == "[3.0000, 12.0000] (open below)"

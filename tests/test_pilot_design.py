@@ -1,4 +1,4 @@
-"""Experiments designed on the twin's subjects (twin.pilot.design)."""
+"""Experiments designed on the twin's subjects (twin.pilot.studies.design)."""
 
 from __future__ import annotations
 
@@ -9,8 +9,9 @@ import pytest
 from planted import planted_rows
 from scipy import stats
 
-from twin.errors import SignalError
-from twin.pilot.design import (
+from twin.core.errors import SignalError
+from twin.core.thesis import TABLES_6_4_TO_6_7
+from twin.pilot.studies.design import (
     ACCEPTANCE,
     Design,
     agreements,
@@ -19,8 +20,7 @@ from twin.pilot.design import (
     subjects_for,
     window,
 )
-from twin.pilot.population import FACTORS, MEASURES, PopulationResult, anova
-from twin.thesis import TABLES_6_4_TO_6_7
+from twin.pilot.studies.population import FACTORS, MEASURES, PopulationResult, anova
 
 #: The contract's measures (every effect of the acceptance) and one more.
 MEASURED = (*MEASURES, "t_lead")
@@ -215,7 +215,7 @@ def test_cli_populations_design_the_next_experiment(monkeypatch, tmp_path, capsy
     from test_pilot_replication import fake_fly
 
     from twin.cli.main import main
-    from twin.pilot import replication
+    from twin.pilot.studies import replication
 
     monkeypatch.setattr(replication, "fly_subject", fake_fly)
     png = str(tmp_path / "rep.png")

@@ -4,10 +4,10 @@ import numpy as np
 import pytest
 
 from twin.chain.config import motion_system
-from twin.errors import SignalError
-from twin.pilot.experiment import pitch_remnant_scale
-from twin.pilot.felt_motion import MATCH_MAX, felt_mismatch, match_motion, settle_s
-from twin.pilot.pitch import PitchPilot, simulate_pitch
+from twin.core.errors import SignalError
+from twin.pilot.identification.felt_motion import MATCH_MAX, felt_mismatch, match_motion, settle_s
+from twin.pilot.models.pitch import PitchPilot, simulate_pitch
+from twin.pilot.studies.experiment import pitch_remnant_scale
 
 #: Configurations with condition-7's pitch response (1 Hz filter, 35 ms; noise is in heave).
 LIKE_7 = {"condition-7", "condition-8", "mpi"}

@@ -9,11 +9,11 @@ import numpy as np
 import pytest
 
 from twin.chain.config import motion_system
-from twin.errors import SignalError
-from twin.pilot.experiment import pitch_remnant_scale
-from twin.pilot.forcing import pitch_task
-from twin.pilot.mle import PARAMETERS, fit_pitch_pilot, fit_text
-from twin.pilot.pitch import Feedthrough, PitchPilot, simulate_pitch
+from twin.core.errors import SignalError
+from twin.pilot.identification.mle import PARAMETERS, fit_pitch_pilot, fit_text
+from twin.pilot.models.forcing import pitch_task
+from twin.pilot.models.pitch import Feedthrough, PitchPilot, simulate_pitch
+from twin.pilot.studies.experiment import pitch_remnant_scale
 
 CONFIG = motion_system("condition-8")
 

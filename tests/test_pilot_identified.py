@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from twin.cli.main import main
-from twin.errors import SignalError
-from twin.pilot.identified import IDENTIFIED, identified_population, identified_subject
-from twin.pilot.population import fly_subject, subjects
+from twin.core.errors import SignalError
+from twin.pilot.studies.identified import IDENTIFIED, identified_population, identified_subject
+from twin.pilot.studies.population import fly_subject, subjects
 
 
 @pytest.fixture(scope="module")
@@ -75,8 +75,8 @@ def test_populations_measured_differently_are_not_pooled():
     comparable with one whose measures are the pilots' own (replication.alike)."""
     from planted import planted_rows
 
-    from twin.pilot.population import PopulationResult, anova
-    from twin.pilot.replication import alike
+    from twin.pilot.studies.population import PopulationResult, anova
+    from twin.pilot.studies.replication import alike
 
     def population(seed, identified):
         rows = planted_rows(seed)
@@ -107,8 +107,8 @@ def test_identified_populations_replicate_as_one_flown_alone(capsys):
 @pytest.mark.slow  # the subject's identification takes 40-50 s
 def test_the_condition_figure_of_an_identified_population_shows_the_fits(subject_rows, tmp_path):
     """Fig 6.5-6.9 of identified measures: tau_v, tau_m and each fit's chi-square per dof too."""
-    from twin.pilot.population import PopulationResult
-    from twin.plotting import pyplot
+    from twin.core.plotting import pyplot
+    from twin.pilot.studies.population import PopulationResult
 
     _, identified = subject_rows
     fig = PopulationResult(identified, {}, 0, identified=0.0).plot_conditions(tmp_path / "c.png")

@@ -1,4 +1,4 @@
-"""twin.pilot.identify_runs: the pilot identified from recorded runs, as a library function."""
+"""twin.pilot.identification.identify_runs: the pilot identified from recorded runs, as a library function."""
 
 from __future__ import annotations
 
@@ -8,8 +8,8 @@ from pathlib import Path
 import pytest
 
 from twin.cli.main import main
-from twin.errors import SignalError, UsageError
-from twin.pilot.identify_runs import PilotIdentification, identify
+from twin.core.errors import SignalError, UsageError
+from twin.pilot.identification.identify_runs import PilotIdentification, identify
 
 
 @pytest.fixture(scope="module")

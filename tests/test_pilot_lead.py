@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from twin.chain.config import motion_system
-from twin.pilot.lead import analyse_lead
+from twin.pilot.models.lead import analyse_lead
 
 
 def test_canal_thresholds_follow_the_stated_criterion():

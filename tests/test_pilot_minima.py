@@ -1,9 +1,9 @@
-"""Minima the data cannot tell apart: Vuong's test (:mod:`twin.pilot.minima`)."""
+"""Minima the data cannot tell apart: Vuong's test (:mod:`twin.pilot.identification.minima`)."""
 
 import numpy as np
 import pytest
 
-from twin.pilot.minima import VUONG_Z, competing, distinct, vuong_z, widened
+from twin.pilot.identification.minima import VUONG_Z, competing, distinct, vuong_z, widened
 
 LINES = 40  # real and imaginary parts at Table 6.2's 20 lines
 

@@ -1,11 +1,11 @@
-"""Likelihood-ratio intervals from the profile likelihood (twin.pilot.profile), and the
+"""Likelihood-ratio intervals from the profile likelihood (twin.pilot.identification.profile), and the
 pilot fit's intervals where its Cramer-Rao bounds are too narrow."""
 
 import numpy as np
 import pytest
 from scipy.optimize import least_squares
 
-from twin.pilot.profile import inward_point, likelihood_interval, profile_fit
+from twin.pilot.identification.profile import inward_point, likelihood_interval, profile_fit
 
 T = np.linspace(0.0, 2.0, 21)
 RNG = np.random.default_rng(5)
@@ -117,9 +117,9 @@ def test_the_pilot_fit_interval_covers_omega_nm_where_the_bound_misses():
     twice two bounds below the estimate, so omega_nm is reported not identifiable by its
     bound (QUADRATIC_SIDE_RATIO)."""
     from twin.chain.config import motion_system
-    from twin.pilot.experiment import pitch_remnant_scale
-    from twin.pilot.mle import QUADRATIC_SIDE_RATIO, fit_pitch_pilot
-    from twin.pilot.pitch import PitchPilot, simulate_pitch
+    from twin.pilot.identification.mle import QUADRATIC_SIDE_RATIO, fit_pitch_pilot
+    from twin.pilot.models.pitch import PitchPilot, simulate_pitch
+    from twin.pilot.studies.experiment import pitch_remnant_scale
 
     truth = PitchPilot(tau_v=0.275)
     cfg = motion_system("condition-8")

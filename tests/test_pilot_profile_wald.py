@@ -1,14 +1,21 @@
-"""The bound along the likelihood's valley (:mod:`twin.pilot.profile_wald`)."""
+"""The bound along the likelihood's valley (:mod:`twin.pilot.identification.profile_wald`)."""
 
 import numpy as np
 import pytest
 
 from twin.chain.config import motion_system
-from twin.pilot.experiment import pitch_remnant_scale
-from twin.pilot.mle import LOWER, PARAMETERS, UPPER, _bounds, _LineProblem, fit_pitch_pilot
-from twin.pilot.pitch import PitchPilot, simulate_pitch
-from twin.pilot.profile import profile_fit
-from twin.pilot.profile_wald import TOLERANCE, profile_wald_sd
+from twin.pilot.identification.mle import (
+    LOWER,
+    PARAMETERS,
+    UPPER,
+    _bounds,
+    _LineProblem,
+    fit_pitch_pilot,
+)
+from twin.pilot.identification.profile import profile_fit
+from twin.pilot.identification.profile_wald import TOLERANCE, profile_wald_sd
+from twin.pilot.models.pitch import PitchPilot, simulate_pitch
+from twin.pilot.studies.experiment import pitch_remnant_scale
 
 TRUTH = PitchPilot(tau_v=0.275)
 CFG = motion_system("condition-8")

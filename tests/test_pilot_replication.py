@@ -1,4 +1,4 @@
-"""Chapter 6 replicated over populations (twin.pilot.replication)."""
+"""Chapter 6 replicated over populations (twin.pilot.studies.replication)."""
 
 from __future__ import annotations
 
@@ -12,12 +12,12 @@ from planted import planted_rows
 from scipy import stats
 
 from twin.cli.main import main
-from twin.errors import SignalError
-from twin.pilot import population, replication
-from twin.pilot.adapt import ADAPTED
-from twin.pilot.population import PopulationResult, anova, compared
-from twin.pilot.replication import agreement_probability, replicate, run_populations
-from twin.pilot.spread import MOTION_NOISE_SD, VISUAL_DELAY_SD, Spread
+from twin.core.errors import SignalError
+from twin.pilot.models.adapt import ADAPTED
+from twin.pilot.studies import population, replication
+from twin.pilot.studies.population import PopulationResult, anova, compared
+from twin.pilot.studies.replication import agreement_probability, replicate, run_populations
+from twin.pilot.studies.spread import MOTION_NOISE_SD, VISUAL_DELAY_SD, Spread
 
 
 @pytest.mark.parametrize(("f", "significant"), [(5.98, True), (15.0, True), (4.67, False),
@@ -81,7 +81,7 @@ def test_a_replication_of_planted_populations_flags_only_a_reversed_effect(tmp_p
 def test_the_predictive_p_is_uniform_when_the_new_draw_comes_from_the_same_distribution(scale):
     """4000 sets of 20 normal draws and one more (sd ``scale`` times theirs): the fraction
     with p < 0.05 is 0.05 and with p < 0.5 is 0.5, within 4 binomial sd."""
-    from twin.pilot.replication import predictive_p
+    from twin.pilot.studies.replication import predictive_p
 
     rng = np.random.default_rng(5)
     p = np.array([predictive_p(rng.normal(3, 1, 20), rng.normal(3, scale), scale)
@@ -100,7 +100,7 @@ def test_the_predictive_log_density_is_a_density_peaked_at_the_draws_mean():
     """It integrates to 1 over the new draw (whatever the scale), is highest at the draws'
     mean and falls as p falls; summed over a replication's effects it is the replication's
     score, and the thesis' sign counts where it gave one (the likelier sign where not)."""
-    from twin.pilot.replication import (
+    from twin.pilot.studies.replication import (
         EffectReplication,
         Replication,
         predictive_log_density,
@@ -130,7 +130,7 @@ def test_the_predictive_log_density_is_a_density_peaked_at_the_draws_mean():
 
 
 def test_the_thesis_standardised_effect_has_its_direction_or_both_signs():
-    from twin.pilot.replication import EffectReplication
+    from twin.pilot.studies.replication import EffectReplication
 
     def effect(f, direction):
         return EffectReplication("m", "filter", f, direction, (-9.0, -16.0), 9, 0, 0.5)
@@ -167,7 +167,9 @@ def test_a_replication_refuses_one_population_and_mixed_settings():
     for other in (Spread(motion=0.0), Spread(visual_delay=VISUAL_DELAY_SD + 0.01)):
         with pytest.raises(SignalError, match="the subjects' spreads"):
             replicate([one, PopulationResult(rows, anova(rows), 1, spread=other)])
-    with pytest.raises(TypeError, match=r"spread must be a twin.pilot.spread.Spread .* float"):
+    with pytest.raises(
+        TypeError, match=r"spread must be a twin.pilot.studies.spread.Spread .* float"
+    ):
         run_populations(2, spread=0.5)
 
 
@@ -251,8 +253,8 @@ def test_halves_say_how_sure_a_choice_of_settings_is(monkeypatch):
     populations (every one of the 924 of twelve, or random ones) give its spread; a setting
     whose effects sit nearer the thesis wins in nearly every half, one barely different does
     not win in every half."""
-    from twin.pilot import compare_settings
-    from twin.pilot.compare_settings import log_density_difference
+    from twin.pilot.studies import compare_settings
+    from twin.pilot.studies.compare_settings import log_density_difference
 
     results = [PopulationResult(planted_rows(s, subjects=9), {}, s) for s in range(12)]
     results = [PopulationResult(r.rows, anova(r.rows), r.seed) for r in results]

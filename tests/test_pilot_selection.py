@@ -1,10 +1,10 @@
-"""Bounds after a rival minimum was ruled out (twin.pilot.selection)."""
+"""Bounds after a rival minimum was ruled out (twin.pilot.identification.selection)."""
 
 import numpy as np
 import pytest
 
-from twin.pilot.minima import VUONG_Z, vuong_z
-from twin.pilot.selection import selected_sd, selection_limits
+from twin.pilot.identification.minima import VUONG_Z, vuong_z
+from twin.pilot.identification.selection import selected_sd, selection_limits
 
 
 @pytest.mark.parametrize("lower, upper", [(-np.inf, -1.05), (0.8, np.inf), (-2.5, -0.5)])

@@ -4,11 +4,11 @@ import numpy as np
 import pytest
 
 from twin.chain.imu import ImuSpec, postprocess, specific_force
+from twin.chain.signals import builtin_signal, describing_signal, rest
 from twin.chain.simulate import prepare, simulate
-from twin.errors import ActuatorLimitError, SignalError
-from twin.frames import rotation_matrix
-from twin.signals import builtin_signal, describing_signal, rest
-from twin.trajectory import Trajectory
+from twin.chain.trajectory import Trajectory
+from twin.core.errors import ActuatorLimitError, SignalError
+from twin.core.frames import rotation_matrix
 
 
 @pytest.mark.parametrize("model", ["full", "reduced"])

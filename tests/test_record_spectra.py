@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
-from twin.record import read_entities, read_timelines
-from twin.record.spectra import Curve, bode_curve, log_curves
-from twin.record.stream import Recording
+from twin.viz.record import read_entities, read_timelines
+from twin.viz.record.spectra import Curve, bode_curve, log_curves
+from twin.viz.record.stream import Recording
 
 
 def test_measured_points_with_bounds_and_a_model_line(tmp_path):

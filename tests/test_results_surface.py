@@ -21,13 +21,13 @@ from twin.agard.omct import OmctResult
 from twin.agard.snr import SnrResult
 from twin.agard.threshold import LagDelayStepFit, ThresholdResult
 from twin.chain.config import motion_system
-from twin.errors import UsageError
+from twin.core.errors import UsageError
 from twin.measurement.describing_function import LagDelayFit
-from twin.pilot.arx import ArxOrders
-from twin.pilot.experiment import ExperimentResult
-from twin.pilot.mle import PilotFit
-from twin.pilot.montecarlo import MonteCarloResult
-from twin.pilot.pitch import PitchPilot
+from twin.pilot.identification.arx import ArxOrders
+from twin.pilot.identification.mle import PilotFit
+from twin.pilot.models.pitch import PitchPilot
+from twin.pilot.studies.experiment import ExperimentResult
+from twin.pilot.studies.montecarlo import MonteCarloResult
 from twin.platform.kinematics import ForwardResult
 
 F = np.array([0.1, 0.3, 1.0, 3.0])

@@ -21,22 +21,22 @@ import numpy as np
 import pytest
 from scipy import signal
 
-import twin.run_checks as checks
+import twin.formats.run_checks as checks
 from twin.chain.config import motion_system
 from twin.chain.extensions import Extension
 from twin.chain.imu import G
+from twin.chain.signals import MultiSine, periodic_signal, rest
 from twin.chain.simulate import default_imu, prepare
 from twin.cli.main import main
+from twin.core.errors import DataError, RunFormatError
+from twin.core.frames import DOF_NAMES
 from twin.diagnose.diagnosis import diagnose
-from twin.errors import DataError, RunFormatError
-from twin.frames import DOF_NAMES
+from twin.formats.run_checks import read_plausible_run
+from twin.formats.run_folder import execute, run_meta
+from twin.formats.runs import read_run
 from twin.ingest import import_run
 from twin.measurement.describing_function import fourier_coefficients
 from twin.measurement.measure import from_run
-from twin.run_checks import read_plausible_run
-from twin.run_folder import execute, run_meta
-from twin.runs import read_run
-from twin.signals import MultiSine, periodic_signal, rest
 
 IMU_HEADER = "t,ax,ay,az,p,q,r"
 

@@ -10,12 +10,12 @@ import time
 import numpy as np
 import pytest
 
+from twin.chain.trajectory import uniform_rate
 from twin.cli.main import main
-from twin.errors import RunFormatError, SignalError
-from twin.ownership import MANIFEST
-from twin.record import read_entities
-from twin.runs import read_run
-from twin.trajectory import uniform_rate
+from twin.core.errors import RunFormatError, SignalError
+from twin.core.ownership import MANIFEST
+from twin.formats.runs import read_run
+from twin.viz.record import read_entities
 
 
 @pytest.fixture(scope="module")
@@ -45,7 +45,7 @@ def test_rrd_holds_entities_and_samples(run_dir):
     cylinders, cockpit box, moved by Transform3D; the commanded pose as a ghost), IMU axes as
     arrows, per-DOF series in separate translation / rotation groups with names, the IMU
     decimated to 100 Hz by default."""
-    from twin.record import read_archetypes
+    from twin.viz.record import read_archetypes
 
     counts = read_entities(run_dir[1])
     kinds = read_archetypes(run_dir[1])

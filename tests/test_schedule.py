@@ -12,9 +12,9 @@ import math
 import numpy as np
 import pytest
 
-from twin.errors import ScheduleError
-from twin.profiles import point_to_point
-from twin.schedule import Schedule, read_schedule
+from twin.chain.profiles import point_to_point
+from twin.core.errors import ScheduleError
+from twin.formats.schedule import Schedule, read_schedule
 
 
 def _pose(xyz=(0.0, 0.0, 0.0), ang=(0.0, 0.0, 0.0)) -> dict:

@@ -15,7 +15,7 @@ import pytest
 from fake_servers import closed_port, echoes, http_server, says, silent_listener, tcp_server
 
 from twin.cli.main import main
-from twin.tasks.scheduler_probe import what_answers
+from twin.core.tasks.scheduler_probe import what_answers
 
 #: A Dask scheduler's greeting, as one sends it on connecting (distributed 2026.8).
 DASK_GREETING = (
@@ -44,7 +44,7 @@ def test_an_http_server_is_named_on_the_command_line_within_seconds(tmp_path):
 
 
 def test_a_silent_port_is_named_on_the_command_line(capsys, monkeypatch):
-    monkeypatch.setattr("twin.tasks.engine.HANDSHAKE_TIMEOUT_S", 1.0)
+    monkeypatch.setattr("twin.core.tasks.engine.HANDSHAKE_TIMEOUT_S", 1.0)
     with silent_listener() as address:
         assert main(["pilot", "montecarlo", "--runs", "4", "--scheduler", address]) == 2
     err = capsys.readouterr().err

@@ -20,11 +20,11 @@ from referencing import Registry, Resource
 from twin.agard.omct import EXAMPLE_BOUNDS, read_bounds
 from twin.chain.config import config_names, load_config, motion_system
 from twin.cli.main import main
-from twin.errors import TwinError
-from twin.pilot.records import read_pilot_csv
-from twin.runs import read_run
-from twin.schedule import read_schedule
-from twin.tasks.sweep import parse_grid, read_grid
+from twin.core.errors import TwinError
+from twin.formats.runs import read_run
+from twin.formats.schedule import read_schedule
+from twin.pilot.models.records import read_pilot_csv
+from twin.studies.sweep import parse_grid, read_grid
 
 ROOT = Path(__file__).resolve().parents[1]
 SCHEMAS = ROOT / "docs" / "schemas"
@@ -167,8 +167,8 @@ def test_a_pilot_run_the_twin_writes(written):
 
 
 def _docstring_schedule() -> str:
-    """The example schedule of twin.schedule.toml_schedule's docstring (shipped with the code)."""
-    text = (ROOT / "twin" / "schedule" / "toml_schedule.py").read_text()
+    """The example schedule of twin.formats.schedule.toml_schedule's docstring (shipped with the code)."""
+    text = (ROOT / "twin" / "formats" / "schedule" / "toml_schedule.py").read_text()
     block = re.search(r"\.\. code-block:: toml\n\n(.*?)\n\"\"\"", text, re.S)
     assert block is not None
     return "\n".join(line[4:] for line in block.group(1).splitlines())
@@ -204,7 +204,7 @@ def test_sweep_files():
     read_grid(EXAMPLES / "sweep.toml")
     doc = tomllib.loads((EXAMPLES / "sweep.toml").read_text())
     assert errors("twin-sweep", doc) == []
-    text = (ROOT / "twin" / "tasks" / "sweep.py").read_text()
+    text = (ROOT / "twin" / "studies" / "sweep.py").read_text()
     block = re.search(r"points are the product of the axes \(the last axis varies fastest\)::\n\n"
                       r"(.*?)\n\n[A-Z]", text, re.S)  # fmt: skip
     assert block is not None

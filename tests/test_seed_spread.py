@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from twin.agard.seed_spread import Spread, plot_spreads, threshold_taus
-from twin.errors import UsageError
+from twin.core.errors import UsageError
 
 
 def test_spread_summarises_as_median_and_5_95_percent():

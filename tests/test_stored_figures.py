@@ -41,7 +41,7 @@ RTOL = 1e-9
 
 def _commands(seconds: float, rate: float = 100.0):
     """Smooth surge, heave and pitch multi-sines with a fade-in."""
-    from twin.trajectory import Trajectory
+    from twin.chain.trajectory import Trajectory
 
     t = np.arange(round(seconds * rate) + 1) / rate
     fade = np.clip(t / 1.5, 0, 1)
@@ -66,16 +66,16 @@ def _open_loop(config, seconds: float, model: str, seed: int) -> dict[str, np.nd
 
 
 def _pilot() -> dict[str, np.ndarray]:
-    from twin.pilot.pitch import PitchPilot, simulate_pitch
+    from twin.pilot.models.pitch import PitchPilot, simulate_pitch
 
     runs = simulate_pitch(PitchPilot(), "condition-8", runs=2, seed=3, remnant_scale=1.0)
     return {"e": runs.e, "u": runs.u, "theta": runs.theta, "theta_felt": runs.theta_felt}
 
 
 def _chapter_2() -> dict[str, np.ndarray]:
-    from twin.pilot.forcing import roll_task
-    from twin.pilot.loop import remnant_scale_for, simulate_loop
-    from twin.pilot.model import RollPilot
+    from twin.pilot.models.forcing import roll_task
+    from twin.pilot.models.loop import remnant_scale_for, simulate_loop
+    from twin.pilot.models.model import RollPilot
 
     fd, ft = roll_task()
     scale = remnant_scale_for(RollPilot(), fd, ft, 0.1)

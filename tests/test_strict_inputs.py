@@ -36,8 +36,8 @@ REST = ["simulate", "srs", "--model", "reduced", "--signal", "rest-1", "--quiet"
 def runs(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
     """Recorded runs: a multi-sine without a design (twin simulate), a sine and steps with one."""
     from twin.agard.session import Session
+    from twin.chain.signals import single_sine, square_steps
     from twin.measurement.measure import Bench, configure
-    from twin.signals import single_sine, square_steps
 
     root = tmp_path_factory.mktemp("runs")
     argv = ["simulate", "srs", "--model", "reduced", "--signal", "multisine1-pitch", "--quiet"]
@@ -131,7 +131,7 @@ def test_omct_bounds_refuse_unknown_keys(tmp_path, capsys, runs):
 
 def test_platform_toml_and_build_toml_refuse_unknown_keys(tmp_path, monkeypatch):
     """The model folder's files: a misspelt platform.toml key would be ignored today."""
-    from twin.errors import ModelFileError
+    from twin.core.errors import ModelFileError
     from twin.platform.build import read_build_parameters
     from twin.platform.facts import load_facts, model_dir
 
@@ -219,9 +219,9 @@ def test_the_command_line_ranges_are_the_librarys():
     from twin.cli import agard as cli_agard
     from twin.cli import diagnose as cli_diagnose
     from twin.cli import pilot as cli_pilot
+    from twin.core.errors import SignalError
     from twin.diagnose.diagnosis import check_options
-    from twin.errors import SignalError
-    from twin.pilot.identified import MAX_FEEDTHROUGH
+    from twin.pilot.studies.identified import MAX_FEEDTHROUGH
 
     assert cli_agard.FIX_DELAY_MS.hi == MAX_FIT_DELAY_S * 1e3
     assert cli_pilot.MAX_FEEDTHROUGH == MAX_FEEDTHROUGH

@@ -1,4 +1,4 @@
-"""The task layer (twin.tasks) on a real Dask LocalCluster: two worker processes.
+"""The task layer (twin.core.tasks) on a real Dask LocalCluster: two worker processes.
 
 Every batch command's tasks are pure functions of their inputs, so a cluster must give the
 very bits one process gives (compared with ==, not a tolerance), a worker killed mid-sweep
@@ -21,17 +21,17 @@ from fake_servers import closed_port
 from twin.chain.config import motion_system
 from twin.chain.extensions import Extension
 from twin.cli.main import main
+from twin.core.errors import RunFormatError, UsageError
+from twin.core.tasks.engine import Engine, parse_scheduler
+from twin.core.tasks.outcome import TaskError
+from twin.core.tasks.scheduler_probe import what_answers
 from twin.diagnose.batch import diagnose_each, measurement_runs
 from twin.diagnose.diagnosis import diagnose
 from twin.diagnose.hidden import record_runs
-from twin.errors import RunFormatError, UsageError
-from twin.pilot.experiment import fly_condition
-from twin.pilot.montecarlo import monte_carlo
-from twin.pilot.pitch import PitchPilot
-from twin.tasks.engine import Engine, parse_scheduler
-from twin.tasks.outcome import TaskError
-from twin.tasks.scheduler_probe import what_answers
-from twin.tasks.sweep import SweepError, parse_grid, run_sweep
+from twin.pilot.models.pitch import PitchPilot
+from twin.pilot.studies.experiment import fly_condition
+from twin.pilot.studies.montecarlo import monte_carlo
+from twin.studies.sweep import SweepError, parse_grid, run_sweep
 
 DF_GRID = {
     "task": "df",
@@ -257,7 +257,7 @@ def test_sweep_cli_writes_table_points_manifest_and_figure(tmp_path, capsys):
 def test_agard_report_dofs_as_tasks_equal_one_session(cluster, tmp_path):
     from twin.agard.report import write_report
     from twin.measurement.measure import Bench, configure
-    from twin.record import bench_recorder
+    from twin.viz.record import bench_recorder
 
     bench = Bench(configure("srs"), "reduced", 0)
     alone = write_report(

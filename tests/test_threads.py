@@ -1,4 +1,4 @@
-"""One BLAS thread per twin process (twin.threads), the user's own choice kept."""
+"""One BLAS thread per twin process (twin.core.threads), the user's own choice kept."""
 
 import os
 import subprocess
@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from twin.threads import BLAS_THREAD_VARIABLES
+from twin.core.threads import BLAS_THREAD_VARIABLES
 
 #: Threads of the process once NumPy has loaded its BLAS (OpenBLAS starts its pool then).
 COUNT = "import numpy, os; print(len(os.listdir('/proc/self/task')), os.environ['{var}'])"
@@ -46,7 +46,7 @@ def test_importing_the_library_leaves_blas_alone():
 def test_concurrent_jobs_run_side_by_side_and_come_back_in_order():
     import threading
 
-    from twin.threads import concurrently
+    from twin.core.threads import concurrently
 
     meet = threading.Barrier(2, timeout=30)  # two jobs that wait for each other: side by side
     jobs = [lambda: (meet.wait(), "a")[1], lambda: (meet.wait(), "b")[1], lambda: "c"]
@@ -56,7 +56,7 @@ def test_concurrent_jobs_run_side_by_side_and_come_back_in_order():
 
 @pytest.mark.parametrize("workers", [1, 2])
 def test_the_first_failing_job_in_order_raises_or_is_returned(workers):
-    from twin.threads import concurrently
+    from twin.core.threads import concurrently
 
     ran = []
 

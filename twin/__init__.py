@@ -6,7 +6,7 @@ motion noise, platform (full MuJoCo model or reduced Eq 5.11 model) and virtual 
 :mod:`twin.agard` (AGARD-AR-144 tests), :mod:`twin.pilot` (pilots in the loop) and
 :mod:`twin.diagnose` (what a recorded run says the twin gets wrong).
 
-What a newcomer needs is here, one call each (:mod:`twin.api`): :func:`configure`,
+What a newcomer needs is here, one call each (:mod:`twin.api.entry_points`): :func:`configure`,
 :func:`simulate`, :func:`describing_function`, :func:`agard_test`, :func:`session`,
 :func:`compare`, :func:`diagnose_runs`, :func:`load_run`, :func:`workspace` and :func:`fly`. Each
 takes a configuration as a name (``"mpi"``), a ``twin-config/1`` path or a
@@ -27,7 +27,7 @@ Examples
 #: Set before the imports below: modules they import read it (run metadata).
 __version__ = "0.1.0"
 
-from twin.api import (
+from twin.api.entry_points import (
     AGARD_TESTS,
     agard_test,
     compare,
@@ -41,7 +41,7 @@ from twin.api import (
     simulate,
     workspace,
 )
-from twin.results import FrequencyResult, Result
+from twin.core.results import FrequencyResult, Result
 
 __all__ = [
     "AGARD_TESTS",

@@ -4,7 +4,7 @@ One DOF moves at constant speed, reverses through zero speed at a constant accel
 the opposite speed, moves on, and reverses back, for each of a series of speeds (a motion
 computer's bump schedule: 0.1, 0.05, 0.02, 0.01 and 0.005 m/s with reversal accelerations of
 the same numbers in m/s^2, so that every reversal lasts 2 s). The profiles are the
-piecewise-constant-jerk moves of :mod:`twin.profiles`: every change of acceleration is a jerk
+piecewise-constant-jerk moves of :mod:`twin.chain.profiles`: every change of acceleration is a jerk
 ramp of :data:`RAMP_S`.
 
 At a reversal the commanded acceleration is constant, so a smooth platform's measured
@@ -60,14 +60,14 @@ from numpy.typing import NDArray
 from twin.agard.segments import window_in
 from twin.agard.session import Session
 from twin.chain.filter import PlatformFilter
-from twin.checks import number
-from twin.errors import SignalError
-from twin.frames import DOF_NAMES, acceleration_unit, dof_index
+from twin.chain.profiles import JerkProfile, constant_acceleration, constant_speed
+from twin.chain.trajectory import Trajectory
+from twin.core.checks import number
+from twin.core.errors import SignalError
+from twin.core.frames import DOF_NAMES, acceleration_unit, dof_index
+from twin.core.plotting import AxesArg, finish, subplots
+from twin.core.results import frame
 from twin.measurement.measure import Measurement, driven_dof
-from twin.plotting import AxesArg, finish, subplots
-from twin.profiles import JerkProfile, constant_acceleration, constant_speed
-from twin.results import frame
-from twin.trajectory import Trajectory
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -172,7 +172,7 @@ def bump_signal(
     Parameters
     ----------
     dof : str
-        One of :data:`twin.frames.DOF_NAMES`.
+        One of :data:`twin.core.frames.DOF_NAMES`.
     velocities : sequence of float, optional
         Reversal speeds, > 0 and at most :data:`MAX_SPEED` (default :data:`VELOCITIES`).
     accelerations : sequence of float, optional

@@ -31,20 +31,20 @@ from numpy.typing import NDArray
 from twin.chain.config import MotionSystem, resolve
 from twin.chain.physics import FullPlatform
 from twin.chain.reduced import ReducedPlatform
+from twin.chain.signals import describing_signal
 from twin.chain.simulate import Platform, make_platform, simulate
-from twin.errors import SignalError, UsageError
-from twin.frames import DOF_NAMES, dof_index
+from twin.core.errors import SignalError, UsageError
+from twin.core.frames import DOF_NAMES, dof_index
+from twin.core.plotting import AxesArg, finish, subplots
+from twin.core.progress import ProgressFn
+from twin.core.results import frame, frd, pick
+from twin.core.thesis import TABLE_5_5
 from twin.measurement.describing_function import (
     LagDelayFit,
     describing_function,
     fit_lag_delay,
     phase_deg,
 )
-from twin.plotting import AxesArg, finish, subplots
-from twin.progress import ProgressFn
-from twin.results import frame, frd, pick
-from twin.signals import describing_signal
-from twin.thesis import TABLE_5_5
 
 if TYPE_CHECKING:
     import control

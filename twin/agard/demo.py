@@ -4,7 +4,7 @@ Pitch and heave, signals 1 and 2, on the MPI twin (full MuJoCo model and reduced
 the SRS twin (full). Prints a short table (fitted delay against the configured one, worst gain
 and phase difference from Eq 5.11 at the lines whose signal-to-noise ratio is at least 20 dB),
 and writes Bode figures, the results as JSON and one Rerun recording per bench into the
-output folder (given a way to record: :func:`twin.record.bench_recorder`).
+output folder (given a way to record: :func:`twin.viz.record.bench_recorder`).
 """
 
 from __future__ import annotations
@@ -19,8 +19,8 @@ import numpy as np
 
 from twin.agard.df import DfResult, draw_bode, run_df
 from twin.agard.session import Session, SessionRecorder
+from twin.core.progress import ProgressFn
 from twin.measurement.measure import Bench, configure
-from twin.progress import ProgressFn
 
 BENCHES = (("mpi", "full"), ("mpi", "reduced"), ("srs", "full"))
 DOFS = ("pitch", "heave")
@@ -28,7 +28,7 @@ DOFS = ("pitch", "heave")
 GOOD_SNR_DB = 20.0
 
 
-#: Builds a bench's recording saved to a path (:func:`twin.record.bench_recorder`).
+#: Builds a bench's recording saved to a path (:func:`twin.viz.record.bench_recorder`).
 RecorderFactory = Callable[[Bench, Path], SessionRecorder]
 
 
@@ -55,7 +55,7 @@ def run_demo(
 
     ``recorder`` builds each bench's recording, ``OUT/<config>-<model>.rrd`` (none without).
     """
-    from twin.plotting import subplots
+    from twin.core.plotting import subplots
 
     out.mkdir(parents=True, exist_ok=True)
     lock, count = threading.Lock(), [0]

@@ -29,8 +29,12 @@ import numpy as np
 from numpy.typing import NDArray
 
 from twin.agard.session import Session
-from twin.errors import SignalError
-from twin.frames import DOF_NAMES, dof_index
+from twin.chain.signals import describing_signal
+from twin.core.errors import SignalError
+from twin.core.frames import DOF_NAMES, dof_index
+from twin.core.plotting import AxesArg, finish, subplots
+from twin.core.results import frame, frd
+from twin.formats.run_folder import signal_meta
 from twin.measurement.describing_function import (
     ResponseMixin,
     dense_frequencies,
@@ -42,10 +46,6 @@ from twin.measurement.describing_function import (
 )
 from twin.measurement.measure import Bench, Measurement, driven_dof
 from twin.measurement.periodic import periodic_design
-from twin.plotting import AxesArg, finish, subplots
-from twin.results import frame, frd
-from twin.run_folder import signal_meta
-from twin.signals import describing_signal
 
 if TYPE_CHECKING:
     import control

@@ -54,12 +54,12 @@ from twin.agard.positions import PositionRecord
 from twin.agard.segments import AMPLITUDE_TOLERANCE, checked_window
 from twin.agard.session import Session
 from twin.chain.config import MotionSystem
-from twin.checks import number
-from twin.errors import SignalError, SignalLimitError
-from twin.frames import DOF_NAMES, dof_index
-from twin.plotting import AxesArg, finish, subplots
-from twin.results import frame
-from twin.signals import DescribingSignal, MultiSine, check_signal, periodic_signal
+from twin.chain.signals import DescribingSignal, MultiSine, check_signal, periodic_signal
+from twin.core.checks import number
+from twin.core.errors import SignalError, SignalLimitError
+from twin.core.frames import DOF_NAMES, dof_index
+from twin.core.plotting import AxesArg, finish, subplots
+from twin.core.results import frame
 
 if TYPE_CHECKING:
     import pandas as pd

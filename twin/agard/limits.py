@@ -3,7 +3,7 @@
 A platform's limits are usually quoted from its design: the stroke-limited excursion of each
 DOF (``twin workspace``), and the actuators' velocity and acceleration limits (Table 5.1).
 This test measures them: one DOF is driven by jerk-limited point-to-point moves
-(:func:`twin.profiles.point_to_point`) of increasing size, speed, acceleration and jerk (one
+(:func:`twin.chain.profiles.point_to_point`) of increasing size, speed, acceleration and jerk (one
 run per level: out to +d, back to neutral, out to -d, back, holding :data:`HOLD_S` at every
 end), and the response is measured: the excursion and speed reached (from the platform's pose:
 simulated, or solved from a recorded run's leg lengths by forward kinematics), the
@@ -48,15 +48,15 @@ from twin.agard.positions import PositionRecord
 from twin.agard.segments import window_in
 from twin.agard.session import Session
 from twin.chain.filter import PlatformFilter
-from twin.checks import number
-from twin.errors import SignalError
-from twin.frames import DOF_NAMES, acceleration_unit, dof_index
+from twin.chain.profiles import point_to_point
+from twin.chain.trajectory import Trajectory
+from twin.core.checks import number
+from twin.core.errors import SignalError
+from twin.core.frames import DOF_NAMES, acceleration_unit, dof_index
+from twin.core.plotting import AxesArg, finish, subplots
+from twin.core.results import frame
+from twin.formats.runs import RecordedRun
 from twin.measurement.measure import Measurement, driven_dof
-from twin.plotting import AxesArg, finish, subplots
-from twin.profiles import point_to_point
-from twin.results import frame
-from twin.runs import RecordedRun
-from twin.trajectory import Trajectory
 
 if TYPE_CHECKING:
     import pandas as pd

@@ -45,14 +45,14 @@ from scipy.stats import norm
 from twin.agard.df import joined_sources
 from twin.agard.segments import AMPLITUDE_TOLERANCE, checked_window
 from twin.agard.session import Session
-from twin.checks import number
-from twin.errors import SignalError, SignalLimitError
-from twin.frames import DOF_NAMES, acceleration_unit
+from twin.chain.signals import check_signal, single_sine
+from twin.core.checks import number
+from twin.core.errors import SignalError, SignalLimitError
+from twin.core.frames import DOF_NAMES, acceleration_unit
+from twin.core.plotting import AxesArg, finish, subplots
+from twin.core.results import frame
 from twin.measurement.describing_function import fourier_coefficients, neighbour_noise
 from twin.measurement.measure import Measurement, driven_dof
-from twin.plotting import AxesArg, finish, subplots
-from twin.results import frame
-from twin.signals import check_signal, single_sine
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -418,7 +418,7 @@ def fitting_amplitude(
 ) -> float | str:
     """Return the first of ``tops`` whose sine stays within the platform limits (or why none).
 
-    The limit check is :func:`twin.signals.check_signal`'s, the one a session runs.
+    The limit check is :func:`twin.chain.signals.check_signal`'s, the one a session runs.
     """
     reason = ""
     for a in tops:

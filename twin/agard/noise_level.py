@@ -33,12 +33,12 @@ import numpy as np
 from numpy.typing import NDArray
 
 from twin.agard.session import Session
-from twin.errors import SignalError
-from twin.frames import DOF_NAMES, acceleration_unit
+from twin.core.errors import SignalError
+from twin.core.frames import DOF_NAMES, acceleration_unit
+from twin.core.plotting import AxesArg, finish, subplots
+from twin.core.results import frame
 from twin.measurement.measure import Measurement, driven_dof
 from twin.measurement.periodic import periodic_design
-from twin.plotting import AxesArg, finish, subplots
-from twin.results import frame
 
 if TYPE_CHECKING:
     import pandas as pd

@@ -32,14 +32,14 @@ import numpy as np
 from numpy.typing import NDArray
 
 from twin.agard.session import Session
-from twin.checks import check_keys, number, numbers, read_toml
-from twin.errors import SignalError, TwinError
-from twin.frames import DOF_NAMES, dof_index
+from twin.core.checks import check_keys, number, numbers, read_toml
+from twin.core.errors import SignalError, TwinError
+from twin.core.frames import DOF_NAMES, dof_index
+from twin.core.plotting import AxesArg, finish, subplots
+from twin.core.results import frame, frd
 from twin.measurement.describing_function import ResponseMixin, describing_function, phase_deg
 from twin.measurement.measure import Measurement, driven_dof
 from twin.measurement.periodic import periodic_design
-from twin.plotting import AxesArg, finish, subplots
-from twin.results import frame, frd
 
 if TYPE_CHECKING:
     import control

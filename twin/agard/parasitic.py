@@ -53,14 +53,14 @@ from numpy.typing import ArrayLike, NDArray
 
 from twin.agard.df import joined_sources
 from twin.agard.session import Session
-from twin.errors import SignalError
-from twin.frames import DOF_NAMES, dof_index
+from twin.chain.signals import base_frequency, describing_signal, single_sine
+from twin.core.errors import SignalError
+from twin.core.frames import DOF_NAMES, dof_index
+from twin.core.plotting import AxesArg, finish, subplots
+from twin.core.results import frame
 from twin.measurement.describing_function import fourier_coefficients, neighbour_noise
 from twin.measurement.measure import Measurement, driven_dof
 from twin.measurement.periodic import periodic_design
-from twin.plotting import AxesArg, finish, subplots
-from twin.results import frame
-from twin.signals import base_frequency, describing_signal, single_sine
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -206,7 +206,7 @@ class ParasiticResult:
 
     @property
     def dofs(self) -> tuple[str, ...]:
-        """The driven DOFs, in the order of :data:`twin.frames.DOF_NAMES`."""
+        """The driven DOFs, in the order of :data:`twin.core.frames.DOF_NAMES`."""
         return tuple(d for d in DOF_NAMES if d in self.cells)
 
     def matrix(self, name: str) -> FloatArray:

@@ -16,12 +16,12 @@ from numpy.typing import NDArray
 
 from twin.chain.config import MotionSystem
 from twin.chain.simulate import Simulation
-from twin.errors import DataError
+from twin.core.errors import DataError
+from twin.formats.run_checks import read_plausible_run
+from twin.formats.runs import RecordedRun
 from twin.measurement.measure import run_config
 from twin.platform.geometry import load_geometry
 from twin.platform.kinematics import forward
-from twin.run_checks import read_plausible_run
-from twin.runs import RecordedRun
 
 FloatArray = NDArray[np.float64]
 

@@ -30,11 +30,11 @@ from twin.agard import (
     threshold,
 )
 from twin.agard.session import Session, SessionRecorder
-from twin.frames import dof_index
-from twin.lifecycle import replacing_dir, writing
+from twin.core.frames import dof_index
+from twin.core.lifecycle import replacing_dir, writing
+from twin.core.progress import ProgressFn
+from twin.core.tasks.engine import Engine, using
 from twin.measurement.measure import Bench
-from twin.progress import ProgressFn
-from twin.tasks.engine import Engine, using
 
 
 def threshold_defaults(dof: str) -> tuple[float, float]:
@@ -58,9 +58,9 @@ def write_report(
 ) -> dict[str, object]:
     """Run the suite and write the report folder ``out``; return the report as a dict.
 
-    Each DOF's suite is a task (:mod:`twin.tasks`) run in a folder of its own and sent back
+    Each DOF's suite is a task (:mod:`twin.core.tasks`) run in a folder of its own and sent back
     as files, so DOFs run side by side on a ``scheduler`` (default this process) with the
-    same results. A recording (``recorder``, e.g. :func:`twin.record.bench_recorder`; closed
+    same results. A recording (``recorder``, e.g. :func:`twin.viz.record.bench_recorder`; closed
     here) is one stream of runs: with it, the DOFs run one after another in this process
     whatever the scheduler.
     """

@@ -1,6 +1,6 @@
 """The AGARD-AR-144 report of a recorded (or scheduled) run: the tests it holds, and not.
 
-A lab's schedule (:mod:`twin.schedule`) runs many tests in one run. :func:`analyse_schedule`
+A lab's schedule (:mod:`twin.formats.schedule`) runs many tests in one run. :func:`analyse_schedule`
 finds each test's moves (:mod:`twin.agard.segments`), runs the test's analysis on their
 windows and says which tests the run does not hold, and why (what moves they need). The
 tests and what they take from a schedule are :data:`ANALYSES`. A run made for one test
@@ -22,11 +22,11 @@ import numpy as np
 from twin.agard import bump, df, hysteresis, limits, linearity, parasitic, threshold
 from twin.agard.positions import PositionRecord
 from twin.agard.segments import Segment, by_dof, largest_per_frequency, segments
-from twin.errors import SignalError
-from twin.frames import DOF_NAMES
-from twin.lifecycle import writing
+from twin.core.errors import SignalError
+from twin.core.frames import DOF_NAMES
+from twin.core.lifecycle import writing
+from twin.formats.schedule.moves import HYSTERESIS_HZ, Schedule
 from twin.measurement.measure import Measurement, driven_dof
-from twin.schedule.moves import HYSTERESIS_HZ, Schedule
 
 
 @dataclass(frozen=True)
@@ -36,7 +36,7 @@ class Analysis:
     Attributes
     ----------
     moves : str
-        The move class it uses (:func:`twin.schedule.moves.test_of`).
+        The move class it uses (:func:`twin.formats.schedule.moves.test_of`).
     needs : str
         What the schedule must hold for it (the "missing" message).
     analyse : callable

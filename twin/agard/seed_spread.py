@@ -21,9 +21,9 @@ import numpy as np
 from twin.agard.df import sweep
 from twin.agard.session import Session
 from twin.agard.threshold import run_threshold
-from twin.errors import UsageError
+from twin.core.errors import UsageError
+from twin.core.progress import ProgressFn
 from twin.measurement.measure import Bench, configure
-from twin.progress import ProgressFn
 
 #: Seed of repetition ``i`` (far apart, so neighbouring repetitions share no stream).
 SEED_STRIDE = 1000
@@ -91,7 +91,7 @@ def table_5_6_delays(
         Heave and pitch, equal weights (with the thesis' value) and SNR-weighted.
 
     """
-    from twin.thesis import TABLE_5_6_MPI_IMU
+    from twin.core.thesis import TABLE_5_6_MPI_IMU
 
     cfg = configure("srs", break_hz=1.0, delay_ms=25.0)
     rows: dict[tuple[str, str], list[float]] = {}
@@ -113,7 +113,7 @@ def threshold_taus(
     seeds: int = 20, model: str = "reduced", progress: ProgressFn | None = None
 ) -> Spread:
     """§3.4.4's dynamic threshold tau over ``seeds`` seeds [ms] (MPI 2008, surge)."""
-    from twin.thesis import CHAPTER_3_4
+    from twin.core.thesis import CHAPTER_3_4
 
     taus = []
     for i in _seeds(seeds):
@@ -141,7 +141,7 @@ def plot_spreads(spreads: Iterable[Spread], path: str | None = None, unit: str =
     matplotlib.figure.Figure
 
     """
-    from twin.plotting import finish, subplots
+    from twin.core.plotting import finish, subplots
 
     spreads = list(spreads)
     fig, ax = subplots(None, figsize=(7, 0.6 + 0.55 * len(spreads)))

@@ -1,7 +1,7 @@
 """Where each AGARD-AR-144 test finds its data in a scheduled run: windows of moves.
 
-A lab runs a whole test schedule (:mod:`twin.schedule`) as one long run; each move serves
-one test (:func:`twin.schedule.moves.test_of`). This module turns the moves into analysis
+A lab runs a whole test schedule (:mod:`twin.formats.schedule`) as one long run; each move serves
+one test (:func:`twin.formats.schedule.moves.test_of`). This module turns the moves into analysis
 windows on the run's clock: a sine move's window is the longest whole number of periods of
 all its frequencies between its fade-in and its fade-out; other moves are used whole.
 """
@@ -14,10 +14,10 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from twin.checks import number
-from twin.errors import SignalError
-from twin.frames import dof_index
-from twin.schedule.moves import Move, Schedule
+from twin.core.checks import number
+from twin.core.errors import SignalError
+from twin.core.frames import dof_index
+from twin.formats.schedule.moves import Move, Schedule
 
 FloatArray = NDArray[np.float64]
 #: A window's frequencies must each fit a whole number of periods to this share of a period.
@@ -152,7 +152,7 @@ def segments(
         The run's schedule.
     test : str
         ``df``, ``hysteresis``, ``bump``, ``limits`` or ``noise`` (see
-        :func:`~twin.schedule.moves.test_of`).
+        :func:`~twin.formats.schedule.moves.test_of`).
     offset_s : float
         Time of the schedule's t = 0 on the run's clock.
 

@@ -12,15 +12,15 @@ from __future__ import annotations
 from pathlib import Path
 from typing import TYPE_CHECKING, Protocol
 
+from twin.chain.signals import DescribingSignal, StepSignal, single_sine
 from twin.chain.simulate import Simulation
-from twin.errors import SignalLimitError
-from twin.lifecycle import CloseOrAbort
+from twin.chain.trajectory import Trajectory
+from twin.core.errors import SignalLimitError
+from twin.core.lifecycle import CloseOrAbort
+from twin.core.progress import ProgressFn
+from twin.formats.run_folder import RunRecorder, execute, run_meta
+from twin.formats.schedule import Schedule
 from twin.measurement.measure import Bench, Measurement
-from twin.progress import ProgressFn
-from twin.run_folder import RunRecorder, execute, run_meta
-from twin.schedule import Schedule
-from twin.signals import DescribingSignal, StepSignal, single_sine
-from twin.trajectory import Trajectory
 
 if TYPE_CHECKING:
     from twin.chain.config import MotionSystem
@@ -29,7 +29,7 @@ if TYPE_CHECKING:
 class SessionRecorder(RunRecorder, Protocol):
     """A session's recording: every run's chunks, and the describing functions found.
 
-    :class:`twin.record.Recorder` is one (:func:`twin.record.bench_recorder` builds it for a
+    :class:`twin.viz.record.Recorder` is one (:func:`twin.viz.record.bench_recorder` builds it for a
     bench).
     """
 
@@ -48,7 +48,7 @@ class Session(CloseOrAbort):
         Folder for the run folders (``OUT/runs/NN-name``).
     recorder : SessionRecorder, optional
         Where every run goes as well, one after the other (a Rerun recording,
-        :func:`twin.record.bench_recorder`); the session closes it, or aborts it when a run
+        :func:`twin.viz.record.bench_recorder`); the session closes it, or aborts it when a run
         fails.
     progress : callable, optional
         Called with a message before each run, and with the count of a test's runs when the

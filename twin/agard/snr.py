@@ -25,9 +25,9 @@ from numpy.typing import ArrayLike, NDArray
 
 from twin.agard.noise_level import NoiseLevelPoint, analyse_noise
 from twin.agard.session import Session
-from twin.frames import acceleration_unit, dof_index
-from twin.plotting import AxesArg, finish, subplots
-from twin.results import frame
+from twin.core.frames import acceleration_unit, dof_index
+from twin.core.plotting import AxesArg, finish, subplots
+from twin.core.results import frame
 
 if TYPE_CHECKING:
     import pandas as pd

@@ -23,14 +23,14 @@ from scipy.optimize import brentq, least_squares
 from twin.agard.session import Session
 from twin.chain.config import MotionSystem
 from twin.chain.filter import PlatformFilter
-from twin.checks import number
-from twin.errors import SignalError
-from twin.frames import DOF_NAMES, acceleration_unit, dof_index
+from twin.chain.signals import square_steps
+from twin.chain.trajectory import Trajectory
+from twin.core.checks import number
+from twin.core.errors import SignalError
+from twin.core.frames import DOF_NAMES, acceleration_unit, dof_index
+from twin.core.plotting import AxesArg, finish, subplots
+from twin.core.results import frame
 from twin.measurement.measure import Measurement, driven_dof
-from twin.plotting import AxesArg, finish, subplots
-from twin.results import frame
-from twin.signals import square_steps
-from twin.trajectory import Trajectory
 
 if TYPE_CHECKING:
     import pandas as pd

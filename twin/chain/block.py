@@ -21,8 +21,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from twin.chain.jets import JetSignal, hermite_eval
-from twin.errors import SignalError
-from twin.trajectory import Trajectory
+from twin.chain.trajectory import Trajectory
+from twin.core.errors import SignalError
 
 FloatArray = NDArray[np.float64]
 ComplexArray = NDArray[np.complex128]
@@ -49,7 +49,7 @@ class Block(ABC):
     def __call__(self, sig: JetSignal | Trajectory) -> JetSignal | Trajectory:
         """Run the stream over every sample of ``sig`` (the whole-trajectory form).
 
-        A :class:`~twin.trajectory.Trajectory` goes in as the jets of its cubic spline and
+        A :class:`~twin.chain.trajectory.Trajectory` goes in as the jets of its cubic spline and
         comes out as the output's values.
         """
         if isinstance(sig, Trajectory):
@@ -74,7 +74,7 @@ class Block(ABC):
 
 def dof_mask(dofs: tuple[str, ...] | None) -> NDArray[np.bool_]:
     """Mask over the six DOFs for a tuple of names (all six for None or empty)."""
-    from twin.frames import DOF_NAMES, dof_index
+    from twin.core.frames import DOF_NAMES, dof_index
 
     mask = np.zeros(len(DOF_NAMES), dtype=bool)
     if not dofs:

@@ -44,12 +44,12 @@ from twin.chain.filter import MAX_BREAK_HZ, MIN_BREAK_HZ, PlatformFilter, check_
 from twin.chain.lti import LinearModel
 from twin.chain.noise import MotionNoise
 from twin.chain.resonance import Resonance
-from twin.checks import check_keys, did_you_mean, flag, number, read_json
-from twin.errors import ConfigError, SignalError, UnknownPlatformError, UsageError
-from twin.lifecycle import replacing_file
+from twin.core.checks import check_keys, did_you_mean, flag, number, read_json
+from twin.core.errors import ConfigError, SignalError, UnknownPlatformError, UsageError
+from twin.core.lifecycle import replacing_file
+from twin.core.thesis import TABLE_6_3
 from twin.platform.facts import PLATFORMS, load_facts
 from twin.platform.platform_physics import PlatformPhysics
-from twin.thesis import TABLE_6_3
 
 #: Format tag of a configuration file (``twin diagnose --save-config``).
 CONFIG_FORMAT = "twin-config/1"
@@ -276,7 +276,7 @@ class MotionSystem:
         """
         import control
 
-        from twin.frames import dof_index
+        from twin.core.frames import dof_index
 
         k = dof_index(dof) if isinstance(dof, str) else int(dof)
         tf, delay = control.tf([1.0], [1.0]), 0.0

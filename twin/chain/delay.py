@@ -17,7 +17,7 @@ from numpy.typing import ArrayLike, NDArray
 from twin.chain.block import Block, ComplexArray
 from twin.chain.bounds import MAX_DELAY_S
 from twin.chain.jets import held, hermite_samples
-from twin.errors import SignalError
+from twin.core.errors import SignalError
 
 FloatArray = NDArray[np.float64]
 
@@ -29,7 +29,7 @@ class Delay(Block):
     Examples
     --------
     >>> from twin.chain.jets import JetSignal
-    >>> from twin.trajectory import Trajectory
+    >>> from twin.chain.trajectory import Trajectory
     >>> tr = Trajectory(100.0, np.outer(np.arange(10.0), np.ones(6)))
     >>> Delay(0.02)(JetSignal.from_trajectory(tr)).jets[0, :4, 0, 0].tolist()
     [0.0, 0.0, 0.0, 1.0]

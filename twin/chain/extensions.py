@@ -54,9 +54,9 @@ from scipy import signal
 
 from twin.chain.block import Backlash, Block, Gain, Lead, backlash  # noqa: F401 (re-exported)
 from twin.chain.lti import LtiBlock
-from twin.checks import check_keys, did_you_mean, number
-from twin.errors import ConfigError, SignalError
-from twin.frames import DOF_NAMES, rotation_matrix
+from twin.core.checks import check_keys, did_you_mean, number
+from twin.core.errors import ConfigError, SignalError
+from twin.core.frames import DOF_NAMES, rotation_matrix
 
 FloatArray = NDArray[np.float64]
 ComplexArray = NDArray[np.complex128]
@@ -202,7 +202,7 @@ class Extension:
 
     @classmethod
     def from_json(cls, data: object) -> Extension:
-        """Parse the JSON form (raises :class:`~twin.errors.ConfigError` on anything malformed).
+        """Parse the JSON form (raises :class:`~twin.core.errors.ConfigError` on anything malformed).
 
         An unknown key (``dof`` for ``dofs``) is refused with a did-you-mean, not ignored.
         """

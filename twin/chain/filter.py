@@ -6,7 +6,7 @@ import numpy as np
 
 from twin.chain.bounds import MAX_BREAK_HZ, MIN_BREAK_HZ
 from twin.chain.lti import LtiBlock, System
-from twin.errors import SignalError
+from twin.core.errors import SignalError
 
 
 def check_break_hz(value: float, where: str, error: type[Exception] = SignalError) -> float:

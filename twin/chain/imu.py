@@ -20,11 +20,11 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy import signal
 
-from twin import kernels
+from twin.chain import kernels
 from twin.chain.response import GRAVITY_BASE, PlatformResponse
-from twin.errors import SignalError
-from twin.frames import rotation_matrix
-from twin.trajectory import interp_columns
+from twin.chain.trajectory import interp_columns
+from twin.core.errors import SignalError
+from twin.core.frames import rotation_matrix
 
 FloatArray = NDArray[np.float64]
 G = 9.81

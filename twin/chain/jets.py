@@ -10,12 +10,12 @@ for that input (:mod:`twin.chain.lti`); a delay evaluates the polynomial between
 it falls between (:mod:`twin.chain.delay`); a platform evaluates it at its own rate.
 
 The commands themselves enter as jets of their cubic spline (:meth:`JetSignal.from_trajectory`)
-in open loop, or of the simulated aircraft in a closed loop (:mod:`twin.pilot.pitch`).
+in open loop, or of the simulated aircraft in a closed loop (:mod:`twin.pilot.models.pitch`).
 
 Examples
 --------
 >>> import numpy as np
->>> from twin.trajectory import Trajectory, UniformGrid
+>>> from twin.chain.trajectory import Trajectory, UniformGrid
 >>> t = np.arange(101) / 100.0
 >>> sig = JetSignal.from_trajectory(Trajectory(100.0, np.outer(t**2, np.ones(6))))
 >>> sig.jets.shape, round(float(sig.jets[0, 50, 0, 2]), 6)   # d2/dt2 of t^2
@@ -30,10 +30,10 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from twin.errors import SignalError
-from twin.frames import DOF_NAMES
-from twin.kernels import hermite_basis, hermite_gather
-from twin.trajectory import Trajectory, UniformGrid
+from twin.chain.kernels import hermite_basis, hermite_gather
+from twin.chain.trajectory import Trajectory, UniformGrid
+from twin.core.errors import SignalError
+from twin.core.frames import DOF_NAMES
 
 FloatArray = NDArray[np.float64]
 
@@ -114,7 +114,7 @@ def hermite_samples(jets: FloatArray, k: NDArray[np.intp], s: FloatArray, h: flo
     Point ``i`` lies at ``s[i]`` in the interval from sample ``k[i]`` to ``k[i] + 1``. The
     arithmetic is that of :func:`hermite_eval` (the same products and sums, in the same
     order, so the same bits), in one compiled pass over the points
-    (:func:`twin.kernels.hermite_gather`): several times faster for the long arrays of a
+    (:func:`twin.chain.kernels.hermite_gather`): several times faster for the long arrays of a
     platform's own samples.
 
     Parameters
@@ -253,7 +253,7 @@ class JetSignal(UniformGrid):
         return JetSignal(self.rate_hz, jets, self.t0, self.names)
 
     def trajectory(self, run: int = 0) -> Trajectory:
-        """Return the values of one run as a :class:`~twin.trajectory.Trajectory`."""
+        """Return the values of one run as a :class:`~twin.chain.trajectory.Trajectory`."""
         return Trajectory(self.rate_hz, self.jets[run, :, :, 0], self.t0, self.names)
 
     def at(self, t: ArrayLike, run: int = 0) -> FloatArray:

@@ -4,7 +4,7 @@ The real machines cannot follow a reference beyond their stroke, velocity or acc
 (Table 5.1). The twin checks the leg references at the physics rate, counts every sample that
 breaks a limit, and either limits the reference (``mode="limit"``: clip to the stroke,
 rate- and acceleration-limit with a braking curve, then rejoin the reference as soon as it is
-feasible again) or raises :class:`twin.errors.ActuatorLimitError` (``mode="strict"``).
+feasible again) or raises :class:`twin.core.errors.ActuatorLimitError` (``mode="strict"``).
 """
 
 from __future__ import annotations
@@ -14,8 +14,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from twin.errors import ActuatorLimitError
-from twin.kernels import limit_legs
+from twin.chain.kernels import limit_legs
+from twin.core.errors import ActuatorLimitError
 from twin.platform.facts import PlatformFacts
 from twin.platform.geometry import Geometry
 
@@ -212,7 +212,7 @@ class ActuatorLimits:
     ) -> tuple[FloatArray, FloatArray]:
         """Sequential limiter, run only from a violation until the reference is rejoined.
 
-        Compiled (:func:`twin.kernels.limit_legs`, the bits of the NumPy loop it replaced):
+        Compiled (:func:`twin.chain.kernels.limit_legs`, the bits of the NumPy loop it replaced):
         a large play or a jump in the references keeps it on for most of a run, where the
         loop cost some 15 µs a sample.
         """

@@ -17,7 +17,7 @@ Examples
 --------
 >>> import numpy as np
 >>> from twin.chain.jets import JetSignal
->>> from twin.trajectory import Trajectory
+>>> from twin.chain.trajectory import Trajectory
 >>> ramp = Trajectory(100.0, np.outer(np.arange(300.0) * 0.01, np.ones(6)))
 >>> lag = LtiBlock(((1.0,), (0.1, 1.0)))           # 1 / (1 + 0.1 s) on every DOF
 >>> y = lag(JetSignal.from_trajectory(ramp)).jets   # a ramp lags by 0.1 s
@@ -38,7 +38,7 @@ from scipy import linalg, signal
 
 from twin.chain.block import Block, ComplexArray
 from twin.chain.jets import HERMITE, scaled
-from twin.errors import SignalError
+from twin.core.errors import SignalError
 
 FloatArray = NDArray[np.float64]
 #: One DOF's system: (numerator, denominator) in s, highest power first; None passes.

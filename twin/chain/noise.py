@@ -33,9 +33,9 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy import signal
 
-from twin.errors import SignalError
-from twin.thesis import EQ_5_10
-from twin.trajectory import interp_columns
+from twin.chain.trajectory import interp_columns
+from twin.core.errors import SignalError
+from twin.core.thesis import EQ_5_10
 
 FloatArray = NDArray[np.float64]
 

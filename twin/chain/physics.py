@@ -25,8 +25,8 @@ from numpy.typing import NDArray
 from twin.chain.limits import ActuatorLimits, LimiterState
 from twin.chain.response import PlatformResponse
 from twin.chain.stepping import Platform, PlatformState, Reference
-from twin.errors import PhysicsDivergedError, SignalError
-from twin.frames import euler_from_matrix, matrix_from_quat
+from twin.core.errors import PhysicsDivergedError, SignalError
+from twin.core.frames import euler_from_matrix, matrix_from_quat
 from twin.platform.actuators import LegPhysics, ReferenceState, cabin_static, shape_reference
 from twin.platform.facts import load_facts, load_model
 from twin.platform.geometry import load_geometry

@@ -12,10 +12,10 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from twin.chain.kernels import limit_suspects, rigid_cabin
 from twin.chain.limits import ActuatorLimits, LimitReport
 from twin.chain.response import PlatformResponse
 from twin.chain.stepping import Platform, PlatformState, Reference
-from twin.kernels import limit_suspects, rigid_cabin
 from twin.platform.facts import load_facts
 from twin.platform.geometry import load_geometry
 from twin.platform.kinematics import as_pose, leg_rates
@@ -59,8 +59,8 @@ class ReducedPlatform(Platform):
         """Put the cabin where the reference says; count the limits it would break.
 
         Attitude, angular motion and leg lengths come from one compiled pass
-        (:func:`twin.kernels.rigid_cabin`: the arithmetic of
-        :func:`~twin.frames.rotation_matrix`, :func:`~twin.frames.angular_motion` and
+        (:func:`twin.chain.kernels.rigid_cabin`: the arithmetic of
+        :func:`~twin.core.frames.rotation_matrix`, :func:`~twin.core.frames.angular_motion` and
         :func:`~twin.platform.kinematics.leg_rates`, the same bits).
         """
         runs, m = ref.pose.shape[:2]
@@ -96,7 +96,7 @@ class ReducedPlatform(Platform):
 
         Per sample, |l_dot| <= |c_dot| + |omega| r and |l_ddot| <= |c_ddot| + (|omega_dot| +
         |omega|^2) r + (|c_dot| + |omega| r)^2 / l_min, with r the largest cabin-gimbal radius
-        and l_min the shortest leg (:func:`twin.kernels.limit_suspects`). Samples whose
+        and l_min the shortest leg (:func:`twin.chain.kernels.limit_suspects`). Samples whose
         bounds stay inside the limits cannot break them; the rest (and any out of stroke) get
         the exact leg velocities and accelerations. The counts equal those of checking every
         sample exactly.

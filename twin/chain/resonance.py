@@ -5,9 +5,9 @@ from __future__ import annotations
 from collections.abc import Mapping
 
 from twin.chain.block import Lead
-from twin.errors import SignalError
-from twin.frames import DOF_NAMES
-from twin.thesis import EQ_5_12_13
+from twin.core.errors import SignalError
+from twin.core.frames import DOF_NAMES
+from twin.core.thesis import EQ_5_12_13
 
 
 class Resonance(Lead):

@@ -2,7 +2,7 @@
 
 Examples
 --------
->>> from twin.signals import rest
+>>> from twin.chain.signals import rest
 >>> sim = simulate("srs", rest(1.0), model="reduced", seed=1)
 >>> sim.imu.accel.shape[1], round(float(sim.imu.accel[:, 2].mean()), 1)
 (3, -9.8)
@@ -27,12 +27,12 @@ from twin.chain.noise import MotionNoise, NoiseStream
 from twin.chain.physics import FullPlatform
 from twin.chain.reduced import ReducedPlatform
 from twin.chain.response import PlatformResponse
+from twin.chain.signals import check_physical
 from twin.chain.stepping import CHUNK_S, Platform, overlapped
 from twin.chain.stream import ChainStream, noise_streams
-from twin.errors import ConfigError, SignalError
+from twin.chain.trajectory import Trajectory
+from twin.core.errors import ConfigError, SignalError
 from twin.platform.platform_physics import PlatformPhysics
-from twin.signals import check_physical
-from twin.trajectory import Trajectory
 
 FloatArray = NDArray[np.float64]
 

@@ -30,9 +30,9 @@ from twin.chain.jets import JetSignal, hermite_samples
 from twin.chain.limits import ActuatorLimits, LimitReport
 from twin.chain.noise import NoiseStream
 from twin.chain.response import PlatformResponse
-from twin.errors import SignalError
+from twin.core.errors import SignalError
+from twin.core.threads import one_blas_thread
 from twin.platform.geometry import Geometry
-from twin.threads import one_blas_thread
 
 FloatArray = NDArray[np.float64]
 
@@ -257,7 +257,7 @@ def overlapped(
 
     With the full platform the physics of step k + 1 then rolls while the caller handles the
     response of step k (the IMU, a recording): one step of look-ahead, the same results.
-    Meanwhile BLAS keeps to one thread (:mod:`twin.threads`; restored after the last step):
+    Meanwhile BLAS keeps to one thread (:mod:`twin.core.threads`; restored after the last step):
     a BLAS pool of one thread per core would take the physics thread's core, and make the run
     slower than without the look-ahead (bench/twin_throughput.py, in a process that has not
     set its threads as the ``twin`` command does).

@@ -4,7 +4,7 @@
 :meth:`twin.chain.config.MotionSystem.blocks` (for the platform's own lag), then the platform
 with the configuration's heave noise, for one or several runs. Open-loop runs
 (:mod:`twin.chain.simulate`) feed it their commands a chunk at a time; the pilot in the loop
-(:mod:`twin.pilot.pitch`) feeds it one sample per loop step. Same blocks, same arithmetic.
+(:mod:`twin.pilot.models.pitch`) feeds it one sample per loop step. Same blocks, same arithmetic.
 
 Examples
 --------
@@ -32,7 +32,7 @@ from twin.chain.limits import LimitReport
 from twin.chain.noise import NoiseStream
 from twin.chain.response import PlatformResponse
 from twin.chain.stepping import Platform, PlatformState
-from twin.errors import SignalError
+from twin.core.errors import SignalError
 
 FloatArray = NDArray[np.float64]
 

@@ -1,9 +1,9 @@
 """The ``twin`` command line: argparse glue over the library, one module per command group.
 
-A ``twin`` process uses one BLAS thread (:mod:`twin.threads`), set here before anything
+A ``twin`` process uses one BLAS thread (:mod:`twin.core.threads`), set here before anything
 imports NumPy.
 """
 
-from twin.threads import single_blas_thread
+from twin.core.threads import single_blas_thread
 
 single_blas_thread()

@@ -12,10 +12,10 @@ import contextlib
 import json
 from pathlib import Path
 
+from twin.chain.signals import MAX_STEP
 from twin.cli import common
-from twin.frames import DOF_NAMES, dof_index
-from twin.lifecycle import check_output_dir, replacing_dir, replacing_file
-from twin.signals import MAX_STEP
+from twin.core.frames import DOF_NAMES, dof_index
+from twin.core.lifecycle import check_output_dir, replacing_dir, replacing_file
 
 TESTS = ("df", "noise", "snr", "threshold", "omct", "parasitic", "linearity", "hysteresis",
          "bump", "limits")  # fmt: skip
@@ -174,8 +174,8 @@ def _schedule_option(p: argparse.ArgumentParser) -> None:
 
 def _has_schedule(target: str) -> bool:
     """Return whether ``target`` is a run folder made from a schedule (meta.json says)."""
-    from twin.checks import read_json
-    from twin.errors import RunFormatError
+    from twin.core.checks import read_json
+    from twin.core.errors import RunFormatError
     from twin.measurement.measure import is_run_folder
 
     if not is_run_folder(target):
@@ -197,7 +197,7 @@ def _recorder(bench, rrd: str | None):
     """Return the Rerun recording of a session on ``bench`` saved to ``rrd`` (None: none)."""
     if rrd is None:
         return None
-    from twin.record import bench_recorder
+    from twin.viz.record import bench_recorder
 
     return bench_recorder(bench, rrd)
 
@@ -217,7 +217,7 @@ def _simulate(args: argparse.Namespace, out: Path | None):
         threshold,
     )
     from twin.agard.session import Session
-    from twin.errors import SignalError
+    from twin.core.errors import SignalError
 
     if args.dof is None and args.test != "parasitic":
         raise SignalError(f"give --dof for a configuration ({', '.join(DOF_NAMES)})")
@@ -260,7 +260,7 @@ def _refuse_simulation_options(args: argparse.Namespace) -> None:
     values = {o: getattr(args, o, None) for o in SIMULATION_OPTIONS}
     given = [o for o, v in values.items() if v is not None and v is not False]  # 0 is given
     if given:
-        from twin.errors import UsageError
+        from twin.core.errors import UsageError
 
         names = ", ".join("--" + o.replace("_", "-") for o in given)
         raise UsageError(f"{names}: only for a test simulated on a configuration; the recorded "
@@ -278,19 +278,19 @@ def _analyse(args: argparse.Namespace):
 
     from twin.agard import bump, df, limits, noise_level, omct, parasitic, snr, threshold
     from twin.agard.positions import PositionRecord
+    from twin.formats.run_checks import read_plausible_run
     from twin.measurement.measure import driven_dof, from_run
-    from twin.run_checks import read_plausible_run
 
     _refuse_simulation_options(args)
     if args.test in SCHEDULE_ONLY:
-        from twin.errors import UsageError
+        from twin.core.errors import UsageError
 
         raise UsageError(f"{args.config}: a {args.test} test takes several sines; give the "
                          "schedule the run was made with (--schedule FILE)")  # fmt: skip
     m = from_run(args.config)
     kind = m.meta.get("signal", {}).get("kind")
     if args.test in ("bump", "limits") and kind != args.test:
-        from twin.errors import UsageError
+        from twin.core.errors import UsageError
 
         raise UsageError(f"{args.config}: a {args.test} test analyses a {args.test} run (twin "
                          f"agard {args.test} CONFIG --out DIR writes them) or a schedule's "
@@ -404,9 +404,9 @@ def _scheduled(args: argparse.Namespace, tests: tuple[str, ...] | None) -> int:
     from twin.agard.positions import PositionRecord
     from twin.agard.scheduled import analyse_designed, analyse_schedule
     from twin.agard.session import Session
-    from twin.errors import DataError, UsageError
+    from twin.core.errors import DataError, UsageError
+    from twin.formats.schedule import Schedule, read_schedule
     from twin.measurement.measure import from_run, is_run_folder
-    from twin.schedule import Schedule, read_schedule
 
     if args.dof is not None and args.schedule is not None:
         raise UsageError("--dof: a schedule names the DOFs it drives (leave --dof out)")
@@ -448,7 +448,7 @@ def _scheduled(args: argparse.Namespace, tests: tuple[str, ...] | None) -> int:
 
 def _cmd_demo(args: argparse.Namespace) -> int:
     from twin.agard.demo import run_demo
-    from twin.record import bench_recorder
+    from twin.viz.record import bench_recorder
 
     final = Path(args.out or common.default_out("agard-demo"))
     with replacing_dir(final, "df.json") as tmp:  # complete, or not there

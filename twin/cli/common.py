@@ -22,7 +22,7 @@ numbers                         every numeric option's ``type`` is :func:`number
 ``--rrd FILE``                  save a Rerun recording
 ``--quiet``                     no progress on stderr (never changes stdout)
 ``--overwrite``                 on every command that writes: replace what twin wrote before
-``--scheduler WHERE``           where a batch command's tasks run (:mod:`twin.tasks.engine`)
+``--scheduler WHERE``           where a batch command's tasks run (:mod:`twin.core.tasks.engine`)
 ``--model {full,reduced}``      platform model; **full by default everywhere**; a command
                                 that defaults to ``reduced`` says why in its help
 overrides                       ``--delay-ms``, ``--break-hz``, ``--no-noise``,
@@ -31,7 +31,7 @@ overrides                       ``--delay-ms``, ``--break-hz``, ``--no-noise``,
 ``--ideal-imu``                 IMU without noise and bias (commands that use an IMU)
 ==============================  ===========================================================
 
-Progress goes through one helper, :func:`progress`: a :class:`twin.progress.Progress` that
+Progress goes through one helper, :func:`progress`: a :class:`twin.core.progress.Progress` that
 library functions take as their ``progress=`` argument (a tqdm bar with ETA for counted work);
 it prints on stderr only when stderr is a terminal and ``--quiet`` is not given.
 """
@@ -47,10 +47,10 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from twin.chain.bounds import MAX_BREAK_HZ, MAX_DELAY_S, MIN_BREAK_HZ
-from twin.errors import TwinError, UsageError
-from twin.lifecycle import check_output_file, check_writable
-from twin.ownership import check_replace, kind_of
-from twin.progress import Progress
+from twin.core.errors import TwinError, UsageError
+from twin.core.lifecycle import check_output_file, check_writable
+from twin.core.ownership import check_replace, kind_of
+from twin.core.progress import Progress
 
 if TYPE_CHECKING:
     from twin.chain.config import MotionSystem
@@ -183,12 +183,12 @@ def options_named(names: Mapping[str, str]) -> Iterator[None]:
 
     Examples
     --------
-    >>> from twin.errors import SignalError
+    >>> from twin.core.errors import SignalError
     >>> with options_named({"max_hz": "--max-hz"}):
     ...     raise SignalError("max_hz must be in (0.5, 45] Hz; got 100")
     Traceback (most recent call last):
     ...
-    twin.errors.SignalError: --max-hz must be in (0.5, 45] Hz; got 100
+    twin.core.errors.SignalError: --max-hz must be in (0.5, 45] Hz; got 100
 
     """
     try:
@@ -274,7 +274,7 @@ def add_dof(parser: argparse.ArgumentParser, what: str, *, one: bool = False,
         The DOFs allowed (default all six).
 
     """
-    from twin.frames import DOF_NAMES
+    from twin.core.frames import DOF_NAMES
 
     allowed = DOF_NAMES if choices is None else choices
     if one:
@@ -440,10 +440,10 @@ def inputs_of(args: argparse.Namespace) -> list[str]:
 def outputs_checked(args: argparse.Namespace) -> None:
     """Refuse, before any work, an output file that would replace what it must not.
 
-    Run within the command's :func:`twin.ownership.output_policy`: an existing file is
+    Run within the command's :func:`twin.core.ownership.output_policy`: an existing file is
     replaced only if it is an earlier output of the same kind or with ``--overwrite``, never
-    an input (:func:`twin.ownership.check_replace`). Output folders are checked by the
-    command, which knows their kind (:func:`twin.lifecycle.check_output_dir`).
+    an input (:func:`twin.core.ownership.check_replace`). Output folders are checked by the
+    command, which knows their kind (:func:`twin.core.lifecycle.check_output_dir`).
     """
     values = [v for value in vars(args).values()
               for v in (value if isinstance(value, list | tuple) else [value])]  # fmt: skip
@@ -481,8 +481,8 @@ def rrd_parent(what: str = "save a Rerun recording") -> argparse.ArgumentParser:
 
 
 def scheduler_parent() -> argparse.ArgumentParser:
-    """Return a parent parser with ``--scheduler`` (:mod:`twin.tasks.engine`)."""
-    from twin.tasks.engine import SCHEDULER_HELP
+    """Return a parent parser with ``--scheduler`` (:mod:`twin.core.tasks.engine`)."""
+    from twin.core.tasks.engine import SCHEDULER_HELP
 
     p = _parent()
     p.add_argument("--scheduler", metavar="WHERE", help=SCHEDULER_HELP)
@@ -490,8 +490,8 @@ def scheduler_parent() -> argparse.ArgumentParser:
 
 
 def engine(args: argparse.Namespace):
-    """Return the :class:`~twin.tasks.engine.Engine` of ``--scheduler`` (checked, not started)."""
-    from twin.tasks.engine import Engine
+    """Return the :class:`~twin.core.tasks.engine.Engine` of ``--scheduler`` (checked, not started)."""
+    from twin.core.tasks.engine import Engine
 
     return Engine(args.scheduler)
 

@@ -7,7 +7,7 @@ import json
 from pathlib import Path
 
 from twin.cli import common
-from twin.lifecycle import check_output_dir, replacing_dir
+from twin.core.lifecycle import check_output_dir, replacing_dir
 
 #: ``--budget-s``: from a few periods to an hour.
 BUDGET_S = common.number(10, 3600)

@@ -8,7 +8,7 @@ import sys
 from pathlib import Path
 
 from twin.cli import common
-from twin.lifecycle import check_output_dir
+from twin.core.lifecycle import check_output_dir
 
 #: ``--max-hz``: the band :func:`twin.diagnose.diagnosis.check_options` allows (below the
 #: 50 Hz Nyquist frequency of the 100 Hz grid; not imported: the parser stays light).
@@ -98,9 +98,9 @@ def _nominal(args: argparse.Namespace):
 
 def _cmd_each(args: argparse.Namespace) -> int:
     from twin.cli.sweep import EXIT_PARTIAL
+    from twin.core.errors import UsageError
     from twin.diagnose.batch import diagnose_each, write_batch
-    from twin.errors import UsageError
-    from twin.record.diagnosis import record_diagnosis
+    from twin.viz.record.diagnosis import record_diagnosis
 
     if args.validate or args.save_config:
         raise UsageError("--each diagnoses every measurement on its own: --validate and "
@@ -132,7 +132,7 @@ def _cmd_each(args: argparse.Namespace) -> int:
 def _cmd_diagnose(args: argparse.Namespace) -> int:
     from twin.diagnose.diagnosis import check_options, diagnose
     from twin.diagnose.report import write_report
-    from twin.record.diagnosis import record_diagnosis
+    from twin.viz.record.diagnosis import record_diagnosis
 
     with common.options_named({"max_hz": "--max-hz", "imu_noise": "--imu-noise"}):
         check_options(args.max_hz, args.imu_noise)  # before any work, also of a batch

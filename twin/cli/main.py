@@ -20,10 +20,10 @@ from typing import NoReturn
 from twin import __version__
 from twin.cli import common, terminal
 from twin.cli.simulate import add_parser as add_simulate
-from twin.errors import TwinError, UsageError
-from twin.frames import DOF_NAMES
-from twin.interrupts import handling_ctrl_c
-from twin.ownership import output_policy
+from twin.core.errors import TwinError, UsageError
+from twin.core.frames import DOF_NAMES
+from twin.core.interrupts import handling_ctrl_c
+from twin.core.ownership import output_policy
 
 EXIT_USAGE = 2
 #: Exit code of a bug (``EX_SOFTWARE`` of sysexits.h).
@@ -208,7 +208,7 @@ def error_line(e: BaseException) -> tuple[str, int]:
 
     The one place where errors become ``twin: error: ...`` on stderr:
 
-    - bad input of any kind (:class:`~twin.errors.TwinError`: usage, data, configuration,
+    - bad input of any kind (:class:`~twin.core.errors.TwinError`: usage, data, configuration,
       output path): exit code 2;
     - the operating system refusing a file or folder (missing, permission, read-only file
       system, disk full): the path and the reason, exit 2;
@@ -258,7 +258,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 
     Whatever the locale: files are read and written as UTF-8, and a terminal that cannot
     encode the twin's text gets ASCII spellings (:mod:`twin.cli.terminal`). Ctrl-C ends the
-    command once, cleanly (:mod:`twin.interrupts`). Without ``argv`` the command is this
+    command once, cleanly (:mod:`twin.core.interrupts`). Without ``argv`` the command is this
     process's own (``sys.argv``): after a Ctrl-C, SIGINT then stays ignored while Python waits
     for the threads still running (MuJoCo's) and exits.
     """

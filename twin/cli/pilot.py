@@ -10,11 +10,11 @@ from pathlib import Path
 import numpy as np
 
 from twin.cli import common
-from twin.pilot import spread as spreads
+from twin.pilot.studies import spread as spreads
 
 DEG2 = (180 / np.pi) ** 2
 #: Most runs of ``pilot run`` and per condition of ``pilot experiment fixed``
-#: (:data:`twin.pilot.pitch.MAX_RUNS`, not imported so that the parser stays light).
+#: (:data:`twin.pilot.models.pitch.MAX_RUNS`, not imported so that the parser stays light).
 MAX_RUNS = 1000
 #: Most simulated subjects of ``pilot experiment subjects``.
 MAX_SUBJECTS = 1000
@@ -28,14 +28,14 @@ OPTIONS = {
 }
 #: Most populations of ``pilot experiment subjects --populations``.
 MAX_POPULATIONS = 1000
-#: Runs per task of ``pilot montecarlo`` (:func:`twin.pilot.montecarlo.monte_carlo`'s batch).
+#: Runs per task of ``pilot montecarlo`` (:func:`twin.pilot.studies.montecarlo.monte_carlo`'s batch).
 MC_BATCH = 500
-#: Most runs of ``pilot montecarlo`` (:data:`twin.pilot.montecarlo.MAX_RUNS`, not imported
+#: Most runs of ``pilot montecarlo`` (:data:`twin.pilot.studies.montecarlo.MAX_RUNS`, not imported
 #: so that the parser stays light).
 MAX_MC_RUNS = 100_000_000
-#: Largest ``--feedthrough`` (:data:`twin.pilot.identified.MAX_FEEDTHROUGH`, not imported).
+#: Largest ``--feedthrough`` (:data:`twin.pilot.studies.identified.MAX_FEEDTHROUGH`, not imported).
 MAX_FEEDTHROUGH = 1.0
-#: Largest ``--weight``: the control weight r of :func:`twin.pilot.adapt.adapt` (its default
+#: Largest ``--weight``: the control weight r of :func:`twin.pilot.models.adapt.adapt` (its default
 #: is 0.03); beyond it the pilot hardly acts.
 MAX_WEIGHT = 1000.0
 #: Ranges of the numeric options (argparse ``type``; their help gives the range).
@@ -49,7 +49,7 @@ FEEDTHROUGH = common.number(0, MAX_FEEDTHROUGH)
 MOTION_SPREAD = common.number(0, spreads.MAX_MOTION_SPREAD)
 VISUAL_DELAY_SPREAD = common.number(0, spreads.MAX_VISUAL_DELAY_SD)
 WEIGHT = common.number(0, MAX_WEIGHT, lo_open=True)
-#: ``--margin-deg``: as :func:`twin.pilot.lead.analyse_lead` allows.
+#: ``--margin-deg``: as :func:`twin.pilot.models.lead.analyse_lead` allows.
 MARGIN_DEG = common.number(0, 90)
 
 
@@ -109,7 +109,9 @@ def add_parser(sub: argparse._SubParsersAction, parser_class: type) -> None:
     )
     common.add_config(ada)
     ada.add_argument(
-        "--weight", type=WEIGHT, help=f"r of the cost ({WEIGHT.span}; default: twin.pilot.adapt's)"
+        "--weight",
+        type=WEIGHT,
+        help=f"r of the cost ({WEIGHT.span}; default: twin.pilot.models.adapt's)",
     )
     _adaptation_options(ada)
     ada.set_defaults(func=_cmd_adapt)
@@ -249,7 +251,7 @@ def _add_experiment(cmds: argparse._SubParsersAction, parser_class: type) -> Non
         action="store_true",
         help="measure the pilot model as the thesis did, each subject's five repetitions "
         "flown in the time domain and Eq 6.5-6.7 fitted by the MLE to their average "
-        "(twin.pilot.identified; tau_m and tau_v in the ANOVA, each fit's goodness of fit in "
+        "(twin.pilot.studies.identified; tau_m and tau_v in the ANOVA, each fit's goodness of fit in "
         "--json's rows; about 12 s a subject on two cores; with --populations, over "
         "populations)",
     )
@@ -260,7 +262,7 @@ def _add_experiment(cmds: argparse._SubParsersAction, parser_class: type) -> Non
         metavar="R",
         help="with --identify: each subject also has a passive path from the motion to the "
         f"stick, R ({FEEDTHROUGH.span}) of its condition-1 motion response at 3 rad/s "
-        "(twin.pilot.pitch.Feedthrough; an assumption: only the simulated subjects have it, no "
+        "(twin.pilot.models.pitch.Feedthrough; an assumption: only the simulated subjects have it, no "
         "fit models it; default 0: none; about 5x slower)",
     )
     subj.add_argument(
@@ -289,7 +291,7 @@ def _add_experiment(cmds: argparse._SubParsersAction, parser_class: type) -> Non
         "each effect's standardised size over populations (median, 5-95 %%) beside the "
         "thesis', and whether the thesis is a plausible draw of them; with 40 subjects or "
         "more in all, how many subjects an experiment needs to find each effect, for "
-        "experiments of up to half the subjects flown, at most 60 (twin.pilot.design) "
+        "experiments of up to half the subjects flown, at most 60 (twin.pilot.studies.design) "
         "(default 1; 20 for a distribution: about 13 min on two cores)",
     )
     subj.add_argument(
@@ -305,12 +307,17 @@ def _add_experiment(cmds: argparse._SubParsersAction, parser_class: type) -> Non
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
-    from twin.lifecycle import check_output_file
-    from twin.ownership import check_replace, kind_of
-    from twin.pilot.experiment import pitch_remnant_scale
-    from twin.pilot.forcing import pitch_task
-    from twin.pilot.pitch import PitchPilot, open_loops, simulate_pitch, variance_decomposition
-    from twin.pilot.records import repetition_paths, stale_repetitions, write_pilot_runs
+    from twin.core.lifecycle import check_output_file
+    from twin.core.ownership import check_replace, kind_of
+    from twin.pilot.models.forcing import pitch_task
+    from twin.pilot.models.pitch import (
+        PitchPilot,
+        open_loops,
+        simulate_pitch,
+        variance_decomposition,
+    )
+    from twin.pilot.models.records import repetition_paths, stale_repetitions, write_pilot_runs
+    from twin.pilot.studies.experiment import pitch_remnant_scale
 
     if args.out:  # every file the runs will go to, before the work
         for path in repetition_paths(args.out, args.runs):
@@ -346,7 +353,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
             print(f"note: {', '.join(map(str, older))} beside them {verb} from an earlier run, "
                   "not this one", file=sys.stderr)  # fmt: skip
     if args.rrd:
-        from twin.record.pilot import record_pilot
+        from twin.viz.record.pilot import record_pilot
 
         progress(f"recording {args.rrd}")
         record_pilot(args.rrd, r, pilot)
@@ -381,13 +388,13 @@ def _adaptation_options(parser: argparse.ArgumentParser, when: str = "") -> None
         "--adapt-visual-delay",
         action="store_true",
         help="also adapt the visual delay tau_v, traded against the visual remnant (a "
-        "speed-accuracy trade-off, twin.pilot.adapt.visual_noise_ratio; an assumption, not "
+        "speed-accuracy trade-off, twin.pilot.models.adapt.visual_noise_ratio; an assumption, not "
         "the thesis')" + when,
     )
 
 
 def _adapted(args: argparse.Namespace) -> tuple[str, ...]:
-    from twin.pilot.adapt import ADAPTED, EQUALISATION, SPEED_ACCURACY
+    from twin.pilot.models.adapt import ADAPTED, EQUALISATION, SPEED_ACCURACY
 
     base = EQUALISATION if args.fixed_neuromuscular else ADAPTED
     return (*base, *SPEED_ACCURACY) if args.adapt_visual_delay else base
@@ -395,7 +402,7 @@ def _adapted(args: argparse.Namespace) -> tuple[str, ...]:
 
 def _cmd_adapt(args: argparse.Namespace) -> int:
     from twin.chain.config import motion_system
-    from twin.pilot.adapt import CONTROL_WEIGHT, adapt
+    from twin.pilot.models.adapt import CONTROL_WEIGHT, adapt
 
     with common.options_named({"control weight r": "--weight (the control weight r)"}):
         a = adapt(motion_system(args.config),
@@ -406,7 +413,7 @@ def _cmd_adapt(args: argparse.Namespace) -> int:
 
 
 def _cmd_fixed(args: argparse.Namespace) -> int:
-    from twin.pilot.experiment import run_experiment
+    from twin.pilot.studies.experiment import run_experiment
 
     with common.engine(args) as engine:
         r = run_experiment(runs=args.runs, seed=args.seed, progress=common.progress(args),
@@ -418,10 +425,10 @@ def _cmd_fixed(args: argparse.Namespace) -> int:
 
 
 def _cmd_subjects(args: argparse.Namespace) -> int:
-    from twin.errors import UsageError
-    from twin.pilot.identified import check_feedthrough
-    from twin.pilot.population import checked_settings
-    from twin.pilot.spread import Spread
+    from twin.core.errors import UsageError
+    from twin.pilot.studies.identified import check_feedthrough
+    from twin.pilot.studies.population import checked_settings
+    from twin.pilot.studies.spread import Spread
 
     if args.feedthrough and not args.identify:
         raise UsageError("--feedthrough gives the subjects a path the MLE is to meet: give it "
@@ -433,8 +440,8 @@ def _cmd_subjects(args: argparse.Namespace) -> int:
         checked_settings(_adapted(args), 0.0, args.spread)
     if args.populations > 1:
         return _replication(args)
-    from twin.pilot.identified import identified_population
-    from twin.pilot.population import run_population
+    from twin.pilot.studies.identified import identified_population
+    from twin.pilot.studies.population import run_population
 
     with common.engine(args) as engine, common.options_named(OPTIONS):
         if args.identify:
@@ -453,8 +460,8 @@ def _cmd_subjects(args: argparse.Namespace) -> int:
 
 
 def _replication(args: argparse.Namespace) -> int:
-    from twin.pilot.design import MIN_POOL, design
-    from twin.pilot.replication import run_populations
+    from twin.pilot.studies.design import MIN_POOL, design
+    from twin.pilot.studies.replication import run_populations
 
     identified = args.feedthrough if args.identify else None
     with common.engine(args) as engine, common.options_named(OPTIONS):
@@ -487,8 +494,8 @@ def _replication(args: argparse.Namespace) -> int:
 
 
 def _cmd_identify(args: argparse.Namespace) -> int:
-    from twin.errors import UsageError
-    from twin.pilot.identify_runs import identify
+    from twin.core.errors import UsageError
+    from twin.pilot.identification.identify_runs import identify
 
     overridden = common.overrides_given(args)
     if overridden and args.config is None:
@@ -502,7 +509,7 @@ def _cmd_identify(args: argparse.Namespace) -> int:
 
 
 def _cmd_montecarlo(args: argparse.Namespace) -> int:
-    from twin.pilot.montecarlo import monte_carlo
+    from twin.pilot.studies.montecarlo import monte_carlo
 
     with common.engine(args) as engine:
         r = monte_carlo(args.runs, args.seed, fit_runs=args.fit_runs,
@@ -533,13 +540,13 @@ def _cmd_montecarlo(args: argparse.Namespace) -> int:
 
 
 def _cmd_lead(args: argparse.Namespace) -> int:
-    from twin.pilot.lead import SENSORS, analyse_lead
+    from twin.pilot.models.lead import SENSORS, analyse_lead
 
     cfg = common.configured(args.config, args)
     with common.options_named({"margin_deg": "--margin-deg"}):
         res = [analyse_lead(cfg, s, args.margin_deg) for s in SENSORS]
     if args.json:
-        from twin.jsonable import plain
+        from twin.core.jsonable import plain
 
         # no threshold: null (strict JSON has no NaN)
         print(json.dumps(plain([r.__dict__ for r in res]), indent=2))

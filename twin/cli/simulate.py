@@ -1,7 +1,7 @@
 """``twin simulate``: run a configuration on a signal and write a ``twin-run/1`` folder.
 
 Argument glue only: the run's ``meta.json`` and the streaming into the folder and the
-recording are :func:`twin.run_folder.run_meta` and :func:`twin.run_folder.execute`.
+recording are :func:`twin.formats.run_folder.run_meta` and :func:`twin.formats.run_folder.execute`.
 """
 
 from __future__ import annotations
@@ -11,15 +11,15 @@ import os
 import time
 from pathlib import Path
 
+from twin.chain.trajectory import Trajectory
 from twin.cli import common
-from twin.schedule import SUFFIXES, Schedule, read_schedule
-from twin.trajectory import Trajectory
+from twin.formats.schedule import SUFFIXES, Schedule, read_schedule
 
 
 def signal_help() -> str:
     """Return what ``--signal`` takes (its help, and the message for a missing file)."""
-    from twin.runs import COMMANDS_FILE
-    from twin.signals import BUILTIN_HELP
+    from twin.chain.signals import BUILTIN_HELP
+    from twin.formats.runs import COMMANDS_FILE
 
     return (f"a commands.csv (twin-run/1: {COMMANDS_FILE}), a run folder holding one, a test "
             "schedule (.json MovementSeries or .toml twin-schedule/1), or a "
@@ -29,7 +29,7 @@ def signal_help() -> str:
 def load_signal(spec: str, rate_hz: float = 100.0) -> tuple[Trajectory, Schedule | None]:
     """Return commands from a ``commands.csv`` path (or a run folder), a schedule or a name.
 
-    A schedule (:func:`twin.schedule.read_schedule`) is returned with its commands, for the
+    A schedule (:func:`twin.formats.schedule.read_schedule`) is returned with its commands, for the
     run's ``meta.json``; the other sources return None there.
 
     Raises
@@ -39,9 +39,9 @@ def load_signal(spec: str, rate_hz: float = 100.0) -> tuple[Trajectory, Schedule
         ``commands.csv``) that does not exist, saying what ``--signal`` takes.
 
     """
-    from twin.errors import UsageError
-    from twin.runs import read_commands
-    from twin.signals import builtin_signal
+    from twin.chain.signals import builtin_signal
+    from twin.core.errors import UsageError
+    from twin.formats.runs import read_commands
 
     path = Path(spec)
     if path.is_dir():
@@ -107,7 +107,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 def _cmd_simulate(args: argparse.Namespace) -> int:
     from twin.chain.simulate import prepare
-    from twin.run_folder import execute, run_meta
+    from twin.formats.run_folder import execute, run_meta
 
     commands, schedule = load_signal(args.signal)
     ms = common.configured(args.config, args)
@@ -122,7 +122,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
         common.refuse_file_in_folder(args.rrd, folder)
     recorder = None
     if args.rrd is not None or args.connect is not None:
-        from twin.record import Recorder
+        from twin.viz.record import Recorder
 
         recorder = Recorder(
             run.platform.geometry,

@@ -14,7 +14,7 @@ EXIT_PARTIAL = 1
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
     """Add ``twin sweep`` to the ``twin`` parser."""
-    from twin.tasks import sweep
+    from twin.studies import sweep
 
     p = sub.add_parser(
         "sweep",
@@ -33,16 +33,16 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         f"are written (exit code {EXIT_PARTIAL}). Tasks: "
         + "; ".join(f"{k}: {v}" for k, v in sweep.TASKS.items()),
     )
-    p.add_argument("grid", metavar="GRID_TOML", help="sweep file (see twin.tasks.sweep)")
+    p.add_argument("grid", metavar="GRID_TOML", help="sweep file (see twin.studies.sweep)")
     p.add_argument("--format", choices=("csv", "parquet"), default="csv",
                    help="table format (default csv)")  # fmt: skip
     p.set_defaults(func=_cmd_sweep)
 
 
 def _cmd_sweep(args: argparse.Namespace) -> int:
-    from twin.lifecycle import check_output_dir
-    from twin.tasks.sweep import read_grid, run_sweep
-    from twin.tasks.sweep_report import write_sweep
+    from twin.core.lifecycle import check_output_dir
+    from twin.studies.sweep import read_grid, run_sweep
+    from twin.studies.sweep_report import write_sweep
 
     grid = read_grid(args.grid)
     out = Path(args.out or common.default_out("sweep", Path(args.grid).stem))

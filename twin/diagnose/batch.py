@@ -4,7 +4,7 @@ Each target is one measurement: a ``twin-run/1`` folder (diagnosed alone), or a 
 sub-folders are run folders (diagnosed together, e.g. Table 5.2's two multi-sines of one
 session). The runs are read and checked here, before any task starts (a malformed folder is
 refused in one line), and handed to the tasks as data, so workers on other machines need no
-shared disk. Each diagnosis is a task of :mod:`twin.tasks.engine`, a pure function of the
+shared disk. Each diagnosis is a task of :mod:`twin.core.tasks.engine`, a pure function of the
 runs, the nominal configuration and the seed; one that fails is listed with its runs and the
 others are written.
 
@@ -25,15 +25,15 @@ from pathlib import Path
 from typing import Any
 
 from twin.chain.config import MotionSystem
+from twin.core.errors import RunFormatError
+from twin.core.lifecycle import replacing_dir
+from twin.core.progress import ProgressFn
+from twin.core.tasks.engine import Engine, using
+from twin.core.tasks.outcome import Failure
 from twin.diagnose.diagnosis import Diagnosis, diagnose
 from twin.diagnose.report import Recording, write_report
-from twin.errors import RunFormatError
-from twin.lifecycle import replacing_dir
-from twin.progress import ProgressFn
-from twin.run_checks import read_plausible_run
-from twin.runs import RecordedRun
-from twin.tasks.engine import Engine, using
-from twin.tasks.outcome import Failure
+from twin.formats.run_checks import read_plausible_run
+from twin.formats.runs import RecordedRun
 
 #: Columns of ``batch.csv``.
 COLUMNS = ("measurement", "runs", "finding", "effect", "dofs", "describe", "delta_bic",
@@ -130,7 +130,7 @@ def diagnose_each(
     config : MotionSystem, optional
         Nominal configuration of every measurement (default: each one's ``meta.json``).
     scheduler : Engine or str, optional
-        Where the diagnoses run (:func:`twin.tasks.engine.using`; default this process).
+        Where the diagnoses run (:func:`twin.core.tasks.engine.using`; default this process).
     progress : callable, optional
         Called as measurements finish.
     **options

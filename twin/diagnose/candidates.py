@@ -33,13 +33,13 @@ from numpy.typing import NDArray
 from scipy import optimize
 
 from twin.chain.extensions import DOF_CHANNEL, EFFECTS, LINEAR, Extension
+from twin.core.errors import SignalError
+from twin.core.frames import dof_index
+from twin.core.threads import concurrently
 from twin.diagnose.data import Case, Channel
 from twin.diagnose.evidence import Lines
-from twin.errors import SignalError
-from twin.frames import dof_index
+from twin.formats.run_checks import MAX_EXTRA_DELAY_S
 from twin.measurement.measure import simulate_measurement
-from twin.run_checks import MAX_EXTRA_DELAY_S
-from twin.threads import concurrently
 
 FloatArray = NDArray[np.float64]
 ComplexArray = NDArray[np.complex128]
@@ -122,7 +122,7 @@ class Model:
 
         Fills what :meth:`base` of ``self.with_(backlash play)`` gives for each play and
         channel (the same values: each is a simulation of its own, run by
-        :func:`twin.threads.concurrently`). A simulation that fails is left out: the
+        :func:`twin.core.threads.concurrently`). A simulation that fails is left out: the
         :meth:`base` that needs it runs it again and raises where it did before.
         """
         jobs: dict[tuple, Callable[[], FloatArray]] = {}

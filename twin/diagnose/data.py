@@ -25,8 +25,13 @@ from numpy.typing import NDArray
 from twin.chain.config import MotionSystem, resolve
 from twin.chain.imu import ImuSpec
 from twin.chain.simulate import MODELS, default_imu
-from twin.errors import RunFormatError, SignalError
-from twin.frames import DOF_NAMES, dof_index
+from twin.chain.trajectory import Trajectory
+from twin.core.errors import RunFormatError, SignalError
+from twin.core.frames import DOF_NAMES, dof_index
+from twin.core.progress import ProgressFn
+from twin.core.threads import concurrently
+from twin.formats.run_checks import check_distinct, read_plausible_run
+from twin.formats.runs import RecordedRun
 from twin.measurement.measure import (
     Measurement,
     clean_config,
@@ -35,11 +40,6 @@ from twin.measurement.measure import (
     simulate_measurements,
 )
 from twin.measurement.periodic import periodic_design
-from twin.progress import ProgressFn
-from twin.run_checks import check_distinct, read_plausible_run
-from twin.runs import RecordedRun
-from twin.threads import concurrently
-from twin.trajectory import Trajectory
 
 FloatArray = NDArray[np.float64]
 #: Noise realisations simulated per run and noise source for the nominal noise spectra.
@@ -274,7 +274,7 @@ def load_case(
     ------
     RunFormatError
         A run folder is malformed (also for a malformed ``platform_config``), or a run is
-        given twice (:func:`twin.run_checks.check_distinct`).
+        given twice (:func:`twin.formats.run_checks.check_distinct`).
     SignalError
         Unknown model, platforms that differ, nothing driven.
 

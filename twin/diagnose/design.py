@@ -4,7 +4,7 @@ When a diagnosis is ambiguous (several explanations within the selection margin:
 :mod:`twin.diagnose.select`), or found nothing and a user asks how to see a smaller effect,
 :func:`design_run` chooses one run in the finding's DOF: a multisine of a few lines, their
 frequencies and acceleration amplitudes (within the platform's limits:
-:func:`twin.signals.check_signal`) and its length (within a time budget), the one whose
+:func:`twin.chain.signals.check_signal`) and its length (within a time budget), the one whose
 expected evidence between the closest two explanations is largest.
 
 The expected evidence of a run between explanations i and j, if i is true, is
@@ -33,6 +33,18 @@ from scipy import optimize
 
 from twin.chain.config import MotionSystem
 from twin.chain.extensions import Extension
+from twin.chain.signals import (
+    DescribingSignal,
+    MultiSine,
+    base_frequency,
+    check_signal,
+    periodic_signal,
+    premeasurement_periods,
+    single_sine,
+)
+from twin.core.errors import DataError, SignalError, SignalLimitError
+from twin.core.frames import acceleration_unit, dof_index
+from twin.core.progress import ProgressFn
 from twin.diagnose.candidates import (
     extension_at_bounds,
     make_extension,
@@ -42,19 +54,7 @@ from twin.diagnose.candidates import (
 from twin.diagnose.data import Case, Channel, load_case
 from twin.diagnose.equivalence import SAME_RESPONSE
 from twin.diagnose.select import BIC_MARGIN
-from twin.errors import DataError, SignalError, SignalLimitError
-from twin.frames import acceleration_unit, dof_index
 from twin.measurement.describing_function import fourier_coefficients
-from twin.progress import ProgressFn
-from twin.signals import (
-    DescribingSignal,
-    MultiSine,
-    base_frequency,
-    check_signal,
-    periodic_signal,
-    premeasurement_periods,
-    single_sine,
-)
 
 FloatArray = NDArray[np.float64]
 ComplexArray = NDArray[np.complex128]
@@ -650,7 +650,7 @@ def design_from(
         without a stated size.
 
     """
-    from twin.checks import read_json
+    from twin.core.checks import read_json
 
     path = Path(folder) / "diagnosis.json"
     if not path.exists():
@@ -690,7 +690,7 @@ def _run_paths(nominal: dict, path: Path) -> list[str]:
 
 def write_design(result: DesignResult, out: Path) -> None:
     """Write ``design.json``, ``commands.csv`` (twin-run/1) and ``schedule.toml`` into ``out``."""
-    from twin.runs import write_commands
+    from twin.formats.runs import write_commands
 
     (out / "design.json").write_text(
         json.dumps(result.to_json(), indent=2) + "\n", encoding="utf-8"

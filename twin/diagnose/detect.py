@@ -24,12 +24,12 @@ import numpy as np
 from scipy import optimize
 
 from twin.chain.extensions import DOF_CHANNEL, Extension
+from twin.core.frames import dof_index
 from twin.diagnose.candidates import Model, make_extension, numeric_names, search_space
 from twin.diagnose.evidence import Lines
 from twin.diagnose.nuisance import off_line
 from twin.diagnose.residuals import TAPER_CORRELATION, Segment
 from twin.diagnose.select import BIC_MARGIN
-from twin.frames import dof_index
 
 
 def _on_top(model: Model, exts: Sequence[Extension]) -> Model:

@@ -22,7 +22,12 @@ import numpy as np
 
 from twin.chain.config import MotionSystem
 from twin.chain.extensions import Extension
-from twin.checks import number
+from twin.core.checks import number
+from twin.core.errors import SignalError, UsageError
+from twin.core.jsonable import plain
+from twin.core.plotting import AxesArg, finish, subplots
+from twin.core.progress import ProgressFn
+from twin.core.results import frame, frd, pick
 from twin.diagnose.candidates import DYNAMIC, Model, describe_bound
 from twin.diagnose.data import NOISE_REALISATIONS, Case, load_case
 from twin.diagnose.detect import smallest_detectable
@@ -50,13 +55,8 @@ from twin.diagnose.select import (
     same_response_text,
 )
 from twin.diagnose.sensor_side import decide_side, side_text
-from twin.errors import SignalError, UsageError
-from twin.jsonable import plain
-from twin.plotting import AxesArg, finish, subplots
-from twin.progress import ProgressFn
-from twin.results import frame, frd, pick
-from twin.run_checks import check_distinct, read_plausible_run
-from twin.runs import RecordedRun
+from twin.formats.run_checks import check_distinct, read_plausible_run
+from twin.formats.runs import RecordedRun
 
 if TYPE_CHECKING:
     import control
@@ -223,7 +223,7 @@ class Diagnosis:
     max_hz : float
         Top of the analysis band.
     notes : list of str
-        What reading the runs did to them (:attr:`twin.runs.RecordedRun.notes`).
+        What reading the runs did to them (:attr:`twin.formats.runs.RecordedRun.notes`).
     physical : PhysicalResult or None
         The physical causes weighed on the full model (``physics=True``; None: not weighed).
 
@@ -500,7 +500,7 @@ def diagnose(
     ----------
     runs : sequence of path or RecordedRun
         ``twin-run/1`` folders (same platform), e.g. Table 5.2's two multi-sines, or those
-        runs already read (:func:`twin.runs.read_run`; what a task on a cluster is given).
+        runs already read (:func:`twin.formats.runs.read_run`; what a task on a cluster is given).
     config : str or MotionSystem, optional
         Nominal configuration; ``meta.json``'s by default.
     model : str
@@ -530,7 +530,7 @@ def diagnose(
     Raises
     ------
     RunFormatError
-        A run that is malformed or implausible (:func:`twin.runs.read_run`), or one given
+        A run that is malformed or implausible (:func:`twin.formats.runs.read_run`), or one given
         twice, among the runs or between them and the validation runs.
 
     """

@@ -25,8 +25,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from twin.core.errors import SignalError
 from twin.diagnose.data import Channel
-from twin.errors import SignalError
 from twin.measurement.describing_function import fourier_coefficients, neighbour_bins
 
 FloatArray = NDArray[np.float64]

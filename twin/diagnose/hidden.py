@@ -56,18 +56,24 @@ import numpy as np
 from twin.chain.config import MotionSystem, motion_system
 from twin.chain.extensions import DOF_CHANNEL, EFFECTS, Extension
 from twin.chain.imu import ImuSpec
+from twin.chain.signals import (
+    WINDOW_S,
+    DescribingSignal,
+    describing_signal,
+    periodic_signal,
+    table_5_2,
+)
 from twin.chain.simulate import default_imu, prepare
+from twin.core.errors import SignalError
+from twin.core.frames import DOF_NAMES
 from twin.diagnose.candidates import DYNAMIC, Model, fit_set, numeric_names
 from twin.diagnose.data import Case, Channel, measurement_channels, nominal_imu
 from twin.diagnose.detect import expected_delta_bic, expected_noise_delta_bic, fisher_std
 from twin.diagnose.evidence import Lines, lines, nominal_line_sd
 from twin.diagnose.residuals import segment
 from twin.diagnose.select import BIC_MARGIN
-from twin.errors import SignalError
-from twin.frames import DOF_NAMES
+from twin.formats.run_folder import execute, run_meta, signal_meta
 from twin.measurement.measure import clean_config, from_imu
-from twin.run_folder import execute, run_meta, signal_meta
-from twin.signals import WINDOW_S, DescribingSignal, describing_signal, periodic_signal, table_5_2
 
 #: The effects the generator hides: the chain's vocabulary as the diagnosis fits it to the
 #: lines (``platform_lag``, the platform-side reading of a ``sensor_filter``, is drawn by the
@@ -128,7 +134,7 @@ class Nuisance:
     amplitude : float
         Factor on the Table 5.2 amplitudes.
     periods : int
-        Measurement window in base periods of :data:`twin.signals.WINDOW_S`.
+        Measurement window in base periods of :data:`twin.chain.signals.WINDOW_S`.
 
     """
 
@@ -301,7 +307,7 @@ def _truth(
 def hidden_signal(number: int, dof: str, nuisance: Nuisance | None = None) -> DescribingSignal:
     """Return Table 5.2 signal ``number`` for ``dof`` with a draw's amplitude and window.
 
-    Without nuisances it is :func:`twin.signals.describing_signal` with the pre-measurement of
+    Without nuisances it is :func:`twin.chain.signals.describing_signal` with the pre-measurement of
     Eq 3.3, as the generator has always recorded.
     """
     if nuisance is None:

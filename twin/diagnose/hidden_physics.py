@@ -25,12 +25,12 @@ from pathlib import Path
 import numpy as np
 
 from twin.chain.config import MotionSystem, motion_system
+from twin.chain.signals import describing_signal
 from twin.chain.simulate import default_imu, prepare
+from twin.core.errors import SignalError
+from twin.core.frames import DOF_NAMES
 from twin.diagnose.physical_vocabulary import PhysicalCause, configured
-from twin.errors import SignalError
-from twin.frames import DOF_NAMES
-from twin.run_folder import execute, run_meta
-from twin.signals import describing_signal
+from twin.formats.run_folder import execute, run_meta
 
 #: What :func:`draw` hides.
 KINDS = ("payload", "leg", "clean")

@@ -49,6 +49,8 @@ from numpy.typing import NDArray
 from twin.chain.config import MotionSystem
 from twin.chain.extensions import Extension, imu_rotation
 from twin.chain.imu import ImuRecord, ImuSpec, rotate_readings
+from twin.core.progress import ProgressFn
+from twin.core.threads import concurrently
 from twin.diagnose.candidates import numeric_names
 from twin.diagnose.physical_evidence import Block, Simulated, blocks, reread, simulate_run
 from twin.diagnose.physical_vocabulary import (
@@ -60,10 +62,8 @@ from twin.diagnose.physical_vocabulary import (
     nominal_value,
 )
 from twin.diagnose.select import BIC_MARGIN, Finding
+from twin.formats.runs import RecordedRun
 from twin.measurement.measure import Measurement
-from twin.progress import ProgressFn
-from twin.runs import RecordedRun
-from twin.threads import concurrently
 
 FloatArray = NDArray[np.float64]
 #: Candidates refined by simulation after the screening.
@@ -427,7 +427,7 @@ def calibrate(
     config : MotionSystem
         The nominal configuration.
     runs : sequence of (RecordedRun, Measurement)
-        The runs as read (:func:`twin.run_checks.read_plausible_run`) and post-processed.
+        The runs as read (:func:`twin.formats.run_checks.read_plausible_run`) and post-processed.
     imu : ImuSpec
         The nominal IMU.
     seed : int

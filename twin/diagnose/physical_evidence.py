@@ -36,13 +36,13 @@ from numpy.typing import NDArray
 from twin.chain.config import MotionSystem
 from twin.chain.imu import ImuRecord, ImuSpec
 from twin.chain.simulate import prepare
+from twin.chain.trajectory import interp_columns
+from twin.core.frames import DOF_NAMES
 from twin.diagnose.data import driven_dofs
 from twin.diagnose.evidence import in_window, line_design, neighbour_sd
-from twin.frames import DOF_NAMES
+from twin.formats.runs import RecordedRun
 from twin.measurement.measure import Measurement, clean_config, from_imu
 from twin.measurement.periodic import periodic_design
-from twin.runs import RecordedRun
-from twin.trajectory import interp_columns
 
 FloatArray = NDArray[np.float64]
 ComplexArray = NDArray[np.complex128]

@@ -11,13 +11,13 @@ from pathlib import Path
 
 import numpy as np
 
+from twin.core.lifecycle import replacing_dir
 from twin.diagnose.candidates import describe_bound
 from twin.diagnose.diagnosis import Diagnosis, DofReport
 from twin.diagnose.physical import SOURCE_TEXT, PhysicalResult
 from twin.diagnose.residual_figure import plot_residual
 from twin.diagnose.select import describe_alternative, negligible_text, same_response_text
 from twin.diagnose.sensor_side import side_text
-from twin.lifecycle import replacing_dir
 
 #: What a payload's factor means, with and without the legs' forces among the evidence.
 PAYLOAD_IMU = ("The factor is on the cabin's mass and inertia together: from the IMU alone a "
@@ -228,7 +228,7 @@ def _figures(d: Diagnosis, folder: Path) -> None:
         plot_residual(d, dof, str(folder / f"residual_{dof}.png"))
 
 
-#: Writes a diagnosis' recording to a path (:func:`twin.record.diagnosis.record_diagnosis`).
+#: Writes a diagnosis' recording to a path (:func:`twin.viz.record.diagnosis.record_diagnosis`).
 Recording = Callable[[Diagnosis, Path], object]
 
 

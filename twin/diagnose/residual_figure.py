@@ -14,9 +14,9 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from twin.core.frames import dof_index
+from twin.core.plotting import finish, subplots
 from twin.diagnose.residuals import segment
-from twin.frames import dof_index
-from twin.plotting import finish, subplots
 
 FloatArray = NDArray[np.float64]
 #: Bins either side of a line left out of the between-lines spectrum: the Hann taper's own

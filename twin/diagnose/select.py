@@ -55,11 +55,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from twin.chain.extensions import Extension
+from twin.core.progress import ProgressFn
 from twin.diagnose.candidates import DYNAMIC, Model, SetFit, at_bounds, fit_set, numeric_names
 from twin.diagnose.data import Case
 from twin.diagnose.equivalence import same_response
 from twin.diagnose.evidence import Lines, lines, measured_line_sd
-from twin.progress import ProgressFn
 
 FloatArray = NDArray[np.float64]
 #: Most alternatives an ambiguous finding lists (the closest first).

@@ -22,8 +22,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from twin.chain.imu import G
-from twin.checks import ENCODING
-from twin.errors import DataError
+from twin.core.checks import ENCODING
+from twin.core.errors import DataError
 
 FloatArray = NDArray[np.float64]
 

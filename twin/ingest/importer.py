@@ -35,8 +35,14 @@ from numpy.typing import NDArray
 
 from twin.chain.config import MotionSystem, motion_system
 from twin.chain.imu import G, ImuRecord, postprocess
+from twin.chain.signals import check_signal
 from twin.chain.simulate import default_imu
-from twin.errors import DataError, UsageError
+from twin.chain.trajectory import Trajectory, interp_columns
+from twin.core.errors import DataError, UsageError
+from twin.core.ownership import reading
+from twin.core.progress import ProgressFn
+from twin.formats.run_checks import IMU_RATE_HZ, MAX_EXTRA_DELAY_S, check_plausible
+from twin.formats.runs import HEADERS, RecordedRun, RunWriter, check_run_output, check_values
 from twin.ingest.align import MountEstimate, estimate_mount, lag_s
 from twin.ingest.columns import (
     COMMAND_TARGETS,
@@ -50,18 +56,12 @@ from twin.ingest.columns import (
 )
 from twin.ingest.timebase import Regular, check_stamps, decimate, regularise
 from twin.measurement.measure import clean_config, from_imu, simulate_measurement
-from twin.ownership import reading
-from twin.progress import ProgressFn
-from twin.run_checks import IMU_RATE_HZ, MAX_EXTRA_DELAY_S, check_plausible
-from twin.runs import HEADERS, RecordedRun, RunWriter, check_run_output, check_values
-from twin.signals import check_signal
-from twin.trajectory import Trajectory, interp_columns
 
 FloatArray = NDArray[np.float64]
 #: Rate of the grids the clocks are compared on [Hz].
 ALIGN_RATE_HZ = 100.0
 #: An apparent extra lag beyond this [s] is not taken for a motion-system delay (what the
-#: reader allows, :data:`twin.run_checks.MAX_EXTRA_DELAY_S`).
+#: reader allows, :data:`twin.formats.run_checks.MAX_EXTRA_DELAY_S`).
 MAX_PLAUSIBLE_DELAY_S = MAX_EXTRA_DELAY_S
 #: Accelerometer units tried, with the magnitude of gravity each would read.
 _GRAVITY_UNITS = ("m/s^2", "g", "mg", "ft/s^2")

@@ -24,8 +24,8 @@ from numpy.typing import NDArray
 from scipy.interpolate import CubicSpline
 from scipy.signal import butter, sosfiltfilt
 
-from twin.errors import DataError
-from twin.trajectory import interp_columns
+from twin.chain.trajectory import interp_columns
+from twin.core.errors import DataError
 
 FloatArray = NDArray[np.float64]
 #: The largest gap (in median steps) interpolated over.

@@ -24,7 +24,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import least_squares, minimize_scalar
 
-from twin.errors import SignalError
+from twin.core.errors import SignalError
 
 FloatArray = NDArray[np.float64]
 ComplexArray = NDArray[np.complex128]

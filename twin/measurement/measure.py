@@ -28,13 +28,13 @@ from numpy.typing import NDArray
 
 from twin.chain.config import MotionSystem, motion_system
 from twin.chain.imu import ImuRecord, ImuSpec, postprocess
+from twin.chain.signals import check_signal
 from twin.chain.simulate import MODELS, Run, Simulation, make_platform, prepare
-from twin.errors import RunFormatError, SignalError, UnknownPlatformError
-from twin.frames import DOF_NAMES, dof_index
-from twin.run_checks import read_plausible_run
-from twin.runs import RecordedRun
-from twin.signals import check_signal
-from twin.trajectory import Trajectory, interp_columns
+from twin.chain.trajectory import Trajectory, interp_columns
+from twin.core.errors import RunFormatError, SignalError, UnknownPlatformError
+from twin.core.frames import DOF_NAMES, dof_index
+from twin.formats.run_checks import read_plausible_run
+from twin.formats.runs import RecordedRun
 
 FloatArray = NDArray[np.float64]
 G = 9.81

@@ -13,8 +13,8 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy import signal
 
-from twin.errors import SignalError
-from twin.frames import DOF_NAMES
+from twin.core.errors import SignalError
+from twin.core.frames import DOF_NAMES
 from twin.measurement.describing_function import fourier_coefficients
 from twin.measurement.measure import Measurement
 

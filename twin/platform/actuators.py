@@ -50,8 +50,8 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
-from twin.checks import check_keys, number
-from twin.errors import ConfigError, ModelFileError
+from twin.core.checks import check_keys, number
+from twin.core.errors import ConfigError, ModelFileError
 from twin.platform.geometry import geometry_from_model
 from twin.platform.kinematics import static_leg_forces
 from twin.platform.payload import cabin_mass_properties

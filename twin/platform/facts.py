@@ -17,9 +17,9 @@ from pathlib import Path
 
 import mujoco
 
-from twin import checks
-from twin.checks import check_keys, number
-from twin.errors import ModelFileError, UnknownPlatformError
+from twin.core import checks
+from twin.core.checks import check_keys, number
+from twin.core.errors import ModelFileError, UnknownPlatformError
 
 #: Platform name -> model folder name.
 PLATFORMS: dict[str, str] = {"mpi": "mpi_stewart", "srs": "simona_srs"}

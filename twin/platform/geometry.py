@@ -13,8 +13,8 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
-from twin.errors import ModelFileError
-from twin.frames import MJ_FROM_THESIS, MJ_FROM_THESIS_QUAT
+from twin.core.errors import ModelFileError
+from twin.core.frames import MJ_FROM_THESIS, MJ_FROM_THESIS_QUAT
 from twin.platform.facts import load_model
 
 N_LEGS = 6

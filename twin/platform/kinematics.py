@@ -25,16 +25,16 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import brentq
 
-from twin.errors import ForwardKinematicsError, OutOfStrokeError, PoseError
-from twin.frames import DOF_NAMES, angular_motion, euler_rate_matrix, rotation_matrix
+from twin.core.errors import ForwardKinematicsError, OutOfStrokeError, PoseError
+from twin.core.frames import DOF_NAMES, angular_motion, euler_rate_matrix, rotation_matrix
+from twin.core.results import frame
 from twin.platform.geometry import Geometry
-from twin.results import frame
 
 if TYPE_CHECKING:
     import pandas as pd
     from matplotlib.figure import Figure
 
-    from twin.plotting import AxesArg
+    from twin.core.plotting import AxesArg
 
 FloatArray = NDArray[np.float64]
 
@@ -259,7 +259,7 @@ class ForwardResult:
         matplotlib.figure.Figure
 
         """
-        from twin.plotting import finish, subplots
+        from twin.core.plotting import finish, subplots
 
         pose = np.asarray(self.pose).reshape(-1, 6)
         fig, (ax_t, ax_r) = subplots(ax, 2, 1, figsize=(6, 5), sharex=True)
@@ -368,7 +368,7 @@ def leg_rates(
     pose_acc : array_like, shape (..., 6), optional
         Second derivative; leg accelerations are returned only if given (with ``pose_rate``).
     rotation : ndarray, shape (..., 3, 3), optional
-        T_c^b of the poses if already computed (:func:`twin.frames.rotation_matrix`).
+        T_c^b of the poses if already computed (:func:`twin.core.frames.rotation_matrix`).
 
     Returns
     -------

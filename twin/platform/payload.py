@@ -29,8 +29,8 @@ import mujoco
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from twin.checks import number, numbers
-from twin.errors import ConfigError
+from twin.core.checks import number, numbers
+from twin.core.errors import ConfigError
 from twin.platform.facts import load_model, model_path
 
 FloatArray = NDArray[np.float64]

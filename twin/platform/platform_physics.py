@@ -21,8 +21,8 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass
 
-from twin.checks import check_keys
-from twin.errors import ConfigError
+from twin.core.checks import check_keys
+from twin.core.errors import ConfigError
 from twin.platform.actuators import LegPhysics
 from twin.platform.payload import Payload
 

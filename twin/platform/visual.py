@@ -3,7 +3,7 @@
 Recordings and figures draw the platform from the model itself, not from a hand-made outline:
 each visual geom of the ``base`` and ``cabin`` bodies as a box, cylinder or capsule in its
 body's frame (thesis coordinates, since both bodies carry the thesis-from-MuJoCo rotation,
-:data:`twin.frames.MJ_FROM_THESIS_QUAT`), its colour from its material, and the cabin's IMU
+:data:`twin.core.frames.MJ_FROM_THESIS_QUAT`), its colour from its material, and the cabin's IMU
 site.
 """
 

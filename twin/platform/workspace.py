@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from twin.core.thesis import table_5_1_targets
 from twin.platform.kinematics import DofRange
-from twin.thesis import table_5_1_targets
 
 
 def comparable(ws: dict[str, DofRange]) -> dict[str, float]:

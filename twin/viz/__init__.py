@@ -1,0 +1,1 @@
+"""Views of results: Rerun recordings (:mod:`twin.viz.record`, the only importer of rerun)."""
