@@ -47,6 +47,7 @@ fuzz: $(STAMP)
 lint: $(STAMP)
 	$(BIN)/ruff check twin tests bench docs
 	$(BIN)/ruff format --check twin tests bench docs
+	$(BIN)/lint-imports
 
 # The docs site in docs/_build/html: the figures and notebooks first (docs/figures.py makes
 # only those whose sources changed; all of them: about 15 min on two cores), then Sphinx with

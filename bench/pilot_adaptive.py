@@ -22,15 +22,15 @@
    parameter, among the estimates where it counted as identifiable, the fraction within 2
    Cramer-Rao sd of the truth, with the bound at the truth (the bound proper: does the
    estimator attain it?) and with the bound the fit reports (widened to cover the minima the
-   data do not rule out, :mod:`twin.pilot.identification.minima`, over the profile of a parameter on an end
-   of its range and over the fit with a weak parameter on the end it cannot be told from,
-   and for the selection where the data rule a minimum out, :mod:`twin.pilot.identification.selection`;
-   printed with how often, and by how much, it is wider than the bound at the estimate);
-   and the fraction of all estimates whose likelihood-ratio interval (:mod:`twin.pilot.identification.profile`)
-   holds the truth (goal >= 90 %). Each with its 95 % Wilson interval: 50 estimates pin a
-   coverage down to about +-8 %, 200 to about +-4 %. Once with one run per estimate, once
-   with five repetitions averaged (the thesis' five per condition, §6.3.4). With
-   ``--no-intervals`` the fits skip the intervals and the rule that flags by them.
+   data do not rule out, :mod:`twin.pilot.identification.minima`, over the profile of a parameter on
+   an end of its range and over the fit with a weak parameter on the end it cannot be told from,
+   and for the selection where the data rule a minimum out,
+   :mod:`twin.pilot.identification.selection`; printed with how often, and by how much, it is wider
+   than the bound at the estimate); and the fraction of all estimates whose likelihood-ratio
+   interval (:mod:`twin.pilot.identification.profile`) holds the truth (goal >= 90 %). Each with its
+   95 % Wilson interval: 50 estimates pin a coverage down to about +-8 %, 200 to about +-4 %. Once
+   with one run per estimate, once with five repetitions averaged (the thesis' five per condition,
+   §6.3.4). With ``--no-intervals`` the fits skip the intervals and the rule that flags by them.
 4. The same coverage (480 estimates, no intervals) on data whose nuisance the twin's remnant
    model did not shape: condition 4 with half the remnant and a white stick-sensor noise of
    half u's sd added (five repetitions averaged), and a pilot the defaults are not (a lead
@@ -185,7 +185,8 @@ def populations(sd: float, n: int, adapted: tuple[str, ...] = ADAPTED) -> list[P
 def spread_profile(grid: dict[str, tuple[float, ...]], n: int, seed: int = 0) -> None:
     """Section 7: the subjects' spreads and run-to-run variation profiled against Tables
     6.4-6.7, ``n`` populations of nine a cell from ``seed``; then each cell against the best
-    on halves of the populations (:mod:`twin.pilot.studies.compare_settings`; from 4 populations)."""
+    on halves of the populations (:mod:`twin.pilot.studies.compare_settings`; from 4
+    populations)."""
     filters = [(m, "filter") for m in TABLES_6_4_TO_6_7 if m not in ("tau_v", "tau_m")]
     head = " ".join(f"{m[:9]:>9s}" for m, _ in filters)
     print(f"\n{n} populations of {SUBJECTS} a cell, seeds {seed}-{seed + n - 1}")
@@ -564,8 +565,8 @@ if __name__ == "__main__":
                              "7 (default: twin.pilot.studies.spread.MOTION_NOISE_SD; 0 with "
                              "--visual-delay-spread 0.03: the subjects before either)")  # fmt: skip
     parser.add_argument("--visual-delay-spread", type=float, default=VISUAL_DELAY_SD,
-                        metavar="S", help="the subjects' visual-delay sd in s for every "
-                        "section but 7 (default: twin.pilot.studies.spread.VISUAL_DELAY_SD)")  # fmt: skip
+                        metavar="S", help="the subjects' visual-delay sd in s for every section "
+                        "but 7 (default: twin.pilot.studies.spread.VISUAL_DELAY_SD)")  # fmt: skip
     parser.add_argument("--no-intervals", action="store_true",
                         help="fit without the likelihood-ratio intervals (and their rule): "
                              "about 6x faster")  # fmt: skip

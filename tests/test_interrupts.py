@@ -144,7 +144,8 @@ def test_the_worker_setup_ignores_ctrl_c_and_simulates_one_run_at_a_time():
         import twin.core.threads
         from twin.core.tasks.worker_setup import dask_setup
         dask_setup(None)
-        print(signal.getsignal(signal.SIGINT) is signal.SIG_IGN, twin.core.threads.SIMULATION_THREADS)
+        ignored = signal.getsignal(signal.SIGINT) is signal.SIG_IGN
+        print(ignored, twin.core.threads.SIMULATION_THREADS)
     """)
     assert out == "True 1\n"
 

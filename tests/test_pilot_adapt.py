@@ -1,4 +1,4 @@
-"""The adaptive pilot (twin.pilot.models.adapt) and the Chapter 6 statistics (twin.pilot.studies.population)."""
+"""The adaptive pilot (pilot.models.adapt), the Chapter 6 statistics (pilot.studies.population)."""
 
 from __future__ import annotations
 
@@ -377,8 +377,8 @@ def test_nine_adaptive_subjects_predict_the_filter_effects_of_chapter_6():
     have the thesis' direction with p < 0.05, and delay and noise have no significant effect
     on the disturbance crossover; on the target crossover they have none in at least 3 of 5.
 
-    And as a replication (twin.pilot.studies.replication): the median effect over the populations has
-    the thesis' direction for every filter effect of Tables 6.4-6.7, including the three that
+    And as a replication (twin.pilot.studies.replication): the median effect over the populations
+    has the thesis' direction for every filter effect of Tables 6.4-6.7, including the three that
     single populations miss most (var(u), the target crossover, zeta_nm); the thesis' target
     crossover effect is a plausible draw of the twin's populations (predictive p >= 0.05;
     over 20 populations p = 0.33, docs). And the default population (seed 0) meets the

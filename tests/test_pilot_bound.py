@@ -139,8 +139,9 @@ def test_a_lag_on_its_bound_is_not_identifiable_and_widens_what_moves_with_it():
     fit = fit_pitch_pilot(r.ft, r.fd, r.u[0], CFG)
     assert fit.competing == ()  # the widening below is the profile point's alone
     assert list(fit.on_range_bound) == ["t_lag"]
-    # t_lead's sd is also taken along the likelihood's valley (twin.pilot.identification.profile_wald), with
-    # t_lag free to leave zero there: wider here, enough to flag it from this one run
+    # t_lead's sd is also taken along the likelihood's valley
+    # (twin.pilot.identification.profile_wald), with t_lag free to leave zero there: wider here,
+    # enough to flag it from this one run
     assert set(fit.unidentifiable) - {"t_lead"} == {"t_lag"}
     assert fit.crlb["t_lag"] == np.inf
     out = fit.to_dict()
@@ -227,8 +228,8 @@ def test_a_minimum_the_data_rule_out_widens_the_bound_for_the_selection():
     pair's other basin is ruled out (chi-square 15 above the best, Vuong's test prefers the
     best), nothing competes, and the estimate came out low, as those that pass do: t_lead
     0.173 s with a bound of 0.013 s at the estimate, which misses the truth (0.2) by more than
-    two. Widened for the selection (:mod:`twin.pilot.identification.selection`) it holds the truth; t_lag,
-    whose estimate lies near the limit where the other basin would compete again, is no
+    two. Widened for the selection (:mod:`twin.pilot.identification.selection`) it holds the truth;
+    t_lag, whose estimate lies near the limit where the other basin would compete again, is no
     longer counted as identified."""
     r = simulate_pitch(TRUTH, CFG, 5, seed=23, remnant_scale=pitch_remnant_scale(TRUTH, 0.15))
     fit = fit_pitch_pilot(r.ft, r.fd, r.u, CFG)

@@ -1,4 +1,4 @@
-"""Likelihood-ratio intervals from the profile likelihood (twin.pilot.identification.profile), and the
+"""Likelihood-ratio intervals from the profile likelihood (pilot.identification.profile), and the
 pilot fit's intervals where its Cramer-Rao bounds are too narrow."""
 
 import numpy as np

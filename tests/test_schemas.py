@@ -167,7 +167,7 @@ def test_a_pilot_run_the_twin_writes(written):
 
 
 def _docstring_schedule() -> str:
-    """The example schedule of twin.formats.schedule.toml_schedule's docstring (shipped with the code)."""
+    """The example schedule in twin.formats.schedule.toml_schedule's docstring (shipped with it)."""
     text = (ROOT / "twin" / "formats" / "schedule" / "toml_schedule.py").read_text()
     block = re.search(r"\.\. code-block:: toml\n\n(.*?)\n\"\"\"", text, re.S)
     assert block is not None

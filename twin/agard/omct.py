@@ -32,6 +32,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from twin.agard.session import Session
+from twin.agard.snr import system_limit
 from twin.core.checks import check_keys, number, numbers, read_toml
 from twin.core.errors import SignalError, TwinError
 from twin.core.frames import DOF_NAMES, dof_index
@@ -290,8 +291,6 @@ def default_amplitude(dof: str, w_rad_s: float, platform: str, fraction: float =
     As the Table 5.2 amplitudes (10 % of the system limits, §3.3.3), capped like them at
     0.2 m/s^2 and 1 rad/s^2; the system limit is that of :func:`twin.agard.snr.system_limit`.
     """
-    from twin.agard.snr import system_limit
-
     cap = 1.0 if dof_index(dof) >= 3 else 0.2
     return min(cap, fraction * float(system_limit(platform, dof, w_rad_s / (2 * np.pi))))
 

@@ -23,6 +23,7 @@ from twin.agard.session import Session
 from twin.agard.threshold import run_threshold
 from twin.core.errors import UsageError
 from twin.core.progress import ProgressFn
+from twin.core.thesis import CHAPTER_3_4, TABLE_5_6_MPI_IMU
 from twin.measurement.measure import Bench, configure
 
 #: Seed of repetition ``i`` (far apart, so neighbouring repetitions share no stream).
@@ -91,8 +92,6 @@ def table_5_6_delays(
         Heave and pitch, equal weights (with the thesis' value) and SNR-weighted.
 
     """
-    from twin.core.thesis import TABLE_5_6_MPI_IMU
-
     cfg = configure("srs", break_hz=1.0, delay_ms=25.0)
     rows: dict[tuple[str, str], list[float]] = {}
     for i in _seeds(seeds):
@@ -113,8 +112,6 @@ def threshold_taus(
     seeds: int = 20, model: str = "reduced", progress: ProgressFn | None = None
 ) -> Spread:
     """§3.4.4's dynamic threshold tau over ``seeds`` seeds [ms] (MPI 2008, surge)."""
-    from twin.core.thesis import CHAPTER_3_4
-
     taus = []
     for i in _seeds(seeds):
         with Session(Bench(configure("mpi-2008"), model, seed=SEED_STRIDE * i)) as s:

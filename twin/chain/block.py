@@ -23,6 +23,7 @@ from numpy.typing import ArrayLike, NDArray
 from twin.chain.jets import JetSignal, hermite_eval
 from twin.chain.trajectory import Trajectory
 from twin.core.errors import SignalError
+from twin.core.frames import DOF_NAMES, dof_index
 
 FloatArray = NDArray[np.float64]
 ComplexArray = NDArray[np.complex128]
@@ -74,8 +75,6 @@ class Block(ABC):
 
 def dof_mask(dofs: tuple[str, ...] | None) -> NDArray[np.bool_]:
     """Mask over the six DOFs for a tuple of names (all six for None or empty)."""
-    from twin.core.frames import DOF_NAMES, dof_index
-
     mask = np.zeros(len(DOF_NAMES), dtype=bool)
     if not dofs:
         mask[:] = True

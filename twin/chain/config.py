@@ -39,13 +39,14 @@ from numpy.typing import ArrayLike, NDArray
 
 from twin.chain.block import Backlash, Block
 from twin.chain.delay import MAX_DELAY_S, Delay
-from twin.chain.extensions import Extension, imu_rotation
+from twin.chain.extensions import DOF_CHANNEL, Extension, imu_rotation
 from twin.chain.filter import MAX_BREAK_HZ, MIN_BREAK_HZ, PlatformFilter, check_break_hz
 from twin.chain.lti import LinearModel
 from twin.chain.noise import MotionNoise
 from twin.chain.resonance import Resonance
 from twin.core.checks import check_keys, did_you_mean, flag, number, read_json
 from twin.core.errors import ConfigError, SignalError, UnknownPlatformError, UsageError
+from twin.core.frames import dof_index
 from twin.core.lifecycle import replacing_file
 from twin.core.thesis import TABLE_6_3
 from twin.platform.facts import PLATFORMS, load_facts
@@ -276,8 +277,6 @@ class MotionSystem:
         """
         import control
 
-        from twin.core.frames import dof_index
-
         k = dof_index(dof) if isinstance(dof, str) else int(dof)
         tf, delay = control.tf([1.0], [1.0]), 0.0
         for block in self.blocks():
@@ -379,8 +378,6 @@ def _extension(data: object, k: int) -> Extension:
 
 def _sensed(ext: Extension) -> NDArray[np.bool_]:
     """DOFs whose measured acceleration comes from a sensor_filter's channels."""
-    from twin.chain.extensions import DOF_CHANNEL
-
     channels = ext.parameters["channels"]
     return np.array([DOF_CHANNEL[d] in channels for d in DOF_CHANNEL])  # type: ignore[operator]
 

@@ -202,7 +202,7 @@ class Extension:
 
     @classmethod
     def from_json(cls, data: object) -> Extension:
-        """Parse the JSON form (raises :class:`~twin.core.errors.ConfigError` on anything malformed).
+        """Parse the JSON form (:class:`~twin.core.errors.ConfigError` on anything malformed).
 
         An unknown key (``dof`` for ``dofs``) is refused with a did-you-mean, not ignored.
         """

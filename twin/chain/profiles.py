@@ -1,8 +1,8 @@
 """Motion profiles of test schedules: faded sines and piecewise-constant-jerk motions.
 
 Motion computers drive their test moves from a few profile types; the SIMONA Research
-Simulator's schedules (:mod:`twin.formats.schedule`) name four, and the AGARD-AR-144 turn-around bump
-and system-limit tests are built from the same shapes:
+Simulator's schedules (:mod:`twin.formats.schedule`) name four, and the AGARD-AR-144 turn-around
+bump and system-limit tests are built from the same shapes:
 
 - faded sines (:func:`faded_sines`): a sum of sines under a raised-cosine fade-in and
   fade-out (the fade of Eq 3.1, lasting ``t_fade`` at each end);

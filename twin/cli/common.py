@@ -490,7 +490,7 @@ def scheduler_parent() -> argparse.ArgumentParser:
 
 
 def engine(args: argparse.Namespace):
-    """Return the :class:`~twin.core.tasks.engine.Engine` of ``--scheduler`` (checked, not started)."""
+    """Return ``--scheduler``'s :class:`~twin.core.tasks.engine.Engine` (checked, not started)."""
     from twin.core.tasks.engine import Engine
 
     return Engine(args.scheduler)

@@ -16,10 +16,10 @@ Traceback (most recent call last):
 twin.core.errors.DataError: delay_s must be a number >= 0; got 'x'
 >>> numbers([1, 2, 3], "position_m", size=3).tolist()
 [1.0, 2.0, 3.0]
->>> check_keys({"dealy_s": 0.1}, ("delay_s",), "cfg.json")
+>>> check_keys({"dealy": 0.1}, ("delay",), "cfg.json")
 Traceback (most recent call last):
 ...
-twin.core.errors.DataError: cfg.json: unknown key 'dealy_s' (did you mean 'delay_s'?); allowed: delay_s
+twin.core.errors.DataError: cfg.json: unknown key 'dealy' (did you mean 'delay'?); allowed: delay
 
 """
 

@@ -11,6 +11,8 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from twin.core.errors import ConfigError
+
 #: Quaternion (w, x, y, z) of the thesis base/cabin frame expressed in MuJoCo's z-up world:
 #: a half turn about x maps (x fwd, y right, z down) onto (x fwd, y left, z up).
 MJ_FROM_THESIS_QUAT = (0.0, 1.0, 0.0, 0.0)
@@ -39,8 +41,6 @@ def dof_index(dof: str) -> int:
     try:
         return DOF_NAMES.index(dof)
     except ValueError:
-        from twin.core.errors import ConfigError
-
         raise ConfigError(f"unknown DOF {dof!r}; expected one of {', '.join(DOF_NAMES)}") from None
 
 

@@ -42,6 +42,7 @@ from twin.chain.signals import (
     premeasurement_periods,
     single_sine,
 )
+from twin.core.checks import read_json
 from twin.core.errors import DataError, SignalError, SignalLimitError
 from twin.core.frames import acceleration_unit, dof_index
 from twin.core.progress import ProgressFn
@@ -54,6 +55,7 @@ from twin.diagnose.candidates import (
 from twin.diagnose.data import Case, Channel, load_case
 from twin.diagnose.equivalence import SAME_RESPONSE
 from twin.diagnose.select import BIC_MARGIN
+from twin.formats.runs import write_commands
 from twin.measurement.describing_function import fourier_coefficients
 
 FloatArray = NDArray[np.float64]
@@ -650,8 +652,6 @@ def design_from(
         without a stated size.
 
     """
-    from twin.core.checks import read_json
-
     path = Path(folder) / "diagnosis.json"
     if not path.exists():
         raise DataError(f"{folder}: no diagnosis.json; give a folder twin diagnose wrote")
@@ -690,8 +690,6 @@ def _run_paths(nominal: dict, path: Path) -> list[str]:
 
 def write_design(result: DesignResult, out: Path) -> None:
     """Write ``design.json``, ``commands.csv`` (twin-run/1) and ``schedule.toml`` into ``out``."""
-    from twin.formats.runs import write_commands
-
     (out / "design.json").write_text(
         json.dumps(result.to_json(), indent=2) + "\n", encoding="utf-8"
     )

@@ -1,7 +1,7 @@
 """Plausibility of a recorded run: what a well-formed ``twin-run/1`` folder must also be.
 
-:func:`twin.formats.runs.read_run` checks the format (files, headers, numbers, uniform time); here is
-whether the numbers are a motion system's: every reader of runs (``twin diagnose``, ``twin
+:func:`twin.formats.runs.read_run` checks the format (files, headers, numbers, uniform time); here
+is whether the numbers are a motion system's: every reader of runs (``twin diagnose``, ``twin
 agard`` on a run folder, the notebooks) gets them through :func:`plausible_run`, and ``twin
 import`` checks what it is about to write the same way. One function per check, each raising
 :class:`~twin.core.errors.RunFormatError` with one line that says what is implausible and how to
@@ -38,6 +38,7 @@ from scipy import signal
 from twin.chain.config import MotionSystem
 from twin.chain.imu import G, rotate_readings
 from twin.core.errors import RunFormatError
+from twin.core.frames import DOF_NAMES
 from twin.formats.run_expected import BAND_HZ, Comparison, compare, ideal_imu
 from twin.formats.runs import HEADERS, RecordedRun, read_run
 
@@ -158,8 +159,6 @@ def _informative(cmp: Comparison) -> list[int]:
 
 def _dofs_moving(run: RecordedRun) -> str:
     """Name the DOFs the commands move (for messages)."""
-    from twin.core.frames import DOF_NAMES
-
     span = np.ptp(run.commands.values, axis=0)
     return ", ".join(d for d, s in zip(DOF_NAMES, span, strict=True) if s > 0) or "no DOF"
 

@@ -1,8 +1,8 @@
 """Stream a prepared run into a ``twin-run/1`` folder (and a Rerun recording).
 
-The format itself (reading, checking, :class:`~twin.formats.runs.RunWriter`) is in :mod:`twin.formats.runs`;
-this module is the one place where a simulated run's ``meta.json`` is built
-(:func:`run_meta`, with the signal design of :func:`signal_meta`) and where a run's chunks are
+The format itself (reading, checking, :class:`~twin.formats.runs.RunWriter`) is in
+:mod:`twin.formats.runs`; this module is the one place where a simulated run's ``meta.json`` is
+built (:func:`run_meta`, with the signal design of :func:`signal_meta`) and where a run's chunks are
 written as they are simulated (:func:`execute`). Every command and library function that
 writes a simulated run goes through here; none of it depends on the command line.
 """
@@ -159,7 +159,8 @@ def execute(
     meta : dict, optional
         ``meta.json`` contents (see :func:`run_meta`; needed with ``folder``).
     folder : Path, optional
-        Destination ``twin-run/1`` folder (written atomically by :class:`~twin.formats.runs.RunWriter`).
+        Destination ``twin-run/1`` folder (written atomically by
+        :class:`~twin.formats.runs.RunWriter`).
     overwrite : bool
         Replace an existing folder.
     recorder : RunRecorder, optional

@@ -32,9 +32,12 @@ from typing import TextIO
 import numpy as np
 from numpy.typing import NDArray
 
+from twin.chain.config import MotionSystem
+from twin.chain.signals import check_physical
 from twin.chain.trajectory import Trajectory, uniform_rate
 from twin.core.checks import ENCODING, not_utf8, number, numbers, read_json
 from twin.core.errors import ConfigError, OutputError, RunFormatError, SignalError, UsageError
+from twin.core.frames import DOF_NAMES
 from twin.core.lifecycle import (
     CloseOrAbort,
     StagedFolder,
@@ -96,7 +99,8 @@ class RecordedRun:
         What the reader did to the data, one sentence each (e.g. an IMU resampled to a rate
         the analyses are made for: :func:`twin.formats.run_checks.supported_rate`).
     plausible : bool
-        Whether :func:`twin.formats.run_checks.plausible_run` has passed it (it is not checked again).
+        Whether :func:`twin.formats.run_checks.plausible_run` has passed it (it is not checked
+        again).
 
     """
 
@@ -254,8 +258,6 @@ def _check_rate(path: Path, t: FloatArray, expected: float) -> None:
 
 def _check_meta(meta: object, path: Path) -> dict:
     """Check a ``meta.json``'s keys and types (the configuration as :meth:`from_meta` does)."""
-    from twin.chain.config import MotionSystem
-
     where = f"{path}/meta.json"
     if not isinstance(meta, dict):
         raise RunFormatError(f"{where}: must hold a JSON object")
@@ -286,7 +288,6 @@ def _check_meta(meta: object, path: Path) -> dict:
 
 def _check_optional(meta: dict, where: str) -> None:
     """Check the optional ``signal`` (the test design) and ``import`` entries of a meta.json."""
-    from twin.core.frames import DOF_NAMES
 
     def table(value: object, name: str) -> dict:
         if not isinstance(value, dict):
@@ -324,9 +325,9 @@ def read_run(folder: str | Path | RecordedRun) -> RecordedRun:
     """Read and validate a ``twin-run/1`` folder (a run already read is returned as it is).
 
     This is the format only; the analyses read runs through
-    :func:`twin.formats.run_checks.read_plausible_run`, which also checks that the data are plausible
-    for a motion system (gravity, units, axes, clock and IMU rate) and resamples an IMU faster
-    than the analyses are made for, with a note in :attr:`RecordedRun.notes`.
+    :func:`twin.formats.run_checks.read_plausible_run`, which also checks that the data are
+    plausible for a motion system (gravity, units, axes, clock and IMU rate) and resamples an IMU
+    faster than the analyses are made for, with a note in :attr:`RecordedRun.notes`.
 
     Raises
     ------
@@ -392,8 +393,6 @@ def read_commands(path: str | Path) -> Trajectory:
 
 def _trajectory(cmd: FloatArray, path: Path) -> Trajectory:
     """Return the commands of a ``commands.csv`` (refused beyond :data:`MAX_COMMAND`)."""
-    from twin.chain.signals import check_physical
-
     tr = Trajectory(uniform_rate(cmd[:, 0], str(path)), cmd[:, 1:], float(cmd[0, 0]))
     try:
         check_physical(tr, str(path))

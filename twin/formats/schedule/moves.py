@@ -3,9 +3,9 @@
 A schedule is what a motion lab runs on its platform: a list of moves, each starting at a
 time, from a pose, along a direction in the six DOFs (``axis``: the direction and the scale,
 e.g. 0.7 rad per unit for rotations), driven by one profile (:mod:`twin.chain.profiles`). Between
-moves the platform holds the last pose. Readers (:mod:`twin.formats.schedule.movement_series` for the
-SIMONA Research Simulator's JSON, :mod:`twin.formats.schedule.toml_schedule` for the twin's own TOML)
-build a :class:`Schedule`; it checks that the moves follow each other without a jump in pose
+moves the platform holds the last pose. Readers (:mod:`twin.formats.schedule.movement_series` for
+the SIMONA Research Simulator's JSON, :mod:`twin.formats.schedule.toml_schedule` for the twin's own
+TOML) build a :class:`Schedule`; it checks that the moves follow each other without a jump in pose
 or speed, makes the commands (:meth:`Schedule.commands`), travels in a run's ``meta.json``
 (:meth:`Schedule.to_json`, :meth:`Schedule.from_json`) and says which AGARD-AR-144 test each
 move serves (:func:`test_of`).

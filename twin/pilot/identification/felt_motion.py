@@ -1,8 +1,8 @@
 """Which motion system a recorded pilot run was flown through, read from its felt attitude.
 
-The closed-loop fit (:mod:`twin.pilot.identification.mle`) models the loop through the motion system's pitch
-response, so it needs the right one: fitted through the SRS baseline, a run flown behind the
-MPI platform's 1 Hz filter is explained by a different pilot. A ``twin-pilot/1`` run that
+The closed-loop fit (:mod:`twin.pilot.identification.mle`) models the loop through the motion
+system's pitch response, so it needs the right one: fitted through the SRS baseline, a run flown
+behind the MPI platform's 1 Hz filter is explained by a different pilot. A ``twin-pilot/1`` run that
 carries ``theta_felt`` (the attitude the motion system gave the pilot) shows which response
 it had: ``theta_felt`` is the simulated attitude ``theta`` through it. Each candidate's
 response is applied to ``theta`` (the whole record, zero-padded so nothing wraps round) and

@@ -1,7 +1,7 @@
 """Pilot-model parameters from identified frequency responses (§2.5.2.4, Table 2.3).
 
-The seven parameters of :data:`twin.pilot.models.model.ESTIMATED` are fitted to estimates of H_pe and
-H_px (the canal dynamics are kept at their Table 2.1 values, as in the thesis) by least squares
+The seven parameters of :data:`twin.pilot.models.model.ESTIMATED` are fitted to estimates of H_pe
+and H_px (the canal dynamics are kept at their Table 2.1 values, as in the thesis) by least squares
 on the complex relative error, ``|H_model / H_estimate - 1|``, of both responses together.
 """
 

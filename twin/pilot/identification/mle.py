@@ -90,13 +90,13 @@ class PilotFit:
     crlb : dict of str to float
         The standard deviation reported for each parameter: its Cramer-Rao bound at the
         estimate where no other minimum competes, else that bound widened so that two of it
-        cover each competing minimum's own two bounds (:func:`twin.pilot.identification.minima.widened`: the
-        truth may sit in any of them) and each point of ``on_range_bound`` and ``range_end``
-        (a point's parameters on an end of their range count as points there), after the
-        widening for the minima the data ruled out (:mod:`twin.pilot.identification.selection`; it starts
-        from the bound at the estimate); for the lead-lag pair where it counts as
-        identifiable, at least the sd along the likelihood's valley
-        (:mod:`twin.pilot.identification.profile_wald`). JSON ``crlb_sd``;
+        cover each competing minimum's own two bounds
+        (:func:`twin.pilot.identification.minima.widened`: the truth may sit in any of them) and
+        each point of ``on_range_bound`` and ``range_end`` (a point's parameters on an end of their
+        range count as points there), after the widening for the minima the data ruled out
+        (:mod:`twin.pilot.identification.selection`; it starts from the bound at the estimate); for
+        the lead-lag pair where it counts as identifiable, at least the sd along the likelihood's
+        valley (:mod:`twin.pilot.identification.profile_wald`). JSON ``crlb_sd``;
         an unbounded sd (a parameter the data do not see, or one on its range's bound) is
         infinite, null in the JSON.
     vaf_percent : float
@@ -110,15 +110,15 @@ class PilotFit:
         reaches much farther than two bounds (reported, not hidden).
     intervals : dict of str to (float, float), or None
         Likelihood-ratio interval of each parameter (two standard deviations where the
-        likelihood is a parabola; :mod:`twin.pilot.identification.profile`), when asked for: honest where the
-        bound is not (the lead-lag pair's several minima). An end at ``UPPER``, or at a
+        likelihood is a parabola; :mod:`twin.pilot.identification.profile`), when asked for: honest
+        where the bound is not (the lead-lag pair's several minima). An end at ``UPPER``, or at a
         ``LOWER`` above zero, is open: the data do not bound the parameter there (a lower end
         at zero is the physical limit of a time constant, delay or gain).
     competing : tuple of PitchPilot
         Other minima the data do not tell from the estimate (chi-square within
-        ``COMPETING_CHI2``, or not rejected by Vuong's test: :mod:`twin.pilot.identification.minima`), best
-        first: from one run at the thesis' remnant level, typically the lead-lag pair's other
-        basin (t_lead near 0.5 s, t_lag near 0.9 s).
+        ``COMPETING_CHI2``, or not rejected by Vuong's test:
+        :mod:`twin.pilot.identification.minima`), best first: from one run at the thesis' remnant
+        level, typically the lead-lag pair's other basin (t_lead near 0.5 s, t_lag near 0.9 s).
     crlb_at_estimate : dict of str to float, or None
         The Cramer-Rao bound at the estimate alone (the inverse Fisher information there; with
         parameters on their range's bound, the others' with those held there). JSON
@@ -147,8 +147,8 @@ class PilotFit:
         ``competing``) of ``{"delta_chi2", "vuong_z"}`` (chi-square above the best, and
         Vuong's statistic for the best against it); ``ruled_out_minima``, the same of the
         minima the data ruled out, which widen the bounds for the selection
-        (:mod:`twin.pilot.identification.selection`); ``range_end``, parameter -> the chi-square rise with
-        it on its end; ``fit``, the best fit's goodness of fit (:func:`goodness_of_fit`:
+        (:mod:`twin.pilot.identification.selection`); ``range_end``, parameter -> the chi-square
+        rise with it on its end; ``fit``, the best fit's goodness of fit (:func:`goodness_of_fit`:
         the VAF does not tell a model that does not hold, this does). JSON ``evidence``.
 
     """
@@ -509,8 +509,8 @@ def fit_pitch_pilot(
     the lead-lag pair, so a grid of starts (delays, lead-lag, motion gain on or off) is tried
     and the best kept. Another minimum competes with it when the data do not tell them apart:
     chi-square within ``COMPETING_CHI2`` of the best, or Vuong's test for non-nested models
-    does not prefer the best (:mod:`twin.pilot.identification.minima`; the lead-lag pair at the thesis'
-    remnant level has a second minimum near t_lead 0.4-0.6 s that one run rarely rules out).
+    does not prefer the best (:mod:`twin.pilot.identification.minima`; the lead-lag pair at the
+    thesis' remnant level has a second minimum near t_lead 0.4-0.6 s that one run rarely rules out).
     The truth may sit in any competing minimum, with that minimum's bound as its spread, so
     each parameter's reported bound is widened until two of it cover every competing minimum's
     own two bounds (from one run this lifts omega_nm's coverage from 80 % to over 90 %). A
@@ -519,8 +519,8 @@ def fit_pitch_pilot(
     A minimum the data do rule out still tells on the estimate: the data rule it out when
     their noise pulled the estimate away from it, so the estimates that pass are drawn from
     one side. Each parameter's bound is widened to the interval that holds after that
-    selection (:mod:`twin.pilot.identification.selection`, Lee et al. 2016): unchanged far from where the
-    rival would compete again, wide near it. From five repetitions at the thesis' remnant
+    selection (:mod:`twin.pilot.identification.selection`, Lee et al. 2016): unchanged far from
+    where the rival would compete again, wide near it. From five repetitions at the thesis' remnant
     level, where the lead-lag pair's other basin is ruled out in about one fit in eight,
     this takes t_lead's coverage over the fits that counted it identifiable from 82 % (of
     102 of 600) to 96 % (the same fits; 94 % of the 69 still counted) and t_lag off the
@@ -531,8 +531,8 @@ def fit_pitch_pilot(
     others' bound is taken with it held there, and the point where its profile into the range
     has risen by ``COMPETING_CHI2`` (the data do not rule it out) widens their bounds as a
     competing minimum does (:attr:`PilotFit.on_range_bound`,
-    :func:`twin.pilot.identification.profile.inward_point`; about 0.5 s per such parameter). So does the fit
-    with a parameter the data hardly see moved onto the nearer end of its range, where that
+    :func:`twin.pilot.identification.profile.inward_point`; about 0.5 s per such parameter). So does
+    the fit with a parameter the data hardly see moved onto the nearer end of its range, where that
     costs less than ``COMPETING_CHI2`` (:attr:`PilotFit.range_end`).
     With ``intervals``, a parameter whose likelihood-ratio interval reaches on either side more
     than ``QUADRATIC_SIDE_RATIO`` times two bounds from the estimate is reported too: the
@@ -555,7 +555,8 @@ def fit_pitch_pilot(
         The loop holds u over each sample (a digital simulator's zero-order hold, a half-sample
         delay; the twin's pitch task does); False for a continuous loop.
     progress : callable, optional
-        Called after each start of the grid and each parameter's interval (:mod:`twin.core.progress`).
+        Called after each start of the grid and each parameter's interval
+        (:mod:`twin.core.progress`).
     intervals : bool
         Also compute each parameter's likelihood-ratio interval from the profile likelihood
         (:attr:`PilotFit.intervals`; typically 5-35 s more).

@@ -13,12 +13,12 @@ bound (already widened for the minima and the selection) held the truth in 89 %.
 
 This module inverts the Wald test with the bound at each hypothesised value: a value
 ``theta`` is kept where the estimate lies within two of the bounds at ``theta``, the other
-parameters fitted again with the one held there (the profile, :func:`twin.pilot.identification.profile.
-profile_fit`, so the point follows the valley; along the covariance's straight line the
-chi-square rose by 10-30 at two bounds, where a parabola rises by 4). Each end of the
-interval is the fixed point d = 2 sd(estimate +- d), found by iteration from two bounds at
-the estimate, each step one refit; the sd is half the longer side, never below the bound at
-the estimate. Measured on the 117 fits above: t_lead's reported sd, the larger of the two,
+parameters fitted again with the one held there (the profile,
+:func:`twin.pilot.identification.profile. profile_fit`, so the point follows the valley; along the
+covariance's straight line the chi-square rose by 10-30 at two bounds, where a parabola rises by 4).
+Each end of the interval is the fixed point d = 2 sd(estimate +- d), found by iteration from two
+bounds at the estimate, each step one refit; the sd is half the longer side, never below the bound
+at the estimate. Measured on the 117 fits above: t_lead's reported sd, the larger of the two,
 held the truth in 97 % (91 % of the 45 with t_lag low), widened in 86 of them by x1.41
 (median; 95th percentile x16). It is wider than the likelihood-ratio interval (the profile's
 chi-square at its ends had a median rise of 8.6): it asks of each value whether the estimate

@@ -1,7 +1,7 @@
 """Bounds that hold after a rival minimum was ruled out: inference after selection.
 
-When the data rule out another minimum (:func:`twin.pilot.identification.minima.competing`), the fit reports
-the best minimum's own Cramer-Rao bound, and a parameter whose bound is then small counts as
+When the data rule out another minimum (:func:`twin.pilot.identification.minima.competing`), the fit
+reports the best minimum's own Cramer-Rao bound, and a parameter whose bound is then small counts as
 identifiable. But ruling the rival out selects the data: it happens when the noise pulled
 the estimate away from the rival. The lead-lag pair of the pitch pilot, fitted to five
 repetitions at the thesis' remnant level (condition 8, 600 seeded fits), shows it: over all

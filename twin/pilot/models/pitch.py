@@ -122,8 +122,8 @@ class Feedthrough:
     at s = jw), while Eq 6.7's -K_m s e^{-s tau_m} (its sign in u) is 90 deg from it less the
     delay's lag, for any K_m >= 0 and tau_m >= 0: both share H_nm, and the MLE of Eq 6.5-6.7
     can only absorb the path in biased parameters (``evidence["fit"]`` of
-    :func:`twin.pilot.identification.mle.fit_pitch_pilot` shows the misfit). The path is positive feedback
-    (the hand pushed aft as the nose rises); a large one destabilises the loop. An
+    :func:`twin.pilot.identification.mle.fit_pitch_pilot` shows the misfit). The path is positive
+    feedback (the hand pushed aft as the nose rises); a large one destabilises the loop. An
     assumption for exploring what the thesis' estimates may hold
     (Venrooij et al. measured such paths; no value for the SRS side-stick is given), not a
     measured property of the SRS.

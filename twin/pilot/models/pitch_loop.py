@@ -1,4 +1,4 @@
-"""The stepping of the pitch loop of :func:`twin.pilot.models.pitch.simulate_pitch`, many runs at once.
+"""The stepping of the pitch loop of :func:`~twin.pilot.models.pitch.simulate_pitch`, many runs.
 
 Per loop sample: the aircraft's attitude (and its first two derivatives, the jets the motion
 chain takes) from its zero-order-hold state, the error, the pilot's visual and motion channels

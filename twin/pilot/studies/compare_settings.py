@@ -2,10 +2,10 @@
 
 Settings that the thesis does not give (the subjects' spreads, :mod:`twin.pilot.studies.spread`) are
 chosen by the log predictive density of the thesis' main effects under the twin's populations
-(:attr:`twin.pilot.studies.replication.Replication.log_density`). Flown on the same seeds, two settings
-draw the same people, so their difference is much surer than either score; but the populations
-are still few (10-20), and one or two outlying populations can decide a sum over 36 effects.
-:func:`log_density_difference` scores both settings again on halves of the populations (the
+(:attr:`twin.pilot.studies.replication.Replication.log_density`). Flown on the same seeds, two
+settings draw the same people, so their difference is much surer than either score; but the
+populations are still few (10-20), and one or two outlying populations can decide a sum over 36
+effects. :func:`log_density_difference` scores both settings again on halves of the populations (the
 same half for both; every half where there are at most :data:`ALL_HALVES`, else random ones)
 and reports the difference's 5-95 % over halves and how often the first setting scores higher:
 would a profile of half as many populations have made the same choice? The halves' scores are

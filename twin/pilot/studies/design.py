@@ -1,7 +1,7 @@
 """How many subjects an experiment needs to find each effect, designed on the twin's subjects.
 
-The replication (:mod:`twin.pilot.studies.replication`) asks whether the thesis' nine participants are
-a plausible draw of the twin's populations. The engineer planning the next experiment asks the
+The replication (:mod:`twin.pilot.studies.replication`) asks whether the thesis' nine participants
+are a plausible draw of the twin's populations. The engineer planning the next experiment asks the
 converse: if the twin is right, how many participants will show each effect (p < 0.05 in the
 thesis' direction), and will the effects the thesis did not find stay out? And one population of
 nine that misses an effect, or the thesis' experiment itself, is it a surprise?

@@ -160,10 +160,11 @@ def run_experiment(
 ) -> ExperimentResult:
     """Fly every condition ``runs`` times and compute the measures and factor effects.
 
-    With ``fit``, the pilot model is also estimated (closed-loop MLE, :mod:`twin.pilot.identification.mle`)
-    from each condition's first run, as the thesis did per condition (Fig 6.6, 6.8, 6.9).
-    Each condition is a task (:mod:`twin.core.tasks`; condition ``n`` uses seed ``seed + n``), so
-    the result is the same whatever runs them (``scheduler``; default this process).
+    With ``fit``, the pilot model is also estimated (closed-loop MLE,
+    :mod:`twin.pilot.identification.mle`) from each condition's first run, as the thesis did per
+    condition (Fig 6.6, 6.8, 6.9). Each condition is a task (:mod:`twin.core.tasks`; condition ``n``
+    uses seed ``seed + n``), so the result is the same whatever runs them (``scheduler``; default
+    this process).
     """
     p = pilot or PitchPilot()
     with using(scheduler) as engine:  # a remote scheduler is reached (or refused) first

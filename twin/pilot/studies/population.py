@@ -15,8 +15,8 @@ imperfect adaptation: in each repetition every adapted parameter is off by a log
 loop is unstable or costs more than ``MAX_COST_RATIO`` times the adapted one is a run where
 control was lost and is flown again. The measures per subject and condition follow the
 thesis' procedure: var(e) and var(u) are the repetitions' own (frequency domain,
-:func:`twin.pilot.models.adapt.predict`), averaged; the pilot model identified on the averaged data is
-approximated by the repetitions' average pilot (geometric mean of each parameter), and
+:func:`twin.pilot.models.adapt.predict`), averaged; the pilot model identified on the averaged data
+is approximated by the repetitions' average pilot (geometric mean of each parameter), and
 its crossover frequencies and phase margins (:func:`twin.pilot.models.pitch.open_loops`), K_v, K_m,
 t_lead, t_lag, omega_nm and zeta_nm are the measures. (:mod:`twin.pilot.studies.identified` measures
 them as the thesis did instead: the repetitions flown in the time domain and the model
@@ -34,10 +34,10 @@ minus the first), beside the thesis' F and directions.
 Assumptions (stated, not from the thesis): the spreads of :data:`SUBJECT_SPREAD` and the
 adaptation noise (the motion perception's and the visual delay's spreads are settings,
 :class:`twin.pilot.studies.spread.Spread`, chosen from profiles against Tables 6.4-6.7, docs); the
-cost J = var(e) + r var(u) and the observation-noise remnant of :mod:`twin.pilot.models.adapt`; where
-the subjects adapt their visual delay too (``adapted`` with ``"tau_v"``), the speed-accuracy
-trade-off of :func:`twin.pilot.models.adapt.visual_noise_ratio`. What to keep in mind when reading the
-F values: the motion noise of Eq 5.10 changes the predicted var(e) by parts per million, so the
+cost J = var(e) + r var(u) and the observation-noise remnant of :mod:`twin.pilot.models.adapt`;
+where the subjects adapt their visual delay too (``adapted`` with ``"tau_v"``), the speed-accuracy
+trade-off of :func:`twin.pilot.models.adapt.visual_noise_ratio`. What to keep in mind when reading
+the F values: the motion noise of Eq 5.10 changes the predicted var(e) by parts per million, so the
 noise factor is nearly inert in this model (its "no effect" agrees with the thesis by
 construction); behind the filter the adapted loop's gain falls slowly through 0 dB (about -0.5
 in log-log between 1 and 3 rad/s), so the target crossover moves much with small parameter

@@ -102,6 +102,7 @@ def checked(spread: object) -> Spread:
 
     """
     if not isinstance(spread, Spread):
-        raise TypeError(f"spread must be a twin.pilot.studies.spread.Spread (e.g. Spread(motion=0.5, "
-                        f"visual_delay=0.01)); got {type(spread).__name__} {spread!r}")  # fmt: skip
+        raise TypeError(f"spread must be a twin.pilot.studies.spread.Spread (e.g. "
+                        f"Spread(motion=0.5, visual_delay=0.01)); got {type(spread).__name__} "
+                        f"{spread!r}")  # fmt: skip
     return spread

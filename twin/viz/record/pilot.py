@@ -50,7 +50,7 @@ def pilot_blueprint() -> rrb.Blueprint:
 
 
 def record_pilot(path: str | Path, runs, pilot, run: int = 0) -> Path:
-    """Save run ``run`` of :class:`twin.pilot.models.pitch.PitchRuns` and the open loops to ``path``."""
+    """Save run ``run`` of :class:`~twin.pilot.models.pitch.PitchRuns`, open loops, to ``path``."""
     cfg = runs.config
     with Recording(f"pilot {cfg.name}", pilot_blueprint(), rrd=path) as recording:
         rec = recording.rec
