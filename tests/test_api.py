@@ -237,7 +237,9 @@ NOT_RESULTS = {
     "twin.ingest.importer.ImportReport": "what twin import made of logs (text and JSON)",
     "twin.ingest.timebase.Regular": "part of ImportReport (a resampling)",
     "twin.pilot.models.adapt.Adapted": "a pilot (parameters), not a result",
-    "twin.pilot.identification.felt_motion.MotionMatch": "part of an identification (its motion chain)",
+    "twin.pilot.identification.felt_motion.MotionMatch": (
+        "part of an identification (its motion chain)"
+    ),
     "twin.pilot.studies.spread.Spread": "a setting (subjects' spreads)",
     "twin.platform.actuators.LegPhysics": "a setting (actuator physics)",
     "twin.platform.payload.Payload": "a setting (a payload)",
@@ -413,7 +415,10 @@ print("ok")
 
 
 def test_import_twin_is_light_and_leaves_numpy_to_the_entry_points():
-    """The ``twin`` command imports the package before it sets one BLAS thread (twin.core.threads)."""
+    """The ``twin`` command imports the package before it sets one BLAS thread.
+
+    (:mod:`twin.core.threads`)
+    """
     code = (
         "import sys, twin\n"
         "print(sorted(m for m in ('numpy', 'scipy', 'mujoco', 'matplotlib', 'pandas', 'control')"

@@ -1,4 +1,4 @@
-"""twin.pilot.identification.identify_runs: the pilot identified from recorded runs, as a library function."""
+"""twin.pilot.identification.identify_runs: the pilot identified from recorded runs."""
 
 from __future__ import annotations
 

@@ -25,7 +25,7 @@ Examples
 """
 
 #: Set before the imports below: modules they import read it (run metadata).
-__version__ = "0.1.0"
+from twin.core.version import __version__
 
 from twin.api.entry_points import (
     AGARD_TESTS,

@@ -17,7 +17,7 @@ import sys
 from collections.abc import Sequence
 from typing import NoReturn
 
-from twin import __version__
+from twin.core.version import __version__
 from twin.cli import common, terminal
 from twin.cli.simulate import add_parser as add_simulate
 from twin.core.errors import TwinError, UsageError

@@ -28,7 +28,8 @@ OPTIONS = {
 }
 #: Most populations of ``pilot experiment subjects --populations``.
 MAX_POPULATIONS = 1000
-#: Runs per task of ``pilot montecarlo`` (:func:`twin.pilot.studies.montecarlo.monte_carlo`'s batch).
+#: Runs per task of ``pilot montecarlo``
+#: (:func:`twin.pilot.studies.montecarlo.monte_carlo`'s batch).
 MC_BATCH = 500
 #: Most runs of ``pilot montecarlo`` (:data:`twin.pilot.studies.montecarlo.MAX_RUNS`, not imported
 #: so that the parser stays light).
@@ -251,8 +252,8 @@ def _add_experiment(cmds: argparse._SubParsersAction, parser_class: type) -> Non
         action="store_true",
         help="measure the pilot model as the thesis did, each subject's five repetitions "
         "flown in the time domain and Eq 6.5-6.7 fitted by the MLE to their average "
-        "(twin.pilot.studies.identified; tau_m and tau_v in the ANOVA, each fit's goodness of fit in "
-        "--json's rows; about 12 s a subject on two cores; with --populations, over "
+        "(twin.pilot.studies.identified; tau_m and tau_v in the ANOVA, each fit's goodness of "
+        "fit in --json's rows; about 12 s a subject on two cores; with --populations, over "
         "populations)",
     )
     subj.add_argument(
@@ -262,8 +263,8 @@ def _add_experiment(cmds: argparse._SubParsersAction, parser_class: type) -> Non
         metavar="R",
         help="with --identify: each subject also has a passive path from the motion to the "
         f"stick, R ({FEEDTHROUGH.span}) of its condition-1 motion response at 3 rad/s "
-        "(twin.pilot.models.pitch.Feedthrough; an assumption: only the simulated subjects have it, no "
-        "fit models it; default 0: none; about 5x slower)",
+        "(twin.pilot.models.pitch.Feedthrough; an assumption: only the simulated subjects have "
+        "it, no fit models it; default 0: none; about 5x slower)",
     )
     subj.add_argument(
         "--motion-spread",

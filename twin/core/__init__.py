@@ -6,5 +6,5 @@ written whole, files the twin owns), ``interrupts``, ``progress``, ``threads`` (
 thread), ``jsonable``, ``plotting`` (figures on Figure objects or the caller's axes; no
 backend chosen), ``results`` (the result protocol) and :mod:`twin.core.tasks` (batches of
 pure tasks on one process or a Dask cluster). Imports nothing of the twin outside ``core``
-but ``twin.__version__``.
+(the version lives in :mod:`twin.core.version`).
 """

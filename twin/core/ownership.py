@@ -31,7 +31,7 @@ from contextlib import contextmanager, suppress
 from dataclasses import dataclass
 from pathlib import Path
 
-from twin import __version__
+from twin.core.version import __version__
 from twin.core.errors import UsageError
 
 #: The manifest's file name in every folder the twin wrote into.

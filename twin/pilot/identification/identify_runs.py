@@ -7,9 +7,11 @@ made of them:
 
 - the Fourier-coefficient (FC) estimates of the pilot's responses H_pe and H_ptheta at the
   lines (:func:`twin.pilot.identification.fc.fc_estimate`);
-- the ARX estimates at the same lines, orders chosen by :func:`twin.pilot.identification.arx.select_orders`;
+- the ARX estimates at the same lines, orders chosen by
+  :func:`twin.pilot.identification.arx.select_orders`;
 - the maximum-likelihood fit of the pilot model (Eq 6.5-6.7) in the closed loop through the
-  motion system the runs were flown with (:func:`twin.pilot.identification.mle.fit_pitch_pilot`), which is
+  motion system the runs were flown with
+  (:func:`twin.pilot.identification.mle.fit_pitch_pilot`), which is
   the one given, checked against the runs' ``theta_felt``, or the built-in one ``theta_felt``
   follows (:func:`twin.pilot.identification.felt_motion.match_motion`).
 """
@@ -53,7 +55,8 @@ class PilotIdentification:
     fc : FcEstimate
         FC estimates of the repetitions' mean at the forcing functions' lines.
     arx : ArxModel
-        The ARX model of the repetitions' mean (at :data:`twin.pilot.identification.arx.ARX_RATE_HZ`).
+        The ARX model of the repetitions' mean
+        (at :data:`twin.pilot.identification.arx.ARX_RATE_HZ`).
     arx_h_pe, arx_h_ptheta : ndarray of complex
         The ARX model's responses at the FC estimate's lines.
     mle : PilotFit
