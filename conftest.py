@@ -18,7 +18,7 @@ if not os.environ.get("MUJOCO_GL"):
     os.environ["MUJOCO_GL"] = "disable"
 
 if os.environ.get("PYTEST_XDIST_WORKER") and "numpy" not in sys.modules:
-    from twin.threads import single_blas_thread
+    from twin.core.threads import single_blas_thread
 
     single_blas_thread()
 
