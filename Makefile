@@ -3,14 +3,20 @@ PYTHON ?= python3
 VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
+CORESTAMP := $(VENV)/.installed-core
 NBSTAMP := $(VENV)/.installed-notebooks
 DOCSTAMP := $(VENV)/.installed-docs
 
 .PHONY: demo test test-all fuzz lint models bench docs clean
 
-$(STAMP): pyproject.toml
+# The core install runs the demo; the suite adds the dev tools and the cluster extra (Dask).
+$(CORESTAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
+	$(BIN)/python -m pip install --quiet -e .
+	touch $(CORESTAMP)
+
+$(STAMP): $(CORESTAMP)
 	$(BIN)/python -m pip install --quiet -e '.[dev]'
 	touch $(STAMP)
 
@@ -22,7 +28,7 @@ $(DOCSTAMP): $(STAMP)
 	$(BIN)/python -m pip install --quiet -e '.[dev,docs]'
 	touch $(DOCSTAMP)
 
-demo: $(STAMP)
+demo: $(CORESTAMP)
 	$(BIN)/twin agard demo --out out/demo
 	# a "measured" SRS (its IMU filters the gyros) diagnosed against the nominal SRS
 	for n in 1 2; do $(BIN)/twin simulate notebooks/data/srs-imu-filtered.json --quiet \

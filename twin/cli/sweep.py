@@ -42,8 +42,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 def _cmd_sweep(args: argparse.Namespace) -> int:
     from twin.core.lifecycle import check_output_dir
     from twin.studies.sweep import read_grid, run_sweep
-    from twin.studies.sweep_report import write_sweep
+    from twin.studies.sweep_report import check_table_format, write_sweep
 
+    check_table_format(args.format)  # before the sweep runs, not after
     grid = read_grid(args.grid)
     out = Path(args.out or common.default_out("sweep", Path(args.grid).stem))
     check_output_dir(out, "sweep.json")

@@ -12,6 +12,7 @@
 
 from __future__ import annotations
 
+import importlib.util
 import json
 from pathlib import Path
 from typing import Any
@@ -36,10 +37,27 @@ def _plain(v: object) -> object:
     raise TypeError(f"not JSON: {type(v).__name__}")
 
 
-def write_sweep(result: SweepResult, out: str | Path, table_format: str = "csv") -> Path:
-    """Write a sweep's folder (see the module docstring); return the table's path."""
+def check_table_format(table_format: str) -> None:
+    """Refuse a table format that is unknown or, for Parquet, has no writer installed.
+
+    Raises
+    ------
+    SweepError
+        Naming the formats, or what installs pyarrow (the ``cluster`` extra).
+
+    """
     if table_format not in FORMATS:
         raise SweepError(f"table format must be one of {', '.join(FORMATS)}; got {table_format!r}")
+    if table_format == "parquet" and importlib.util.find_spec("pyarrow") is None:
+        raise SweepError(
+            "a Parquet table needs pyarrow, which is not installed (pip install "
+            "'twin[cluster]'); CSV needs nothing more"
+        )
+
+
+def write_sweep(result: SweepResult, out: str | Path, table_format: str = "csv") -> Path:
+    """Write a sweep's folder (see the module docstring); return the table's path."""
+    check_table_format(table_format)
     out = Path(out)
     g = result.grid
     with replacing_dir(out, "sweep.json") as tmp:

@@ -18,12 +18,19 @@ value                where
 ===================  ========================================================================
 ``local``            a Dask ``LocalCluster`` started for the command: one worker process per
                      CPU core, one thread each (BLAS pinned to one thread per worker, as the
-                     Dask nanny does by default: no oversubscribed cores)
+                     Dask nanny does by default: no oversubscribed cores); without Dask
+                     installed (the core install: ``pip install twin``, not
+                     ``twin[cluster]``), a pool of as many worker processes of the standard
+                     library (:class:`concurrent.futures.ProcessPoolExecutor`), set up alike
 ``local:N``          the same with N worker processes
 ``inline``           this process, one task after another (no Dask)
 ``tcp://HOST:PORT``  a running ``dask scheduler`` (``HOST:PORT`` alone means tcp); its
                      workers need the same twin version installed (checked on connect)
 ===================  ========================================================================
+
+The results are the same bits either way. What only Dask gives: a worker that dies mid-task
+(killed, out of memory) has its tasks run again elsewhere; in the standard library's pool
+the batch's unfinished tasks are reported as failed instead. Remote schedulers need Dask.
 
 A local cluster is started only when a batch has more than one task, so a one-task command
 pays nothing for it. Its workers ignore Ctrl-C: this process shuts them down
@@ -43,7 +50,9 @@ from __future__ import annotations
 
 import asyncio
 import difflib
+import importlib.util
 import logging
+import multiprocessing
 import os
 import re
 import traceback
@@ -58,6 +67,7 @@ from twin.core.interrupts import deferred
 from twin.core.progress import ProgressFn
 from twin.core.tasks.outcome import Failure, Outcome
 from twin.core.tasks.scheduler_probe import HANDSHAKE_TIMEOUT_S, what_answers
+from twin.core.tasks.worker_setup import process_setup
 
 #: Environment variable holding the default ``--scheduler``.
 SCHEDULER_ENV = "TWIN_SCHEDULER"
@@ -77,6 +87,15 @@ SCHEDULER_HELP = (
     "'local:N' (N workers), 'inline' (this process) or a running scheduler's address "
     f"(tcp://HOST:PORT); default: ${SCHEDULER_ENV} or 'local'"
 )
+
+
+#: What installs Dask (the ``cluster`` extra of the package).
+CLUSTER_INSTALL = "pip install 'twin[cluster]'"
+
+
+def dask_installed() -> bool:
+    """Whether Dask's ``distributed`` is installed (the ``cluster`` extra)."""
+    return importlib.util.find_spec("distributed") is not None
 
 
 class SchedulerError(TwinError, ConnectionError):
@@ -112,7 +131,8 @@ class SchedulerSpec:
         if self.kind == "inline":
             return "this process"
         if self.kind == "local":
-            return f"local Dask cluster ({self.workers or cpu_count()} worker processes)"
+            kind = "local Dask cluster" if dask_installed() else "local process pool"
+            return f"{kind} ({self.workers or cpu_count()} worker processes)"
         return f"Dask scheduler {self.address}"
 
 
@@ -243,6 +263,11 @@ class Engine:
         """Return the Dask client, starting the local cluster or connecting first if needed."""
         if self._client is not None:
             return self._client
+        if not dask_installed():
+            raise SchedulerError(
+                f"{self.spec.describe()} needs Dask, which is not installed ({CLUSTER_INSTALL}); "
+                "without it, --scheduler takes 'local', 'local:N' or 'inline'"
+            )
         from distributed import Client, LocalCluster
 
         if self.spec.kind == "local":
@@ -347,6 +372,8 @@ class Engine:
             progress(what, 0, n)
         if self.spec.kind == "inline" or (self.spec.kind == "local" and n <= 1):
             return self._inline(fn, args, inputs, what, progress)
+        if self.spec.kind == "local" and not dask_installed():
+            return self._processes(fn, args, inputs, what, progress)
         return self._dask(fn, args, inputs, what, progress)
 
     @staticmethod
@@ -359,6 +386,36 @@ class Engine:
                 out.failures.append(_failure(i, inputs[i], e, e.__traceback__))
             if progress:
                 progress(what, i + 1, len(args))
+        return out
+
+    def _processes(self, fn, args, inputs, what, progress) -> Outcome:
+        """Run the tasks on a pool of the standard library's worker processes (no Dask).
+
+        Spawned, not forked (MuJoCo's and BLAS's threads do not survive a fork), each set up as
+        a Dask worker is (:func:`twin.core.tasks.worker_setup.process_setup`).
+        """
+        from concurrent.futures import ProcessPoolExecutor, as_completed
+
+        workers = min(self.spec.workers or cpu_count(), len(args))
+        context = multiprocessing.get_context("spawn")
+        out = Outcome(what, [None] * len(args))
+        with deferred():  # a Ctrl-C while the pool starts is raised once it has started
+            pool = ProcessPoolExecutor(workers, mp_context=context, initializer=process_setup)
+        try:
+            index = {pool.submit(fn, *a): i for i, a in enumerate(args)}
+            for done, fut in enumerate(as_completed(index), 1):
+                i = index[fut]
+                try:
+                    out.results[i] = fut.result()  # a worker's error, its traceback chained
+                except (Exception, SystemExit) as e:
+                    out.failures.append(_failure(i, inputs[i], e, e.__traceback__))
+                if progress:
+                    progress(what, done, len(args))
+        except BaseException:  # abandoned (Ctrl-C): no worker writes on into removed folders
+            _terminate(pool)
+            raise
+        pool.shutdown(wait=True)
+        out.failures.sort(key=lambda f: f.index)
         return out
 
     def _dask(self, fn, args, inputs, what, progress) -> Outcome:
@@ -386,6 +443,13 @@ class Engine:
             raise
         out.failures.sort(key=lambda f: f.index)
         return out
+
+
+def _terminate(pool: Any) -> None:
+    """Stop a process pool's workers now (a running task is not cancelled otherwise)."""
+    for proc in list((getattr(pool, "_processes", None) or {}).values()):
+        proc.terminate()
+    pool.shutdown(wait=True, cancel_futures=True)
 
 
 async def _close_nannies(nannies: list[Any], timeout_s: float) -> None:

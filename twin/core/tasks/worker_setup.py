@@ -1,4 +1,7 @@
-"""Set-up of each worker process of a local Dask cluster (a Dask preload, by module name).
+"""Set-up of each worker process of a local cluster (a Dask preload, by module name).
+
+The same set-up is the initializer of the standard library's process pool a core install
+(without Dask) uses instead (:func:`process_setup`).
 
 A local cluster's workers share the terminal's process group with the ``twin`` process, so
 Ctrl-C reaches them too; the ``twin`` process shuts them down (:mod:`twin.core.interrupts`), so a
@@ -26,5 +29,10 @@ def dask_setup(worker: Any) -> None:
         The worker being started (unused).
 
     """
+    process_setup()
+
+
+def process_setup() -> None:
+    """Ignore SIGINT and simulate one run at a time: any local worker process's set-up."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     twin.core.threads.SIMULATION_THREADS = 1
