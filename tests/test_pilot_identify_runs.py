@@ -38,6 +38,12 @@ def test_identify_returns_what_the_command_prints(runs, capsys):
                            "averaged), VAF ")  # fmt: skip
     assert main(["pilot", "identify", *runs, "--config", "condition-8"]) == 0
     assert capsys.readouterr().out == text + "\n"
+    table = result.to_frame()
+    assert len(table) == 20 and table["fc_h_pe_gain"].tolist() == doc["fc"]["h_pe_gain"]
+    fig = result.plot()
+    assert [a.get_title() for a in fig.axes] == [f"H_pe from {result.label}",
+                                                 f"H_ptheta from {result.label}"]  # fmt: skip
+    assert len(fig.axes[0].lines) == 2  # FC points and the ARX line
 
 
 def test_identify_without_a_configuration_finds_the_one_the_runs_felt(runs):

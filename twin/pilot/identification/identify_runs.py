@@ -26,8 +26,13 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from twin.core.errors import SignalError, UsageError
+from twin.core.plotting import AxesArg, finish, subplots
+from twin.core.results import frame
 
 if TYPE_CHECKING:
+    import pandas as pd
+    from matplotlib.figure import Figure
+
     from twin.chain.config import MotionSystem
     from twin.core.progress import ProgressFn
     from twin.pilot.identification.arx import ArxModel
@@ -102,6 +107,47 @@ class PilotIdentification:
             "mle": self.mle.to_dict(),
             "motion": self.motion.to_dict(),
         }
+
+    def to_frame(self) -> pd.DataFrame:
+        """Return the FC and ARX estimates, one row per forcing-function line."""
+        fc = self.fc
+        return frame({
+            "omega_rad_s": fc.omega_rad_s,
+            "fc_h_pe_gain": np.abs(fc.h_pe[0]),
+            "fc_h_pe_phase_deg": np.degrees(np.angle(fc.h_pe[0])),
+            "fc_h_ptheta_gain": np.abs(fc.h_px[0]),
+            "fc_h_ptheta_phase_deg": np.degrees(np.angle(fc.h_px[0])),
+            "arx_h_pe_gain": np.abs(self.arx_h_pe),
+            "arx_h_ptheta_gain": np.abs(self.arx_h_ptheta),
+        })  # fmt: skip
+
+    def plot(self, ax: AxesArg = None, *, path: str | None = None) -> Figure:
+        """Plot the pilot's visual (H_pe) and motion (H_ptheta) gains: FC points, ARX line.
+
+        Parameters
+        ----------
+        ax : sequence of two Axes, optional
+            Where to draw: H_pe's gain, then H_ptheta's; a new figure by default.
+        path : str, optional
+            Save the figure here.
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+
+        """
+        fc = self.fc
+        fig, axes = subplots(ax, 1, 2, figsize=(9, 3.5), panels="H_pe's and H_ptheta's gain")
+        pairs = ((fc.h_pe[0], self.arx_h_pe, "H_pe"), (fc.h_px[0], self.arx_h_ptheta, "H_ptheta"))
+        for a, (h_fc, h_arx, name) in zip(axes, pairs, strict=True):
+            a.semilogx(fc.omega_rad_s, 20 * np.log10(np.abs(h_fc)), "o", label="FC")
+            a.semilogx(fc.omega_rad_s, 20 * np.log10(np.abs(h_arx)), "-", label="ARX")
+            a.set_xlabel("frequency [rad/s]")
+            a.set_ylabel("gain [dB]")
+            a.set_title(f"{name} from {self.label}", fontsize=9)
+            a.grid(True, which="both", alpha=0.3)
+            a.legend(fontsize=8)
+        return finish(fig, path)
 
     def format_text(self) -> str:
         """Return the identification as ``twin pilot identify`` prints it.
