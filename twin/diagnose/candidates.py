@@ -214,6 +214,14 @@ class Space:
     bounds: tuple[tuple[float, float], ...]
 
 
+#: Largest damping of a ``resonance`` searched: a mode. Above 1 the pair of poles is real, two
+#: lags rather than a mode, and the vocabulary says lags as filters (``platform_filter``,
+#: ``sensor_filter``, ``platform_lag``); at 1 it is the critically damped pair of Eq 5.1's
+#: filter (:mod:`twin.diagnose.equivalence`). Reaching it is therefore a physical end of the
+#: effect, not a search limit (:func:`extension_at_bounds` does not report it).
+MAX_DAMPING = 1.0
+
+
 def search_space(effect: str, case: Case, dof: str, channels: Sequence[Channel]) -> Space:
     """Return the physical range searched for each effect (stated in the report)."""
     k = dof_index(dof)
@@ -227,8 +235,8 @@ def search_space(effect: str, case: Case, dof: str, channels: Sequence[Channel])
     if effect == "resonance":
         return Space(
             ("frequency_hz", "damping"),
-            (np.geomspace(0.5, 20.0, 41), np.geomspace(0.05, 1.5, 13)),
-            ((0.3, 30.0), (0.02, 3.0)),
+            (np.geomspace(0.5, 20.0, 41), np.geomspace(0.05, MAX_DAMPING, 12)),
+            ((0.3, 30.0), (0.02, MAX_DAMPING)),
         )
     if effect == "lead":
         return Space(("time_constant_s",), (np.arange(0.0, 0.2001, 0.002),), ((0.0, 0.3),))
@@ -376,6 +384,8 @@ def extension_at_bounds(
     for name, (lo, hi) in zip(space.names, space.bounds, strict=True):
         u, ends = _searched(name, ext.value(name)), (_searched(name, lo), _searched(name, hi))
         for side, end in zip(("lower", "upper"), ends, strict=True):
+            if name == "damping" and side == "upper":
+                continue  # critically damped: a filter's pair of poles, not a search limit
             if abs(u - end) <= AT_BOUND_SHARE * (ends[1] - ends[0]):
                 out.append({"effect": ext.effect, "dofs": [dof], "parameter": name,
                             "value": ext.value(name), "bound": side,

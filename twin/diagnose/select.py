@@ -58,7 +58,7 @@ from twin.chain.extensions import Extension
 from twin.core.progress import ProgressFn
 from twin.diagnose.candidates import DYNAMIC, Model, SetFit, at_bounds, fit_set, numeric_names
 from twin.diagnose.data import Case
-from twin.diagnose.equivalence import same_response
+from twin.diagnose.equivalence import MIN_DF_GAIN_DB, MIN_DF_GAIN_DEG, same_response
 from twin.diagnose.evidence import Lines, lines, measured_line_sd
 
 FloatArray = NDArray[np.float64]
@@ -70,10 +70,6 @@ BIC_MARGIN = 10.0
 #: parameters is named (a platform filter is a resonance with damping 1; the data cannot
 #: prefer the resonance for a better fit of the noise).
 OCCAM_WINDOW = 6.0
-#: Least rise of the held-out describing-function error (mean over the lines) when an effect
-#: named beside another is removed, in dB or in degrees, for it to be named.
-MIN_DF_GAIN_DB = 0.1
-MIN_DF_GAIN_DEG = 0.5
 
 
 @dataclass
@@ -311,10 +307,12 @@ def same_response_text(f: Finding) -> str | None:
                 e + " " + ", ".join(f"{k} {v:.4g}" for k, v in eq["parameters"][e].items())
                 for e in eq["effects"]
             )
+            + f" (within {100 * eq['max_relative_difference']:.2g} %)"
         )
     return (
-        "the same response, with more parameters (no run tells them apart; the fewer "
-        "parameters are named): " + "; ".join(parts)
+        "the same response, with more parameters (at no frequency do they differ by "
+        f"{MIN_DF_GAIN_DB:g} dB or {MIN_DF_GAIN_DEG:g} deg, the least a named effect changes; "
+        "the fewer parameters are named): " + "; ".join(parts)
     )
 
 
