@@ -24,9 +24,6 @@ Examples
 
 """
 
-#: Set before the imports below: modules they import read it (run metadata).
-from twin.core.version import __version__
-
 from twin.api.entry_points import (
     AGARD_TESTS,
     agard_test,
@@ -42,6 +39,7 @@ from twin.api.entry_points import (
     workspace,
 )
 from twin.core.results import FrequencyResult, Result
+from twin.core.version import __version__
 
 __all__ = [
     "AGARD_TESTS",

@@ -17,13 +17,13 @@ import sys
 from collections.abc import Sequence
 from typing import NoReturn
 
-from twin.core.version import __version__
 from twin.cli import common, terminal
 from twin.cli.simulate import add_parser as add_simulate
 from twin.core.errors import TwinError, UsageError
 from twin.core.frames import DOF_NAMES
 from twin.core.interrupts import handling_ctrl_c
 from twin.core.ownership import output_policy
+from twin.core.version import __version__
 
 EXIT_USAGE = 2
 #: Exit code of a bug (``EX_SOFTWARE`` of sysexits.h).

@@ -31,8 +31,8 @@ from contextlib import contextmanager, suppress
 from dataclasses import dataclass
 from pathlib import Path
 
-from twin.core.version import __version__
 from twin.core.errors import UsageError
+from twin.core.version import __version__
 
 #: The manifest's file name in every folder the twin wrote into.
 MANIFEST = ".twin-manifest.json"
