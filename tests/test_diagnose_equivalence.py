@@ -11,6 +11,7 @@ from twin.chain.config import motion_system
 from twin.chain.extensions import Extension
 from twin.diagnose.candidates import extension_at_bounds, search_space
 from twin.diagnose.equivalence import MIN_DF_GAIN_DB, MIN_DF_GAIN_DEG, SAME_RESPONSE, same_response
+from twin.diagnose.select import _apart
 
 
 def _case(platform: str) -> SimpleNamespace:
@@ -140,3 +141,9 @@ def test_an_effect_beside_another_must_change_the_held_out_describing_function()
     gains["delay"] = _gain(0.07 + 1.5 * MIN_DF_GAIN_DB, 0.07, 0.3, 0.2)
     gains["lead"] = _gain(0.08, 0.06, 0.2 + 1.5 * MIN_DF_GAIN_DEG, 0.2)
     assert _negligible(gains, delta) == []
+
+
+def test_the_same_response_says_how_far_apart():
+    """Identical to the refit's precision, or within a stated per cent."""
+    assert _apart(2.5e-11) == " (identical)"
+    assert _apart(0.0015) == " (within 0.15 %)"

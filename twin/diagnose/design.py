@@ -561,7 +561,7 @@ def design_run(
             continue  # j mimics i only at the edge of what it can be: not an explanation
         d = response(i, band.f) - mimics[id(j)].response(theta, band.f)
         e = 2 * np.abs(d) ** 2 * band.amplitude**2 / band.noise**2
-        if np.max(np.abs(d / response(i, band.f))) < SAME_RESPONSE:  # no run tells them apart
+        if np.max(np.abs(d / response(i, band.f))) < SAME_RESPONSE:  # the same response
             same.append((i, j))
         else:
             per_line[i.label, j.label] = e

@@ -64,6 +64,8 @@ from twin.diagnose.evidence import Lines, lines, measured_line_sd
 FloatArray = NDArray[np.float64]
 #: Most alternatives an ambiguous finding lists (the closest first).
 MAX_ALTERNATIVES = 3
+#: Largest relative difference of two responses said to be identical (the refit's precision).
+IDENTICAL = 1e-6
 #: Evidence needed to name a cause [BIC units].
 BIC_MARGIN = 10.0
 #: Sets whose BIC is within this of the best are equally supported: the one with the fewest
@@ -307,13 +309,20 @@ def same_response_text(f: Finding) -> str | None:
                 e + " " + ", ".join(f"{k} {v:.4g}" for k, v in eq["parameters"][e].items())
                 for e in eq["effects"]
             )
-            + f" (within {100 * eq['max_relative_difference']:.2g} %)"
+            + _apart(eq["max_relative_difference"])
         )
     return (
         "the same response, with more parameters (at no frequency do they differ by "
         f"{MIN_DF_GAIN_DB:g} dB or {MIN_DF_GAIN_DEG:g} deg, the least a named effect changes; "
         "the fewer parameters are named): " + "; ".join(parts)
     )
+
+
+def _apart(difference: float) -> str:
+    """Say how far apart two responses are: identical (to the refit's precision), or by %."""
+    if difference < IDENTICAL:
+        return " (identical)"
+    return f" (within {100 * difference:.2g} %)"
 
 
 def below_text(below: float) -> str:
