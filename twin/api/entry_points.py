@@ -100,27 +100,14 @@ def configure(
 ) -> MotionSystem:
     """Return a configuration, with the overrides of ``twin agard`` if given.
 
-    Parameters
-    ----------
-    config : str, path or MotionSystem
-        A name (:func:`twin.chain.config.config_names`), a ``twin-config/1`` file or a
-        configuration.
-    break_hz : float, optional
-        Platform-filter break frequency [Hz]; 0 removes the filter.
-    delay_ms : float, optional
-        Total motion-system delay [ms].
-    noise : bool, optional
-        Heave noise of Eq 5.10 on or off.
-    resonance : bool, optional
-        SRS resonance terms of Eq 5.12/5.13 on or off.
-
-    Examples
-    --------
-    >>> configure("mpi", break_hz=5).filter_break_hz
-    5.0
-
+    As :func:`twin.measurement.measure.configure`: ``config`` a name, a ``twin-config/1``
+    file or a configuration; ``break_hz`` [Hz] (0: no filter), ``delay_ms`` (total delay),
+    ``noise`` (Eq 5.10) and ``resonance`` (Eq 5.12/5.13) override it.
     """
-    return resolve(config).override(break_hz, delay_ms, noise, resonance)
+    from twin.measurement.measure import configure as configured
+
+    return configured(config, break_hz=break_hz, delay_ms=delay_ms, noise=noise,
+                      resonance=resonance)  # fmt: skip
 
 
 def simulate(

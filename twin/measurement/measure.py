@@ -19,6 +19,7 @@ platform, with a seed and an IMU. The same analyses run on a recorded ``twin-run
 
 from __future__ import annotations
 
+import os
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -26,7 +27,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from twin.chain.config import MotionSystem, motion_system
+from twin.chain.config import MotionSystem, motion_system, resolve
 from twin.chain.imu import ImuRecord, ImuSpec, postprocess
 from twin.chain.signals import check_signal
 from twin.chain.simulate import MODELS, Run, Simulation, make_platform, prepare
@@ -299,18 +300,20 @@ class Bench:
 
 
 def configure(
-    name: str,
+    config: MotionSystem | str | os.PathLike[str],
+    *,
     break_hz: float | None = None,
     delay_ms: float | None = None,
     noise: bool | None = None,
     resonance: bool | None = None,
 ) -> MotionSystem:
-    """Return a named configuration with the command-line overrides of ``twin agard``.
+    """Return a configuration, with the overrides of ``twin agard`` if given.
 
     Parameters
     ----------
-    name : str
-        ``mpi``, ``srs``, ``condition-N``, ... (:func:`twin.chain.config.motion_system`).
+    config : str, path or MotionSystem
+        A name (``mpi``, ``srs``, ``condition-N``, ...: :func:`twin.chain.config.config_names`),
+        a ``twin-config/1`` file or a configuration (:func:`twin.chain.config.resolve`).
     break_hz : float, optional
         Platform-filter break frequency [Hz]; 0 removes the filter.
     delay_ms : float, optional
@@ -321,8 +324,13 @@ def configure(
     resonance : bool, optional
         SRS resonance terms of Eq 5.12/5.13 on or off.
 
+    Examples
+    --------
+    >>> configure("mpi", break_hz=5).filter_break_hz
+    5.0
+
     """
-    return motion_system(name).override(break_hz, delay_ms, noise, resonance)
+    return resolve(config).override(break_hz, delay_ms, noise, resonance)
 
 
 def is_run_folder(target: str | Path) -> bool:
