@@ -9,6 +9,7 @@ import time
 
 import numpy as np
 import pytest
+from group_signals import AS_IN_A_TERMINAL
 
 from twin.chain.trajectory import uniform_rate
 from twin.cli.main import main
@@ -189,8 +190,8 @@ def test_raw_imu_records_every_sample(tmp_path):
 
 def _interrupted_run(out) -> subprocess.Popen:
     """Start a long full-model run and Ctrl-C it once its chunks are being written."""
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "twin.cli", "simulate", "mpi", "--signal", "rest-600", "--out",
+    proc = subprocess.Popen(  # SIGINT as a terminal gives it, whatever the suite inherited
+        [sys.executable, "-c", AS_IN_A_TERMINAL, "simulate", "mpi", "--signal", "rest-600", "--out",
          str(out), "--quiet"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
     )  # fmt: skip
     deadline = time.monotonic() + 60
