@@ -1,8 +1,8 @@
-"""``twin agard ...``: the AGARD-AR-144 and OMCT tests from the command line.
+"""The AGARD-AR-144 and OMCT tests from the command line (twin agard TEST CONFIG).
 
-Each test takes a configuration (``mpi``, ``srs``, ``condition-N``, ...; simulated) or a
-recorded ``twin-run/1`` folder (analysed as measured). ``report`` runs the whole suite and
-writes a report folder; ``demo`` is what ``make demo`` runs.
+Each test takes a configuration (mpi, srs, condition-N, ...; simulated) or a recorded
+twin-run/1 folder (analysed as measured). 'report' runs the whole suite and writes a report
+folder; 'demo' is what 'make demo' runs.
 """
 
 from __future__ import annotations

@@ -72,7 +72,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         help="run a configuration on a signal; write a twin-run/1 folder",
         description="Drive a motion-system configuration (filter, delay, noise in front of the "
         "full MuJoCo or the reduced platform) with pose commands and write the run in the "
-        "twin-run/1 format (meta.json, commands.csv, imu.csv, actuators.csv).",
+        "twin-run/1 format (meta.json, commands.csv, imu.csv, actuators.csv; forces.csv with "
+        "the full model).",
     )
     common.add_config(p)
     p.add_argument(

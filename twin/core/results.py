@@ -1,6 +1,7 @@
-"""The one protocol every result object of the twin follows.
+"""The one protocol every analysis result of the twin follows.
 
-A result (:class:`~twin.agard.df.DfResult`, :class:`~twin.diagnose.diagnosis.Diagnosis`,
+Runs and simulations are data (arrays), not results. A result
+(:class:`~twin.agard.df.DfResult`, :class:`~twin.diagnose.diagnosis.Diagnosis`,
 :class:`~twin.pilot.studies.population.PopulationResult`, ...) has
 
 - ``to_dict()``: the result as JSON-ready Python values (``json.dumps`` takes it as it is);

@@ -344,6 +344,11 @@ def check_target(target: str) -> None:
         return
     if Path(target).is_dir():
         raise UnknownPlatformError(f"{target}: a folder without meta.json is not a twin-run/1 run")
+    if "/" in target and not target.endswith(".json") and not Path(target).exists():
+        raise UnknownPlatformError(
+            f"{target}: no such twin-run/1 folder (a command's target is a configuration name, "
+            "a twin-config/1 .json file or a twin-run/1 folder)"
+        )
     motion_system(target)  # a name or a twin-config/1 file
 
 

@@ -83,9 +83,10 @@ WORKER_SETUP = "twin.core.tasks.worker_setup"
 #: How long the workers of an abandoned batch get to stop before they are killed [s].
 STOP_S = 0.5
 SCHEDULER_HELP = (
-    "where tasks run: 'local' (a Dask cluster of one worker process per core, the default), "
-    "'local:N' (N workers), 'inline' (this process) or a running scheduler's address "
-    f"(tcp://HOST:PORT); default: ${SCHEDULER_ENV} or 'local'"
+    "where tasks run: 'local' (one worker process per core, the default: a Dask cluster with "
+    "the cluster extra, else a process pool), 'local:N' (N workers), 'inline' (this process) "
+    f"or a running Dask scheduler's address (tcp://HOST:PORT); default: ${SCHEDULER_ENV} or "
+    "'local'"
 )
 
 
