@@ -10,6 +10,7 @@ and a pair it says no run within the budget separates stays within the margin.
 from __future__ import annotations
 
 import json
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -19,7 +20,7 @@ from twin.chain.extensions import Extension
 from twin.chain.signals import check_signal
 from twin.chain.simulate import prepare
 from twin.cli.main import main
-from twin.diagnose.design import design_from
+from twin.diagnose.design import Candidate, DesignResult, design_from
 from twin.diagnose.diagnosis import diagnose
 from twin.diagnose.hidden import record_runs
 from twin.diagnose.select import BIC_MARGIN
@@ -160,3 +161,31 @@ def test_the_closest_linear_sets_the_diagnosis_fitted_are_rivals_too():
         ("platform_filter", "resonance"): False,
         ("delay", "gain"): False,  # not nameable on the old runs; a new one may change that
     }
+
+
+def _designed(unweighed: tuple[str, ...]) -> DesignResult:
+    best = Candidate(1.0, 0.5, 100.0, 120.0, {("delay", "lead"): 60.0, ("lead", "delay"): 45.0})
+    sig = SimpleNamespace(frequencies_hz=np.array([1.0]), amplitudes=np.array([0.5]))
+    return DesignResult("roll", "mpi", (), best, (best,), sig, "d", (), unweighed)  # type: ignore[arg-type]
+
+
+def test_a_design_with_a_backlash_unweighed_does_not_claim_to_decide():
+    """Every weighed pair above the margin, but a backlash among the explanations: unknown."""
+    assert _designed(()).decides
+    d = _designed(("backlash: play 0.004686 (roll)",))
+    assert not d.decides
+    assert d.to_dict()["not_weighed"] == ["backlash: play 0.004686 (roll)"]
+    assert d.summary_lines()[-1].startswith(
+        "not known to decide: backlash: play 0.004686 (roll) not weighed"
+    )
+
+
+def test_a_design_follows_the_result_protocol():
+    d = _designed(())
+    table = d.to_frame()
+    assert table.to_dict("records") == [
+        {"true": "delay", "other": "lead", "delta_bic": 60.0},
+        {"true": "lead", "other": "delay", "delta_bic": 45.0},
+    ]
+    fig = d.plot()
+    assert len(fig.axes[0].patches) == 2  # one bar per pair

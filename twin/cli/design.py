@@ -78,7 +78,7 @@ def _cmd_design(args: argparse.Namespace) -> int:
     with replacing_dir(out, "design.json") as tmp:
         write_design(result, tmp)
     if args.json:
-        print(json.dumps(result.to_json(), indent=2))
+        print(json.dumps(result.to_dict(), indent=2))
         return 0
     for line in result.summary_lines():
         print(line)

@@ -26,10 +26,15 @@ import json
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
 from scipy import optimize
+
+if TYPE_CHECKING:
+    import pandas as pd
+    from matplotlib.figure import Figure
 
 from twin.chain.config import MotionSystem
 from twin.chain.extensions import Extension
@@ -45,7 +50,9 @@ from twin.chain.signals import (
 from twin.core.checks import read_json
 from twin.core.errors import DataError, SignalError, SignalLimitError
 from twin.core.frames import acceleration_unit, dof_index
+from twin.core.plotting import AxesArg, finish, subplots
 from twin.core.progress import ProgressFn
+from twin.core.results import frame
 from twin.diagnose.candidates import (
     extension_at_bounds,
     make_extension,
@@ -139,13 +146,49 @@ class DesignResult:
     signal: DescribingSignal
     source: str
     notes: tuple[str, ...] = field(default_factory=tuple)
+    unweighed: tuple[str, ...] = ()
 
     @property
     def decides(self) -> bool:
-        """Whether the run is expected to separate every pair by more than the margin."""
-        return self.best.weakest > BIC_MARGIN
+        """Whether the run is expected to separate every pair by more than the margin.
 
-    def to_json(self) -> dict[str, object]:
+        Never where an explanation was not weighed (a backlash): what the run shows of it is
+        not known.
+        """
+        return self.best.weakest > BIC_MARGIN and not self.unweighed
+
+    def to_frame(self) -> pd.DataFrame:
+        """Return the expected evidence, one row per pair (true explanation, other one)."""
+        return frame([{"true": i, "other": j, "delta_bic": v}
+                      for (i, j), v in self.best.evidence.items()])  # fmt: skip
+
+    def plot(self, ax: AxesArg = None, *, path: str | None = None) -> Figure:
+        """Plot the expected evidence of each pair against the naming margin.
+
+        Parameters
+        ----------
+        ax : Axes, optional
+            Where to draw; a new figure by default.
+        path : str, optional
+            Save the figure here.
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+
+        """
+        pairs = list(self.best.evidence.items())
+        fig, ax = subplots(ax, figsize=(7, 0.4 * len(pairs) + 1.5))
+        ax.barh([f"if {i}: against {j}" for (i, j), _ in pairs], [v for _, v in pairs])
+        ax.axvline(BIC_MARGIN, color="k", lw=0.8, ls="--", label=f"margin ({BIC_MARGIN:g})")
+        ax.set_xscale("symlog", linthresh=BIC_MARGIN)
+        ax.set_xlabel("expected evidence of the old runs and the designed one [BIC]")
+        ax.tick_params(axis="y", labelsize=7)
+        ax.legend(fontsize=8)
+        ax.set_title(f"designed run in {self.dof}: {self.best.duration_s:.0f} s", fontsize=9)
+        return finish(fig, path)
+
+    def to_dict(self) -> dict[str, object]:
         """Return the design as JSON (``design.json``)."""
         b = self.best
         return {
@@ -168,6 +211,7 @@ class DesignResult:
                 {"true": i, "other": j, "delta_bic": v} for (i, j), v in b.evidence.items()
             ],
             "decides": self.decides,
+            "not_weighed": list(self.unweighed),
             "margin": BIC_MARGIN,
             "candidates": [
                 {
@@ -195,13 +239,21 @@ class DesignResult:
         ]
         for (i, j), v in b.evidence.items():
             out.append(f"  if {i}: against {j} {v:.1f}")
-        out.append(
-            f"expected to decide (every pair above {BIC_MARGIN:g})"
-            if self.decides
-            else f"not expected to decide within the budget (weakest pair {b.weakest:.1f}, "
-            f"below {BIC_MARGIN:g}); the evidence grows with the measured time: about "
-            f"{b.window_s * BIC_MARGIN / max(b.weakest, 1e-9):.3g} s of it would be needed"
-        )
+        if self.unweighed:
+            out.append(
+                f"not known to decide: {'; '.join(self.unweighed)} not weighed (a backlash "
+                "shows at small amplitudes, a few plays, and these lines move further; the "
+                "others' weakest pair "
+                f"{b.weakest:.1f}, margin {BIC_MARGIN:g})"
+            )
+        else:
+            out.append(
+                f"expected to decide (every pair above {BIC_MARGIN:g})"
+                if self.decides
+                else f"not expected to decide within the budget (weakest pair {b.weakest:.1f}, "
+                f"below {BIC_MARGIN:g}); the evidence grows with the measured time: about "
+                f"{b.window_s * BIC_MARGIN / max(b.weakest, 1e-9):.3g} s of it would be needed"
+            )
         return [*out, *(f"note: {n}" for n in self.notes)]
 
 
@@ -616,7 +668,8 @@ def design_run(
         Candidate(float(f), float(a), window, 0.0, {k: float(v[n]) for k, v in per_line.items()})
         for n, (f, a) in enumerate(zip(freqs, tops, strict=True))
     )
-    return DesignResult(dof, platform, tuple(expls), run, singles, sig, source, tuple(notes))
+    return DesignResult(dof, platform, tuple(expls), run, singles, sig, source, tuple(notes),
+                        tuple(skipped))  # fmt: skip
 
 
 def design_from(
@@ -691,7 +744,7 @@ def _run_paths(nominal: dict, path: Path) -> list[str]:
 def write_design(result: DesignResult, out: Path) -> None:
     """Write ``design.json``, ``commands.csv`` (twin-run/1) and ``schedule.toml`` into ``out``."""
     (out / "design.json").write_text(
-        json.dumps(result.to_json(), indent=2) + "\n", encoding="utf-8"
+        json.dumps(result.to_dict(), indent=2) + "\n", encoding="utf-8"
     )
     write_commands(out / "commands.csv", result.signal.commands)
     sig = result.signal
