@@ -60,6 +60,7 @@ lint: $(STAMP)
 # warnings as errors.
 docs: $(DOCSTAMP)
 	$(BIN)/python docs/figures.py
+	rm -rf docs/reference/generated  # the API pages are generated anew: none of a moved module
 	$(BIN)/python -m sphinx -W --keep-going -q -b html docs docs/_build/html
 
 models: $(STAMP)

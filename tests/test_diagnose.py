@@ -216,6 +216,6 @@ def test_malformed_runs_exit_2_with_one_line(tmp_path, delay_runs, capsys):
 
 @pytest.mark.slow
 def test_same_seed_same_diagnosis(delay_runs):
-    a = diagnose(delay_runs[0][:1], seed=3, realisations=2).to_json_safe()
-    b = diagnose(delay_runs[0][:1], seed=3, realisations=2).to_json_safe()
+    a = diagnose(delay_runs[0][:1], seed=3, realisations=2).to_dict()
+    b = diagnose(delay_runs[0][:1], seed=3, realisations=2).to_dict()
     assert json.dumps(a) == json.dumps(b)

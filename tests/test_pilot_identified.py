@@ -107,12 +107,10 @@ def test_identified_populations_replicate_as_one_flown_alone(capsys):
 @pytest.mark.slow  # the subject's identification takes 40-50 s
 def test_the_condition_figure_of_an_identified_population_shows_the_fits(subject_rows, tmp_path):
     """Fig 6.5-6.9 of identified measures: tau_v, tau_m and each fit's chi-square per dof too."""
-    from twin.core.plotting import pyplot
     from twin.pilot.studies.population import PopulationResult
 
     _, identified = subject_rows
     fig = PopulationResult(identified, {}, 0, identified=0.0).plot_conditions(tmp_path / "c.png")
     titles = [ax.get_title() for ax in fig.axes]
-    pyplot().close(fig)
     assert {"tau_v (Fig 6.9a)", "tau_m (Fig 6.9b)", "fit chi-square per dof"} <= set(titles)
     assert (tmp_path / "c.png").stat().st_size > 0

@@ -6,7 +6,7 @@ type and help everywhere:
 ==============================  ===========================================================
 option                          meaning
 ==============================  ===========================================================
-``CONFIG``                        the motion system (first positional, :func:`add_config`):
+``CONFIG``                      the motion system (first positional, :func:`add_config`):
                                 a configuration name, a platform name, a ``twin-config/1``
                                 file, or (where the command reads one) a ``twin-run/1`` folder
 ``--dof DOF``                   a DOF, repeated for several (``--dof pitch --dof roll``); a

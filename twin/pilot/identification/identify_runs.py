@@ -42,7 +42,7 @@ if TYPE_CHECKING:
     from twin.pilot.models.pitch import PitchPilot
 
 #: A run read for identification: its name, its columns, the last 81.92 s and its rate [Hz].
-Window = tuple[str, dict, dict, float]
+_Window = tuple[str, dict, dict, float]
 
 
 @dataclass(frozen=True)
@@ -249,7 +249,7 @@ def interval_text(name: str, low: float, high: float) -> str:
     return f"[{low:.4f}, {high:.4f}]" + (f" (open {' and '.join(open_ends)})" if open_ends else "")
 
 
-def read_window(path: str | Path) -> Window:
+def read_window(path: str | Path) -> _Window:
     """Read a ``twin-pilot/1`` run; return its name, columns, last 81.92 s and rate [Hz].
 
     Raises
@@ -282,7 +282,7 @@ def read_window(path: str | Path) -> Window:
     return name, d, w, rate
 
 
-def _check_repetitions(runs: Sequence[Window]) -> None:
+def _check_repetitions(runs: Sequence[_Window]) -> None:
     """Refuse runs that are not repetitions of the first: columns, grid, forcing, the same u."""
     name, d, w, rate = runs[0]
     for other, od, ow, orate in runs[1:]:
