@@ -10,6 +10,8 @@ from __future__ import annotations
 
 import json
 import operator
+import os
+import signal
 
 import pytest
 
@@ -68,3 +70,17 @@ def test_a_parquet_table_without_pyarrow_says_what_to_install(no_dask, tmp_path,
     assert main(["sweep", str(grid), "--format", "parquet", "--out", str(tmp_path / "s")]) == 2
     assert "pyarrow" in capsys.readouterr().err
     assert not (tmp_path / "s").exists()  # refused before any run
+
+
+def _worker_state(_: int) -> tuple[bool, str | None]:
+    """Whether this process ignores Ctrl-C, and its OpenBLAS thread setting."""
+    return signal.getsignal(signal.SIGINT) is signal.SIG_IGN, os.environ.get("OPENBLAS_NUM_THREADS")
+
+
+def test_pool_workers_ignore_ctrl_c_and_use_one_blas_thread(no_dask, monkeypatch):
+    """Set up as a Dask worker is: the twin process stops them; BLAS does not oversubscribe."""
+    for name in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+        monkeypatch.delenv(name, raising=False)  # restored after: the pool sets them here
+    out = Engine("local:2").map(_worker_state, [(0,), (1,)], [{}, {}], "probes")
+    assert out.values() == [(True, "1"), (True, "1")]
+    assert signal.getsignal(signal.SIGINT) is not signal.SIG_IGN  # this process: as it was

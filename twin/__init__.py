@@ -8,11 +8,14 @@ motion noise, platform (full MuJoCo model or reduced Eq 5.11 model) and virtual 
 
 What a newcomer needs is here, one call each (:mod:`twin.api.entry_points`): :func:`configure`,
 :func:`simulate`, :func:`describing_function`, :func:`agard_test`, :func:`session`,
-:func:`compare`, :func:`diagnose_runs`, :func:`load_run`, :func:`workspace` and :func:`fly`. Each
-takes a configuration as a name (``"mpi"``), a ``twin-config/1`` path or a
-:class:`~twin.chain.config.MotionSystem` (what :func:`configure` returns). Every result they
-return follows :class:`Result` (``to_dict``, ``to_frame``, ``plot``; ``to_frd`` for a
-frequency response: :class:`FrequencyResult`). ``import twin`` loads no NumPy: each entry
+:func:`compare`, :func:`diagnose_runs`, :func:`load_run`, :func:`workspace` and :func:`fly`. Those
+that take a configuration take it as a name (``"mpi"``), a ``twin-config/1`` path or a
+:class:`~twin.chain.config.MotionSystem` (what :func:`configure` returns); their model is the
+reduced one unless ``model="full"`` (the commands' default is the full one). The analyses'
+results (:func:`describing_function`, :func:`agard_test`, :func:`compare`,
+:func:`diagnose_runs`) follow :class:`Result` (``to_dict``, ``to_frame``, ``plot``; ``to_frd``
+for a frequency response: :class:`FrequencyResult`); runs, simulations and configurations
+are data. ``import twin`` loads no NumPy: each entry
 point imports the modules it runs (the ``twin`` command sets its BLAS threads first).
 
 Examples

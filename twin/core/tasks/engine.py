@@ -68,6 +68,7 @@ from twin.core.progress import ProgressFn
 from twin.core.tasks.outcome import Failure, Outcome
 from twin.core.tasks.scheduler_probe import HANDSHAKE_TIMEOUT_S, what_answers
 from twin.core.tasks.worker_setup import process_setup
+from twin.core.threads import single_blas_thread
 
 #: Environment variable holding the default ``--scheduler``.
 SCHEDULER_ENV = "TWIN_SCHEDULER"
@@ -393,17 +394,30 @@ class Engine:
         """Run the tasks on a pool of the standard library's worker processes (no Dask).
 
         Spawned, not forked (MuJoCo's and BLAS's threads do not survive a fork), each set up as
-        a Dask worker is (:func:`twin.core.tasks.worker_setup.process_setup`).
+        a Dask worker is (:func:`twin.core.tasks.worker_setup.process_setup`): SIGINT ignored
+        (the workers start at the submits, inside :func:`~twin.core.interrupts.deferred`, so
+        they inherit it ignored) and one BLAS thread (asked for here, before they start, so
+        that they inherit it before they load NumPy). A worker that dies breaks the pool: the
+        tasks not done are reported as failed.
         """
         from concurrent.futures import ProcessPoolExecutor, as_completed
+        from concurrent.futures.process import BrokenProcessPool
 
         workers = min(self.spec.workers or cpu_count(), len(args))
         context = multiprocessing.get_context("spawn")
         out = Outcome(what, [None] * len(args))
-        with deferred():  # a Ctrl-C while the pool starts is raised once it has started
-            pool = ProcessPoolExecutor(workers, mp_context=context, initializer=process_setup)
+        single_blas_thread()
+        pool = ProcessPoolExecutor(workers, mp_context=context, initializer=process_setup)
+        index: dict[Any, int] = {}
         try:
-            index = {pool.submit(fn, *a): i for i, a in enumerate(args)}
+            with deferred():  # a Ctrl-C while the workers start is raised once they have
+                for i, a in enumerate(args):
+                    try:
+                        index[pool.submit(fn, *a)] = i
+                    except BrokenProcessPool as e:  # a worker died: none of the rest can run
+                        out.failures += [_failure(k, inputs[k], e, None)
+                                         for k in range(i, len(args))]  # fmt: skip
+                        break
             for done, fut in enumerate(as_completed(index), 1):
                 i = index[fut]
                 try:
@@ -413,7 +427,8 @@ class Engine:
                 if progress:
                     progress(what, done, len(args))
         except BaseException:  # abandoned (Ctrl-C): no worker writes on into removed folders
-            _terminate(pool)
+            with deferred():  # a second Ctrl-C does not cut the workers' stop short
+                _terminate(pool)
             raise
         pool.shutdown(wait=True)
         out.failures.sort(key=lambda f: f.index)
