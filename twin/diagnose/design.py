@@ -92,13 +92,11 @@ LINES = 3
 #: play moves nothing behind it (a run of such lines shows a platform at rest, which the run
 #: checks refuse as an IMU that does not follow its commands).
 BEYOND_PLAY = 3.0
-#: Most position amplitude of a commanded line where a backlash is among the explanations, in
-#: plays: a backlash shows in the describing function at small amplitudes (a sine of five
-#: plays at the play loses 4.5 % of its gain and 7 deg of phase; of thirty, 0.3 % and 1 deg)
-#: and fades at large ones, where every explanation without it is amplitude free; so the new
-#: run's lines stay where the play shows, against the old runs' larger ones. The cap is on
-#: the commands: behind the platform filter less reaches the play. (Capping the motion that
-#: reaches the play at five plays instead named the play less often over the drawn cases.)
+#: Most position amplitude of a line where a backlash is among the explanations, in plays: a
+#: backlash shows in the describing function at small amplitudes (at five plays 4.5 % of the
+#: gain and 7 deg of phase; at thirty 0.3 % and 1 deg) and fades at large ones, where every
+#: explanation without it is amplitude free; so the new run's lines stay where the play
+#: shows, against the old runs' larger ones.
 SHOW_PLAY = 5.0
 #: Expected evidence of a pair beyond which the design seeks no more for it (twice the
 #: margin: lines go to the pairs still below it, not to those already told apart).
