@@ -92,12 +92,6 @@ LINES = 3
 #: play moves nothing behind it (a run of such lines shows a platform at rest, which the run
 #: checks refuse as an IMU that does not follow its commands).
 BEYOND_PLAY = 3.0
-#: Most position amplitude of a line where a backlash is among the explanations, in plays: a
-#: backlash shows in the describing function at small amplitudes (at five plays 4.5 % of the
-#: gain and 7 deg of phase; at thirty 0.3 % and 1 deg) and fades at large ones, where every
-#: explanation without it is amplitude free; so the new run's lines stay where the play
-#: shows, against the old runs' larger ones.
-SHOW_PLAY = 5.0
 #: Expected evidence of a pair beyond which the design seeks no more for it (twice the
 #: margin: lines go to the pairs still below it, not to those already told apart).
 ENOUGH = 2 * BIC_MARGIN
@@ -571,8 +565,6 @@ def design_run(
         top = _largest_amplitude(platform, dof, float(f))
         if top is not None and top / (2 * np.pi * f) ** 2 < BEYOND_PLAY * play:
             top = None
-        if top is not None and play:  # where the play shows (see SHOW_PLAY)
-            top = min(top, SHOW_PLAY * play * (2 * np.pi * f) ** 2)
         if top is not None and _multisine(platform, dof, [(float(f), top)], budget_s):
             tops.append(top)
             keep.append(True)
