@@ -163,25 +163,24 @@ def test_the_closest_linear_sets_the_diagnosis_fitted_are_rivals_too():
     }
 
 
-def _designed(unweighed: tuple[str, ...]) -> DesignResult:
+def _designed() -> DesignResult:
     best = Candidate(1.0, 0.5, 100.0, 120.0, {("delay", "lead"): 60.0, ("lead", "delay"): 45.0})
     sig = SimpleNamespace(frequencies_hz=np.array([1.0]), amplitudes=np.array([0.5]))
-    return DesignResult("roll", "mpi", (), best, (best,), sig, "d", (), unweighed)  # type: ignore[arg-type]
+    return DesignResult("roll", "mpi", (), best, (best,), sig, "d", (), ((0.1, 45.0),))  # type: ignore[arg-type]
 
 
-def test_a_design_with_a_backlash_unweighed_does_not_claim_to_decide():
-    """Every weighed pair above the margin, but a backlash among the explanations: unknown."""
-    assert _designed(()).decides
-    d = _designed(("backlash: play 0.004686 (roll)",))
+def test_a_design_decides_when_every_pair_passes_the_margin():
+    assert _designed().decides
+    tried = _designed().to_dict()["amplitudes_tried"]
+    assert tried == [{"peak_motion": 0.1, "weakest_delta_bic": 45.0}]
+    weak = Candidate(1.0, 0.5, 100.0, 120.0, {("delay", "lead"): BIC_MARGIN / 2})
+    d = DesignResult("roll", "mpi", (), weak, (weak,), _designed().signal, "d")
     assert not d.decides
-    assert d.to_dict()["not_weighed"] == ["backlash: play 0.004686 (roll)"]
-    assert d.summary_lines()[-1].startswith(
-        "not known to decide: backlash: play 0.004686 (roll) not weighed"
-    )
+    assert "not expected to decide within the budget" in d.summary_lines()[-1]
 
 
 def test_a_design_follows_the_result_protocol():
-    d = _designed(())
+    d = _designed()
     table = d.to_frame()
     assert table.to_dict("records") == [
         {"true": "delay", "other": "lead", "delta_bic": 60.0},

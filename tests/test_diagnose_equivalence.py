@@ -110,9 +110,24 @@ def test_rivals_that_differ_somewhere_are_not_the_same(platform, named, effects,
     assert _same(platform, named, effects, start) is None
 
 
-def test_a_non_linear_set_is_never_compared():
+def test_a_backlash_is_compared_only_with_a_backlash():
     named = [Extension("backlash", {"play": 0.01}, ("heave",))]
     assert _same("srs", named, ("gain",), {"gain": {"gain": 0.9}}) is None
+
+
+def test_the_same_motion_reaching_the_same_play_is_the_same_response():
+    """SRS: a play behind a 2.1 Hz filter, or behind a resonance damped at one there."""
+    play = Extension("backlash", {"play": 0.007}, ("heave",))
+    named = [play, Extension("platform_filter", {"break_hz": 2.1}, ("heave",))]
+    start = {"backlash": {"play": 0.0075}, "resonance": {"frequency_hz": 2.0, "damping": 0.9}}
+    eq = _same("srs", named, ("backlash", "resonance"), start)
+    assert eq is not None
+    assert eq["parameters"]["backlash"]["play"] == 0.007  # the named play: the same one
+    assert eq["parameters"]["resonance"]["frequency_hz"] == pytest.approx(2.1, rel=1e-4)
+    assert eq["max_relative_difference"] < SAME_RESPONSE
+    # a filter before the play is not a sensor's filter after it, whatever their responses
+    sensor = {"backlash": {"play": 0.007}, "sensor_filter": {"cutoff_hz": 2.1}}
+    assert _same("srs", named, ("backlash", "sensor_filter"), sensor) is None
 
 
 def _gain(db_before, db_after, deg_before, deg_after):

@@ -14,7 +14,8 @@ The play of ``backlash`` is an outer one-dimensional search (each value is a sim
 That fast form applies the linear effects after the backlash; the chain applies gain, filter,
 resonance and lead before it, so a fitted set with backlash and one of those is refitted in
 the chain's order (:meth:`Model.anchored`: the backlash simulated behind them, the play
-searched around the fast fit's play times their mean gain over the lines). Standard
+searched around the fast fit's play times their mean gain over the lines' motion, then again
+behind the values each pass fitted, until a pass gains little). Standard
 deviations and correlations come from the Jacobian at the optimum (Fisher information 2 J^T J
 of the log-likelihood -chi2); with backlash, whose column costs two simulations per run, when
 first asked for (a named set's). Plays known in advance (the grid, the first two of the
@@ -292,7 +293,9 @@ class SetFit:
     -----
     ``std`` and ``correlation`` come from the constructor's ``_statistics`` when first asked
     for (:meth:`of` gives them computed): with ``backlash`` their Jacobian costs two
-    simulations per run, and only a named set's are reported.
+    simulations per run, and only a named set's are reported. ``anchor``: the effects the
+    backlash was simulated behind (the chain's order, :meth:`Model.anchored`); a model of the
+    set is :meth:`model`.
 
     """
 
@@ -300,6 +303,7 @@ class SetFit:
     chi2: float
     _statistics: Callable[[], Statistics] = field(repr=False, compare=False)
     _computed: list[Statistics] = field(default_factory=list, repr=False, compare=False)
+    anchor: tuple[Extension, ...] = ()
 
     @classmethod
     def of(
@@ -308,9 +312,17 @@ class SetFit:
         chi2: float,
         std: dict[str, dict[str, float]],
         correlation: dict[str, object],
+        anchor: tuple[Extension, ...] = (),
     ) -> SetFit:
         """Return a fit with its statistics computed already."""
-        return cls(extensions, chi2, _computed_already, [(std, correlation)])
+        return cls(extensions, chi2, _computed_already, [(std, correlation)], anchor)
+
+    def model(self, base: Model) -> Model:
+        """Return ``base`` with this set, in the order it was fitted in (:attr:`anchor`)."""
+        m = base.anchored(self.anchor) if self.anchor else base
+        for x in self.extensions:
+            m = m.with_(x)
+        return m
 
     def __getstate__(self) -> dict[str, object]:
         """Pickle with the statistics computed (a task's result travels without closures)."""
@@ -555,6 +567,12 @@ def fit_set(
 BEFORE_BACKLASH = ("gain", "platform_filter", "resonance", "lead")
 #: Log step of the play around its chain-order start (:func:`_parabola`).
 ANCHOR_STEP = 1.1
+#: Passes of the chain-order refit, each anchored at the shaping effects the last one fitted
+#: (the anchor is the effects' values the backlash is simulated behind: a refit that moves
+#: them moves what reaches the play, so the next pass simulates behind the new values).
+ANCHOR_PASSES = 4
+#: A pass that lowers chi2 by less than this is the last one.
+ANCHOR_TOLERANCE = 0.5
 _Memo = dict[float, tuple[float, list[Extension], FloatArray | None, object]]
 
 
@@ -624,14 +642,17 @@ def _brent_start(a: float, b: float, xatol: float) -> tuple[float, float]:
 def _amplitude_ratio(
     shaping: Sequence[Extension], evidence: Sequence[Lines], model: Model
 ) -> float:
-    """Mean gain of ``shaping`` over the lines, weighted by their power (exact for a gain).
+    """Mean gain of ``shaping`` over the lines, weighted by their motion's power (exact for a gain).
 
     A play p behind the effects in the fast order acts roughly as p times this in the
-    chain's order: the start of the chain-order search.
+    chain's order: the start of the chain-order search. A play acts on the motion (position),
+    so each line weighs by its position power, ``|acceleration|^2 / (2 pi f)^4``: the low lines
+    that make the excursion, not the high ones whose acceleration is large but whose motion is
+    small (a filter that halves only those leaves the play as it is).
     """
     num = den = 0.0
     for x in evidence:
-        w = np.abs(x.nominal) ** 2
+        w = np.abs(x.nominal) ** 2 / (2 * np.pi * x.f) ** 4
         h = np.ones(x.size, dtype=complex)
         for e in shaping:
             h = h * e.response(x.f, model.nominal_break)
@@ -663,6 +684,32 @@ def _parabola(
         profile(float(np.exp(u[1] + np.clip(shift, -2.0, 2.0) * np.log(ANCHOR_STEP))))
 
 
+def _chain_order_start(
+    linear: tuple[str, ...],
+    model: Model,
+    evidence: Sequence[Lines],
+    start: dict[str, Sequence[float]],
+    play: float,
+    memo: _Memo,
+) -> tuple[Model, _Memo]:
+    """Return the model and memo of the better order for a start's play: fast or chain.
+
+    A start from a refined fit may hold the chain's order (its play behind its shaping
+    effects, :meth:`Model.anchored`): held at that play, it is evaluated both ways.
+    """
+    shaping = [make_extension(e, numeric_names(e), v, model.dof)
+               for e, v in start.items() if e in BEFORE_BACKLASH]  # fmt: skip
+    if not shaping:
+        return model, memo
+    anchored, memo_a = model.anchored(shaping), {}
+    inner = {e: v for e, v in start.items() if e != "backlash"} or None
+    try:
+        _profile(linear, anchored, evidence, inner, memo_a)(play)
+    except SignalError:  # the chain cannot run them: the fast order stands
+        return model, memo
+    return (anchored, memo_a) if memo_a[play][0] < memo[play][0] else (model, memo)
+
+
 def _fit_with_backlash(
     linear: tuple[str, ...],
     model: Model,
@@ -685,6 +732,7 @@ def _fit_with_backlash(
         lo, hi = centre / 2.0, centre * 2.0
         if coarse:
             profile(centre)
+            model, memo = _chain_order_start(linear, model, evidence, start, centre, memo)
     else:
         grid = space.grids[0]
         model.prefetch([float(p) for p in grid], channels)
@@ -699,25 +747,34 @@ def _fit_with_backlash(
     if coarse:  # a screening fit: no statistics (they would cost two simulations per run)
         nan = float("nan")
         std = {e.effect: dict.fromkeys(numeric_names(e.effect), nan) for e in (ext_b, *exts)}
-        return SetFit.of((ext_b, *exts), chi2, std, {"labels": [], "matrix": []})
-    shaping = [e for e in exts if e.effect in BEFORE_BACKLASH]
-    if shaping:  # the chain's order: these shape what reaches the backlash (Model.anchored)
-        anchored = model.anchored(shaping)
+        return SetFit.of((ext_b, *exts), chi2, std, {"labels": [], "matrix": []}, model.anchor)
+    base, centre = model, None
+    for _ in range(ANCHOR_PASSES):  # the chain's order: these shape what reaches the backlash
+        shaping = [e for e in exts if e.effect in BEFORE_BACKLASH]  # (Model.anchored)
+        if not shaping:
+            break
+        anchored = base.anchored(shaping)
+        centre = play * _amplitude_ratio(shaping, evidence, base) if centre is None else play
         fitted = {e.effect: [e.value(n) for n in numeric_names(e.effect)] for e in exts}
         memo_a: _Memo = {}
         profile_a = _profile(linear, anchored, evidence, fitted, memo_a)
         try:
-            _parabola(profile_a, play * _amplitude_ratio(shaping, evidence, model), space,
-                      lambda plays: anchored.prefetch(plays, channels))  # fmt: skip
+            ahead = functools.partial(anchored.prefetch, channels=channels)
+            _parabola(profile_a, centre, space, ahead)
         except SignalError:  # the chain cannot run them (a pole beyond the commands' Nyquist
-            memo_a.clear()  # frequency): the fast order's fit stands
+            break  # frequency): the fit so far stands
         play_a = min(memo_a, key=lambda p: memo_a[p][0], default=None)
-        if play_a is not None and memo_a[play_a][0] <= chi2:
-            model, play = anchored, play_a
-            chi2, exts, jac, layout = memo_a[play_a]
-            ext_b = make_extension("backlash", ["play"], [play], model.dof)
+        if play_a is None or memo_a[play_a][0] > chi2:
+            break
+        gain = chi2 - memo_a[play_a][0]
+        model, play = anchored, play_a
+        chi2, exts, jac, layout = memo_a[play_a]
+        ext_b = make_extension("backlash", ["play"], [play], model.dof)
+        if gain < ANCHOR_TOLERANCE:
+            break
     stats = functools.partial(_backlash_statistics, model, evidence, play, exts, jac, layout)
-    return SetFit((ext_b, *exts), chi2, stats)  # the statistics when asked for (a named set)
+    # the statistics when asked for (a named set)
+    return SetFit((ext_b, *exts), chi2, stats, anchor=model.anchor)
 
 
 def _backlash_statistics(

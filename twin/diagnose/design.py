@@ -14,10 +14,12 @@ The expected evidence of a run between explanations i and j, if i is true, is
 (the BIC difference the run adds with both at their fitted parameters: the Kullback-Leibler
 divergence of the two complex Gaussians, as :func:`twin.diagnose.detect.expected_delta_bic`;
 refitting j on the new run can absorb part of it, so it is an upper bound). H is each
-explanation's response at the line (analytic for linear effects; simulated, noise-free, when
-one of them has a backlash, whose describing function depends on the amplitude), A the
-acceleration amplitude and s the noise of a Fourier amplitude over the new window: measured
-in the diagnosed runs, off their lines, next to f, and scaled by sqrt(T_old / T_new).
+explanation's response at the line, A the acceleration amplitude and s the noise of a
+Fourier amplitude over the new window: measured in the diagnosed runs, off their lines, next
+to f, and scaled by sqrt(T_old / T_new). Where one of the two has a backlash, whose describing
+function depends on the whole motion, the evidence is simulated instead: both runs with one
+explanation, the other refitted by the diagnosis's own fit
+(:mod:`twin.diagnose.simulated_evidence`), at several amplitudes of the chosen lines.
 """
 
 from __future__ import annotations
@@ -62,6 +64,7 @@ from twin.diagnose.candidates import (
 from twin.diagnose.data import Case, Channel, load_case
 from twin.diagnose.equivalence import SAME_RESPONSE
 from twin.diagnose.select import BIC_MARGIN
+from twin.diagnose.simulated_evidence import SimulatedEvidence
 from twin.formats.runs import write_commands
 from twin.measurement.describing_function import fourier_coefficients
 
@@ -84,6 +87,8 @@ LINEAR_EFFECTS = (
     "sensor_filter",
     "platform_lag",
 )
+#: Effects a run can be designed to show (the linear ones, and a backlash by simulation).
+DESIGNABLE = (*LINEAR_EFFECTS, "backlash")
 #: Default time budget of the designed run [s].
 BUDGET_S = 120.0
 #: Lines of the designed multisine.
@@ -146,16 +151,12 @@ class DesignResult:
     signal: DescribingSignal
     source: str
     notes: tuple[str, ...] = field(default_factory=tuple)
-    unweighed: tuple[str, ...] = ()
+    levels: tuple[tuple[float, float], ...] = ()
 
     @property
     def decides(self) -> bool:
-        """Whether the run is expected to separate every pair by more than the margin.
-
-        Never where an explanation was not weighed (a backlash): what the run shows of it is
-        not known.
-        """
-        return self.best.weakest > BIC_MARGIN and not self.unweighed
+        """Whether the run is expected to separate every pair by more than the margin."""
+        return self.best.weakest > BIC_MARGIN
 
     def to_frame(self) -> pd.DataFrame:
         """Return the expected evidence, one row per pair (true explanation, other one)."""
@@ -211,7 +212,9 @@ class DesignResult:
                 {"true": i, "other": j, "delta_bic": v} for (i, j), v in b.evidence.items()
             ],
             "decides": self.decides,
-            "not_weighed": list(self.unweighed),
+            "amplitudes_tried": [
+                {"peak_motion": p, "weakest_delta_bic": w} for p, w in self.levels
+            ],
             "margin": BIC_MARGIN,
             "candidates": [
                 {
@@ -239,21 +242,13 @@ class DesignResult:
         ]
         for (i, j), v in b.evidence.items():
             out.append(f"  if {i}: against {j} {v:.1f}")
-        if self.unweighed:
-            out.append(
-                f"not known to decide: {'; '.join(self.unweighed)} not weighed (a backlash "
-                "shows at small amplitudes, a few plays, and these lines move further; the "
-                "others' weakest pair "
-                f"{b.weakest:.1f}, margin {BIC_MARGIN:g})"
-            )
-        else:
-            out.append(
-                f"expected to decide (every pair above {BIC_MARGIN:g})"
-                if self.decides
-                else f"not expected to decide within the budget (weakest pair {b.weakest:.1f}, "
-                f"below {BIC_MARGIN:g}); the evidence grows with the measured time: about "
-                f"{b.window_s * BIC_MARGIN / max(b.weakest, 1e-9):.3g} s of it would be needed"
-            )
+        out.append(
+            f"expected to decide (every pair above {BIC_MARGIN:g})"
+            if self.decides
+            else f"not expected to decide within the budget (weakest pair {b.weakest:.1f}, "
+            f"below {BIC_MARGIN:g}); the evidence grows with the measured time: about "
+            f"{b.window_s * BIC_MARGIN / max(b.weakest, 1e-9):.3g} s of it would be needed"
+        )
         return [*out, *(f"note: {n}" for n in self.notes)]
 
 
@@ -270,7 +265,7 @@ def explanations_of(doc: dict, finding: int = 0) -> tuple[str, list[Explanation]
     if not findings:
         raise DataError(
             "the diagnosis found nothing to tell apart; give --effect NAME (one of "
-            f"{', '.join(LINEAR_EFFECTS)}) to design the run that would show it "
+            f"{', '.join(DESIGNABLE)}) to design the run that would show it "
             "below the size these runs could"
         )
     if not 0 <= finding < len(findings):
@@ -327,11 +322,9 @@ def detection_explanations(doc: dict, dof: str, effect: str) -> list[Explanation
         For a DOF the diagnosis did not analyse, or an effect without a stated size.
 
     """
-    if effect not in LINEAR_EFFECTS:
+    if effect not in DESIGNABLE:
         raise DataError(
-            f"--effect {effect}: the design weighs linear effects only "
-            f"({', '.join(LINEAR_EFFECTS)}); a backlash's response depends on the "
-            "amplitude (each one a simulation)"
+            f"--effect {effect}: the design weighs {', '.join(DESIGNABLE)}; not {effect!r}"
         )
     dofs = doc["nominal"]["dofs"]
     if dof not in dofs:
@@ -526,6 +519,40 @@ class Mimic:
         return lines.evidence(target, self.response(theta, lines.f))
 
 
+#: Peak motions tried for a run where a backlash is among the explanations, in plays (besides
+#: the largest the limits allow): a play shows in a motion of a few plays and hides in a large
+#: one, while the other pairs' evidence grows with the amplitude; the simulations weigh both.
+PLAYS_TRIED = (16.0, 8.0, 4.0)
+
+
+def play_of(expls: Sequence[Explanation]) -> float:
+    """Return the largest play of a backlash among the ambiguous explanations (0: none)."""
+    return max((x.value("play") for e in expls if e.primary for x in e.extensions
+                if x.effect == "backlash"), default=0.0)  # fmt: skip
+
+
+def peak_position(sig: DescribingSignal, dof: str) -> float:
+    """Return the largest commanded excursion of a run in ``dof`` [m or rad]."""
+    return float(np.max(np.abs(sig.commands.values[:, dof_index(dof)])))
+
+
+def amplitude_levels(sig: DescribingSignal, dof: str, play: float) -> list[float]:
+    """Return the factors on a run's amplitudes to try: 1, and those of :data:`PLAYS_TRIED`.
+
+    Only factors below 1 and at least :data:`BEYOND_PLAY` plays of motion are kept.
+    """
+    peak = peak_position(sig, dof)
+    if play <= 0 or peak <= 0:
+        return [1.0]
+    return [1.0, *(k * play / peak for k in PLAYS_TRIED if k >= BEYOND_PLAY and k * play < peak)]
+
+
+def scaled(sig: DescribingSignal, dof: str, factor: float) -> DescribingSignal:
+    """Return the same multisine with every amplitude times ``factor`` (same window)."""
+    ms = MultiSine(np.asarray(sig.frequencies_hz), np.asarray(sig.amplitudes) * factor)
+    return periodic_signal(ms, dof, window_s=sig.window[1] - sig.window[0], label=sig.label)
+
+
 def design_run(
     case: Case,
     expls: Sequence[Explanation],
@@ -546,6 +573,11 @@ def design_run(
     the new lines. Pairs whose responses are the same at every frequency (a sensor filter and
     a platform lag) cannot be told apart by any run's lines: they are left to the noise.
 
+    A pair with a backlash has no line-by-line evidence (its response depends on the whole
+    motion): it is simulated and refitted (:class:`SimulatedEvidence`) with the chosen lines
+    at the largest amplitude and at :data:`PLAYS_TRIED` plays of peak motion, and the run
+    kept is the one whose pairs, all of them, score best (:func:`amplitude_levels`).
+
     Raises
     ------
     SignalError
@@ -557,9 +589,8 @@ def design_run(
     freqs = np.array([f for f in FREQUENCIES_HZ if f <= max_hz])
     noise, t_old = measured_noise(case, dof, freqs, case.of(dof))
     # a line that moves less than a few times the play of a backlash among the explanations
-    # to tell apart shows only that nothing moves (a rival's is not weighed: see below)
-    play = max((x.value("play") for e in expls if e.primary for x in e.extensions
-                if x.effect == "backlash"), default=0.0)  # fmt: skip
+    # to tell apart shows only that nothing moves
+    play = play_of(expls)
     tops, keep = [], []
     for f in freqs:
         top = _largest_amplitude(platform, dof, float(f))
@@ -592,17 +623,14 @@ def design_run(
         return {x.effect for x in e.extensions}
 
     # i true, j refitted to it; j holding all of i's effects mimics it exactly (the BIC's
-    # penalty on its extra parameters decides those, not any run's lines)
-    pairs = [
-        (i, j)
-        for i in expls
-        for j in expls
-        if i is not j
-        and i.primary
-        and not nonlinear(i)
-        and not nonlinear(j)
-        and not effects(i) <= effects(j)
-    ]
+    # penalty on its extra parameters decides those, not any run's lines); a pair with a
+    # backlash is weighed by simulation (SimulatedEvidence)
+    pairs, simulated = [], []
+    for i in expls:
+        for j in expls:
+            if i is j or not i.primary or effects(i) <= effects(j):
+                continue
+            (simulated if nonlinear(i) or nonlinear(j) else pairs).append((i, j))
     per_line, same = {}, []
     everything = past + band
     for n, (i, j) in enumerate(pairs):
@@ -619,10 +647,14 @@ def design_run(
             per_line[i.label, j.label] = e
     chosen: list[int] = []
 
-    def score(lines_: list[int]) -> tuple[float, float]:
+    def score_of(sums: Sequence[float]) -> tuple[float, float]:
         """Pairs brought past twice the margin count no more; then the weakest pair."""
-        sums = [float(v[lines_].sum()) for v in per_line.values()]
         return (sum(min(x, ENOUGH) for x in sums), min(sums, default=0.0))
+
+    def score(lines_: list[int]) -> tuple[float, float]:
+        if not per_line:  # only pairs that need simulating: the lines the noise favours
+            return (float(np.sum(band.amplitude[lines_] / band.noise[lines_])), 0.0)
+        return score_of([float(v[lines_].sum()) for v in per_line.values()])
 
     for _ in range(min(LINES, freqs.size)):
         best = max((k for k in range(freqs.size) if k not in chosen),
@@ -634,18 +666,36 @@ def design_run(
         sig = _multisine(platform, dof, [(float(freqs[k]), tops[k])], budget_s)
     assert sig is not None
     w_new = sig.window[1] - sig.window[0]
-    new = LineSet(
-        sig.frequencies_hz,
-        np.asarray(sig.amplitudes),
-        np.interp(np.log(sig.frequencies_hz), np.log(freqs), noise) * np.sqrt(t_old / w_new),
+    noise_new = np.interp(np.log(sig.frequencies_hz), np.log(freqs), noise) * np.sqrt(t_old / w_new)
+    sim = SimulatedEvidence(case, dof, max_hz) if simulated else None
+    levels = [1.0] if sim is None else amplitude_levels(sig, dof, play_of(expls))
+    runs = []
+    for n, factor in enumerate(levels):
+        cand = sig if factor == 1.0 else scaled(sig, dof, factor)
+        new = LineSet(cand.frequencies_hz, np.asarray(cand.amplitudes), noise_new)
+        both = past + new
+        evidence = {}
+        for i, j in pairs:
+            if (i, j) not in same:
+                v = mimics[id(j)].evidence(response(i, both.f), both)
+                if v is not None:
+                    evidence[i.label, j.label] = v
+        if sim is not None:
+            if progress:
+                progress("design: simulating each explanation at each amplitude", n, len(levels))
+            lines_new = sim.candidate(cand, noise_new, f"designed run x{factor:.3g}")
+            for i, j in simulated:
+                v = sim.evidence(i.extensions, j.extensions, lines_new)
+                if v is not None:
+                    evidence[i.label, j.label] = v
+        runs.append((score_of(list(evidence.values())), n, cand, evidence))
+    # every pair past twice the margin at several amplitudes: the smallest motion, where a play
+    # shows most (a larger one adds evidence no pair needs, and hides a play beside another
+    # effect: the explanations are fitted sets, and the world may hold a mix of them)
+    enough = [r for r in runs if r[3] and min(r[3].values()) >= ENOUGH]
+    _, n_best, sig, evidence = (
+        max(enough, key=lambda r: r[1]) if enough else max(runs, key=lambda r: (r[0], -r[1]))
     )
-    both = past + new
-    evidence = {}
-    for i, j in pairs:
-        if (i, j) not in same:
-            v = mimics[id(j)].evidence(response(i, both.f), both)
-            if v is not None:
-                evidence[i.label, j.label] = v
     run = Candidate(
         float(sig.frequencies_hz.min()),
         float(np.max(sig.amplitudes)),
@@ -659,17 +709,20 @@ def design_run(
         for i, j in same
         if i.primary and j.primary and expls.index(i) < expls.index(j)
     ]
-    skipped = [e.label for e in expls if nonlinear(e)]
-    if skipped:
+    tried = tuple((peak_position(r[2], dof), r[0][1]) for r in runs)
+    if sim is not None:
         notes.append(
-            f"not weighed (a backlash: each amplitude is a simulation): {'; '.join(skipped)}"
+            "a backlash among the explanations: its pairs simulated and refitted at "
+            f"{len(levels)} amplitude(s) of the lines (peak motion "
+            + ", ".join(f"{p:.3g}" for p, _ in tried)
+            + f"); the run is the one at {tried[n_best][0]:.3g}"
         )
     singles = tuple(
         Candidate(float(f), float(a), window, 0.0, {k: float(v[n]) for k, v in per_line.items()})
         for n, (f, a) in enumerate(zip(freqs, tops, strict=True))
     )
     return DesignResult(dof, platform, tuple(expls), run, singles, sig, source, tuple(notes),
-                        tuple(skipped))  # fmt: skip
+                        tried)  # fmt: skip
 
 
 def design_from(

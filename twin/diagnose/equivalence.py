@@ -33,7 +33,12 @@ from numpy.typing import NDArray
 from scipy import optimize
 
 from twin.chain.extensions import LINEAR, Extension
-from twin.diagnose.candidates import make_extension, numeric_names, search_space
+from twin.diagnose.candidates import (
+    BEFORE_BACKLASH,
+    make_extension,
+    numeric_names,
+    search_space,
+)
 from twin.diagnose.data import Case, Channel
 
 FloatArray = NDArray[np.float64]
@@ -90,9 +95,48 @@ def same_response(
     dict or None
         ``effects``, ``parameters`` (refitted) and ``max_relative_difference`` where the
         difference is at most :data:`SAME_RESPONSE` at every frequency of
-        :data:`FREQUENCIES_HZ`; None otherwise, or where a set is not linear.
+        :data:`FREQUENCIES_HZ`; None otherwise. Two sets that each hold a backlash are the
+        same response when their plays are the same and their linear effects are, on each
+        side of the play apart (what shapes the motion before it, and the delay, which
+        commutes with it; what acts after it): the same motion reaches the same play.
 
     """
+    plays = [e for e in named if e.effect == "backlash"]
+    if not plays and "backlash" not in effects:
+        return _same_linear(named, effects, parameters, case, dof, channels)
+    if len(plays) != 1 or list(effects).count("backlash") != 1:
+        return None
+    params: dict[str, dict[str, float]] = {"backlash": {"play": plays[0].value("play")}}
+    worst = 0.0
+    for side in (_before_play, lambda e: not _before_play(e)):
+        mine = [e for e in named if e.effect != "backlash" and side(e.effect)]
+        theirs = [e for e in effects if e != "backlash" and side(e)]
+        if not mine and not theirs:
+            continue
+        if not mine or not theirs:
+            return None
+        eq = _same_linear(mine, theirs, parameters, case, dof, channels)
+        if eq is None:
+            return None
+        params |= eq["parameters"]  # type: ignore[arg-type]
+        worst = max(worst, float(eq["max_relative_difference"]))  # type: ignore[arg-type]
+    return {"effects": list(effects), "parameters": params, "max_relative_difference": worst}
+
+
+def _before_play(effect: str) -> bool:
+    """Whether a linear effect acts on the motion before a backlash (or commutes with it)."""
+    return effect in (*BEFORE_BACKLASH, "delay")
+
+
+def _same_linear(
+    named: Sequence[Extension],
+    effects: Sequence[str],
+    parameters: Mapping[str, Mapping[str, float]],
+    case: Case,
+    dof: str,
+    channels: Sequence[Channel],
+) -> dict[str, object] | None:
+    """:func:`same_response` of linear sets (None where a set is not linear)."""
     if any(e.effect not in LINEAR for e in named) or any(e not in LINEAR for e in effects):
         return None
     nominal_break = case.clean.filter_break_hz
