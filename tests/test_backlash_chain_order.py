@@ -5,7 +5,8 @@ the filter after it, which misplaces the play. A set with both is refitted in th
 order (the backlash simulated behind the shaping effects, again behind each pass's values),
 from a play scaled by the filter's gain on the motion, not on the acceleration; pairs with a
 play that screen near the best set are refined; and a set fitted in the chain's order is
-scored in it on held-out data (:meth:`twin.diagnose.candidates.SetFit.model`).
+scored in it on held-out data (:meth:`twin.diagnose.candidates.SetFit.model`; tested in
+``tests/test_design_backlash.py``).
 """
 
 from __future__ import annotations
@@ -16,7 +17,7 @@ import numpy as np
 import pytest
 
 from twin.chain.extensions import Extension
-from twin.diagnose.candidates import SetFit, _amplitude_ratio
+from twin.diagnose.candidates import _amplitude_ratio
 from twin.diagnose.diagnosis import diagnose
 from twin.diagnose.hidden import NUISANCE_RANGES, draw, judged, record
 
@@ -31,25 +32,6 @@ def test_the_start_of_the_chain_order_search_weighs_the_lines_by_their_motion():
     low = abs(FILTER.response(np.array([0.2]), None)[0])
     assert ratio == pytest.approx(low, rel=0.01)  # the 0.2 Hz line makes the excursion
     assert ratio > 0.95  # (weighted by acceleration it was 0.25: the play 4 x too small)
-
-
-def test_a_set_fitted_in_the_chain_order_is_modelled_in_it():
-    play = Extension("backlash", {"play": 0.007}, ("roll",))
-
-    class Base:  # what SetFit.model asks of a Model
-        def __init__(self, anchor=(), exts=()):
-            self.anchor, self.exts = tuple(anchor), list(exts)
-
-        def anchored(self, anchor):
-            return Base(anchor, self.exts)
-
-        def with_(self, ext):
-            return Base(self.anchor, [*self.exts, ext])
-
-    fit = SetFit.of((play, FILTER), 1.0, {}, {}, (FILTER,))
-    m = fit.model(Base())  # type: ignore[arg-type]
-    assert m.anchor == (FILTER,) and m.exts == [play, FILTER]
-    assert SetFit.of((FILTER,), 1.0, {}, {}).model(Base()).anchor == ()  # type: ignore[arg-type]
 
 
 @pytest.mark.slow

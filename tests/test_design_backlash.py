@@ -3,10 +3,12 @@
 A play shows in a motion of a few plays and hides in a large one, while a linear effect's
 evidence grows with the amplitude. The design simulates each explanation on the old runs and
 on candidate runs at several amplitudes, refits the others to it as the diagnosis would, and
-keeps the run whose weakest pair is strongest. Checked here: a refit of the truth itself
+keeps the run likeliest to separate every pair (of runs as likely, the smallest motion).
+Checked here: a refit of the truth itself
 leaves nothing (the search finds the play), no amplitude is best for every pair (a play
 against a filter shows more in a small motion, a gain against a play in a large one), the
-amplitudes tried are a few plays of motion, and
+amplitudes tried are a few plays of motion, a set fitted in the chain's order is modelled
+in it, and
 (slow) a play the standard signals hid behind a moved platform filter is named after the
 designed run.
 """
@@ -21,10 +23,9 @@ import pytest
 from twin.chain.config import motion_system
 from twin.chain.extensions import Extension
 from twin.cli.main import main
+from twin.diagnose.candidates import Model, SetFit
 from twin.diagnose.data import load_case
 from twin.diagnose.design import (
-    BEYOND_PLAY,
-    PLAYS_TRIED,
     _multisine,
     amplitude_levels,
     design_from,
@@ -33,10 +34,12 @@ from twin.diagnose.design import (
     scaled,
 )
 from twin.diagnose.diagnosis import diagnose
+from twin.diagnose.evidence import line_amplitudes, lines
 from twin.diagnose.hidden import NUISANCE_RANGES, draw, judged, play, record, record_runs
 from twin.diagnose.report import write_report
 from twin.diagnose.select import BIC_MARGIN
 from twin.diagnose.simulated_evidence import SimulatedEvidence
+from twin.measurement.measure import simulate_measurement
 
 MPI = motion_system("mpi")
 PLAY = 0.004  # rad: 4 mrad in roll, a few per cent of Table 5.2 signal 2's excursion
@@ -94,15 +97,31 @@ def test_the_amplitudes_tried_are_a_few_plays_of_motion(weighed):
     case, _ = weighed
     large, _ = _run(case)
     peak = peak_position(large, "roll")
+    assert peak == pytest.approx(0.0898, abs=5e-4)  # the largest the MPI's limits allow
     levels = amplitude_levels(large, "roll", PLAY)
-    assert levels[0] == 1.0
-    expected = [k for k in PLAYS_TRIED if k * PLAY < peak and k >= BEYOND_PLAY]
-    assert len(levels) == 1 + len(expected) >= 2
-    for factor, k in zip(levels[1:], expected, strict=True):
-        small = scaled(large, "roll", factor)
+    # 16, 8 and 4 plays of 4 mrad: all below the largest motion
+    peaks = [peak_position(scaled(large, "roll", k), "roll") for k in levels]
+    assert peaks == pytest.approx([peak, 0.064, 0.032, 0.016], rel=1e-9)
+    for k in levels[1:]:
+        small = scaled(large, "roll", k)
         assert small.window == large.window and small.commands.duration == large.commands.duration
-        assert peak_position(small, "roll") == pytest.approx(k * PLAY, rel=1e-9)
     assert amplitude_levels(large, "roll", 0.0) == [1.0]  # no play: the largest only
+    assert amplitude_levels(large, "roll", 0.01) == pytest.approx([1.0, 0.08 / peak, 0.04 / peak])
+
+
+def test_a_set_fitted_in_the_chain_order_is_modelled_in_it(weighed):
+    """A gain before a play (the chain's order) is not the fast form's gain after it."""
+    case, _ = weighed
+    ch = case.of("roll")[0]
+    x = lines(ch)
+    chain = case.clean.replace(extensions=(GAIN, BACKLASH))
+    sim = simulate_measurement(chain, ch.commands, ch.t, case.model, case.seed, case.imu.ideal())
+    expected = line_amplitudes(ch.t, sim[:, ch.index], x.f, x.window)
+    base = Model(case, "roll")
+    anchored = SetFit.of((BACKLASH, GAIN), 1.0, {}, {}, (GAIN,)).model(base)
+    assert anchored.line_prediction(x) == pytest.approx(expected, rel=1e-9)
+    fast = SetFit.of((BACKLASH, GAIN), 1.0, {}, {}).model(base).line_prediction(x)
+    assert np.max(np.abs(fast / expected - 1)) > 1e-3  # the fast form: another play
 
 
 @pytest.mark.slow

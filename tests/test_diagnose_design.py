@@ -108,7 +108,7 @@ def test_design_refuses_what_it_cannot_design_in_one_line(diagnosed, tmp_path, c
 
 
 def test_the_closest_linear_sets_the_diagnosis_fitted_are_rivals_too():
-    """Sets that a new run could make nameable are weighed; those with backlash are not."""
+    """Sets that a new run could make nameable are weighed; pairs with a backlash are not."""
     from twin.diagnose.design import explanations_of
 
     def row(effects, params, nameable=True):
@@ -153,26 +153,43 @@ def test_the_closest_linear_sets_the_diagnosis_fitted_are_rivals_too():
     }
     dof, expls = explanations_of(doc)
     assert dof == "heave"
-    sets = {tuple(sorted(x.effect for x in e.extensions)): e.primary for e in expls}
-    assert sets == {
+
+    def sets_of(explanations):
+        return {tuple(sorted(x.effect for x in e.extensions)): e.primary for e in explanations}
+
+    sets = sets_of(expls)
+    expected = {
         ("delay",): True,
         ("sensor_filter",): True,
         ("gain",): False,
         ("platform_filter", "resonance"): False,
         ("delay", "gain"): False,  # not nameable on the old runs; a new one may change that
     }
+    assert sets == expected
+    # a single backlash is a rival where the runs ask for it (nameable), not where they do not
+    singles = doc["nominal"]["dofs"]["heave"]["singles_tried"]
+    singles.append(row(["backlash"], {"backlash": {"play": 0.002}}, nameable=False))
+    assert {tuple(sorted(x.effect for x in e.extensions)) for e in explanations_of(doc)[1]} == set(
+        expected
+    )
+    singles[-1]["nameable"] = True
+    sets = {
+        tuple(sorted(x.effect for x in e.extensions)): e.primary for e in explanations_of(doc)[1]
+    }
+    assert sets == {**expected, ("backlash",): False}
 
 
 def _designed() -> DesignResult:
     best = Candidate(1.0, 0.5, 100.0, 120.0, {("delay", "lead"): 60.0, ("lead", "delay"): 45.0})
     sig = SimpleNamespace(frequencies_hz=np.array([1.0]), amplitudes=np.array([0.5]))
-    return DesignResult("roll", "mpi", (), best, (best,), sig, "d", (), ((0.1, 45.0),))  # type: ignore[arg-type]
+    return DesignResult("roll", "mpi", (), best, (best,), sig, "d", (), ((0.1, 45.0, 0.99),))  # type: ignore[arg-type]
 
 
 def test_a_design_decides_when_every_pair_passes_the_margin():
     assert _designed().decides
     tried = _designed().to_dict()["amplitudes_tried"]
-    assert tried == [{"peak_motion": 0.1, "weakest_delta_bic": 45.0}]
+    assert tried == [{"peak_motion": 0.1, "motion_unit": "rad", "weakest_delta_bic": 45.0,
+                      "chance_to_decide": 0.99}]  # fmt: skip
     weak = Candidate(1.0, 0.5, 100.0, 120.0, {("delay", "lead"): BIC_MARGIN / 2})
     d = DesignResult("roll", "mpi", (), weak, (weak,), _designed().signal, "d")
     assert not d.decides

@@ -146,14 +146,23 @@ class Model:
         return self.case.config.breaks_hz[dof_index(self.dof)]
 
     def response(self, f: FloatArray) -> ComplexArray:
-        """Product of the linear extensions' responses at ``f`` [Hz]."""
+        """Product of the linear extensions' responses at ``f`` [Hz] (those not simulated)."""
+        h = self.linear_response(f)
+        if self.anchor and any(e.effect == "backlash" for e in self.extensions):
+            for e in self.anchor:  # simulated with the backlash already (see anchored)
+                h = h / e.response(f, self.nominal_break)
+        return h
+
+    def linear_response(self, f: FloatArray) -> ComplexArray:
+        """Product of the linear extensions' responses at ``f`` [Hz], whatever the anchor.
+
+        What the extensions multiply the nominal response by (the anchor only says which of
+        them are simulated with the backlash: :meth:`response` leaves those out).
+        """
         h = np.ones(np.size(f), dtype=complex)
         for e in self.extensions:
             if e.effect in LINEAR:
                 h = h * e.response(f, self.nominal_break)
-        if self.anchor and any(e.effect == "backlash" for e in self.extensions):
-            for e in self.anchor:  # simulated with the backlash already (see anchored)
-                h = h / e.response(f, self.nominal_break)
         return h
 
     def psd_factor(self, f: FloatArray) -> FloatArray:

@@ -25,14 +25,14 @@ explanation, the other refitted by the diagnosis's own fit
 from __future__ import annotations
 
 import json
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy import optimize
+from scipy import optimize, stats
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -77,7 +77,7 @@ FREQUENCIES_HZ = (0.1, 0.2, 0.3, 0.5, 0.7, 1.0, 1.5, 2.0, 3.0, 5.0, 7.0, 10.0, 1
 AMPLITUDES = (3.0, 2.0, 1.0, 0.5, 0.2, 0.1, 0.05)
 #: Neighbouring bins on each side of a frequency whose noise is measured.
 NOISE_BINS = 5
-#: Effects whose response is linear (a transfer function): what the design can weigh.
+#: Effects whose response is linear (a transfer function): weighed line by line.
 LINEAR_EFFECTS = (
     "delay",
     "gain",
@@ -151,7 +151,7 @@ class DesignResult:
     signal: DescribingSignal
     source: str
     notes: tuple[str, ...] = field(default_factory=tuple)
-    levels: tuple[tuple[float, float], ...] = ()
+    levels: tuple[tuple[float, float, float], ...] = ()
 
     @property
     def decides(self) -> bool:
@@ -213,7 +213,13 @@ class DesignResult:
             ],
             "decides": self.decides,
             "amplitudes_tried": [
-                {"peak_motion": p, "weakest_delta_bic": w} for p, w in self.levels
+                {
+                    "peak_motion": p,
+                    "motion_unit": position_unit(self.dof),
+                    "weakest_delta_bic": w,
+                    "chance_to_decide": c,
+                }
+                for p, w, c in self.levels
             ],
             "margin": BIC_MARGIN,
             "candidates": [
@@ -305,6 +311,8 @@ def explanations_of(doc: dict, finding: int = 0) -> tuple[str, list[Explanation]
     for r in [*tried.get("singles_tried", []), *near]:
         if tuple(sorted(r["effects"])) in have:
             continue
+        if "backlash" in r["effects"] and not r.get("nameable"):
+            continue  # a play the runs do not ask for (its search found none): no rival
         exts = tuple(
             make_extension(e, list(r["parameters"][e]), list(r["parameters"][e].values()), dof)
             for e in r["effects"]
@@ -522,7 +530,31 @@ class Mimic:
 #: Peak motions tried for a run where a backlash is among the explanations, in plays (besides
 #: the largest the limits allow): a play shows in a motion of a few plays and hides in a large
 #: one, while the other pairs' evidence grows with the amplitude; the simulations weigh both.
+#: (Each line alone may then move less than :data:`BEYOND_PLAY` plays: it is the lines' sum,
+#: four plays and more at its peaks, that moves through the play.)
 PLAYS_TRIED = (16.0, 8.0, 4.0)
+
+
+#: Runs whose chance of separating every pair is within this of the likeliest run's are as
+#: likely: of them, the smallest motion is kept (where a play shows most).
+AS_LIKELY = 0.01
+
+
+def deciding_chance(evidence: Iterable[float]) -> float:
+    """Return the chance that a run separates every pair by more than the margin.
+
+    A pair's BIC difference, with its expected value ``E`` (noise-free), is about normal with
+    standard deviation ``2 sqrt(E)`` (twice a chi-square difference whose mean is ``E / 2``
+    and variance ``E``), so it passes the margin with probability ``Phi((E - margin) /
+    (2 sqrt(E)))``; the pairs taken as independent.
+    """
+    e = np.maximum(np.asarray(list(evidence), dtype=float), 1e-12)
+    return float(np.prod(stats.norm.cdf((e - BIC_MARGIN) / (2 * np.sqrt(e)))))
+
+
+def position_unit(dof: str) -> str:
+    """Return the unit of a DOF's motion: m or rad."""
+    return "m" if dof_index(dof) < 3 else "rad"
 
 
 def play_of(expls: Sequence[Explanation]) -> float:
@@ -539,12 +571,12 @@ def peak_position(sig: DescribingSignal, dof: str) -> float:
 def amplitude_levels(sig: DescribingSignal, dof: str, play: float) -> list[float]:
     """Return the factors on a run's amplitudes to try: 1, and those of :data:`PLAYS_TRIED`.
 
-    Only factors below 1 and at least :data:`BEYOND_PLAY` plays of motion are kept.
+    Only factors below 1 are kept (a peak motion of ``k`` plays that the largest run exceeds).
     """
     peak = peak_position(sig, dof)
     if play <= 0 or peak <= 0:
         return [1.0]
-    return [1.0, *(k * play / peak for k in PLAYS_TRIED if k >= BEYOND_PLAY and k * play < peak)]
+    return [1.0, *(k * play / peak for k in PLAYS_TRIED if k * play < peak)]
 
 
 def scaled(sig: DescribingSignal, dof: str, factor: float) -> DescribingSignal:
@@ -575,8 +607,10 @@ def design_run(
 
     A pair with a backlash has no line-by-line evidence (its response depends on the whole
     motion): it is simulated and refitted (:class:`SimulatedEvidence`) with the chosen lines
-    at the largest amplitude and at :data:`PLAYS_TRIED` plays of peak motion, and the run
-    kept is the one whose pairs, all of them, score best (:func:`amplitude_levels`).
+    at the largest amplitude and at :data:`PLAYS_TRIED` plays of peak motion
+    (:func:`amplitude_levels`). The run kept is the one likeliest to separate every pair
+    (:func:`deciding_chance`) or, of runs within :data:`AS_LIKELY` of it, the smallest motion:
+    a stated preference, where a play shows most.
 
     Raises
     ------
@@ -668,7 +702,7 @@ def design_run(
     w_new = sig.window[1] - sig.window[0]
     noise_new = np.interp(np.log(sig.frequencies_hz), np.log(freqs), noise) * np.sqrt(t_old / w_new)
     sim = SimulatedEvidence(case, dof, max_hz) if simulated else None
-    levels = [1.0] if sim is None else amplitude_levels(sig, dof, play_of(expls))
+    levels = [1.0] if sim is None else amplitude_levels(sig, dof, play)
     runs = []
     for n, factor in enumerate(levels):
         cand = sig if factor == 1.0 else scaled(sig, dof, factor)
@@ -683,19 +717,17 @@ def design_run(
         if sim is not None:
             if progress:
                 progress("design: simulating each explanation at each amplitude", n, len(levels))
-            lines_new = sim.candidate(cand, noise_new, f"designed run x{factor:.3g}")
+            lines_new = sim.candidate(cand, noise_new, f"designed run x{factor!r}")
             for i, j in simulated:
                 v = sim.evidence(i.extensions, j.extensions, lines_new)
                 if v is not None:
                     evidence[i.label, j.label] = v
-        runs.append((score_of(list(evidence.values())), n, cand, evidence))
-    # every pair past twice the margin at several amplitudes: the smallest motion, where a play
-    # shows most (a larger one adds evidence no pair needs, and hides a play beside another
-    # effect: the explanations are fitted sets, and the world may hold a mix of them)
-    enough = [r for r in runs if r[3] and min(r[3].values()) >= ENOUGH]
-    _, n_best, sig, evidence = (
-        max(enough, key=lambda r: r[1]) if enough else max(runs, key=lambda r: (r[0], -r[1]))
-    )
+        # a pair left out is one whose refit lies at a bound: no explanation, decided
+        runs.append((min(evidence.values(), default=0.0), n, cand, evidence))
+    # the run most likely to separate every pair; of runs as likely, the smallest motion
+    chances = [deciding_chance(r[3].values()) for r in runs]
+    likely = [r for r, c in zip(runs, chances, strict=True) if c >= max(chances) - AS_LIKELY]
+    _, n_best, sig, evidence = max(likely, key=lambda r: r[1])
     run = Candidate(
         float(sig.frequencies_hz.min()),
         float(np.max(sig.amplitudes)),
@@ -709,13 +741,16 @@ def design_run(
         for i, j in same
         if i.primary and j.primary and expls.index(i) < expls.index(j)
     ]
-    tried = tuple((peak_position(r[2], dof), r[0][1]) for r in runs)
+    tried = tuple((peak_position(r[2], dof), r[0], c) for r, c in zip(runs, chances, strict=True))
     if sim is not None:
         notes.append(
             "a backlash among the explanations: its pairs simulated and refitted at "
             f"{len(levels)} amplitude(s) of the lines (peak motion "
-            + ", ".join(f"{p:.3g}" for p, _ in tried)
-            + f"); the run is the one at {tried[n_best][0]:.3g}"
+            + ", ".join(f"{p:.3g}" for p, *_ in tried)
+            + f" {position_unit(dof)}; the chance that every pair passes the margin "
+            + ", ".join(f"{c:.2f}" for *_, c in tried)
+            + f"): the run is the one at {tried[n_best][0]:.3g}, the smallest motion of those "
+            f"within {AS_LIKELY:g} of the likeliest"
         )
     singles = tuple(
         Candidate(float(f), float(a), window, 0.0, {k: float(v[n]) for k, v in per_line.items()})

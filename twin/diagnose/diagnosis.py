@@ -153,7 +153,7 @@ class DofReport:
             label="measured / extended",
         )
         f = np.geomspace(self.lines.f.min() / 2, max_hz, 300)
-        h = self.model.response(f)
+        h = self.model.linear_response(f)
         a1.semilogx(f, 20 * np.log10(np.abs(h)), "k-", lw=1, label="extended / nominal (model)")
         a1.axhline(0, color="0.6", lw=0.5)
         a1.set_ylabel("magnitude [dB]")

@@ -95,10 +95,11 @@ def same_response(
     dict or None
         ``effects``, ``parameters`` (refitted) and ``max_relative_difference`` where the
         difference is at most :data:`SAME_RESPONSE` at every frequency of
-        :data:`FREQUENCIES_HZ`; None otherwise. Two sets that each hold a backlash are the
-        same response when their plays are the same and their linear effects are, on each
-        side of the play apart (what shapes the motion before it, and the delay, which
-        commutes with it; what acts after it): the same motion reaches the same play.
+        :data:`FREQUENCIES_HZ`; None otherwise. Two sets that each hold a backlash are
+        compared with the alternative's play set to the named one: they are the same
+        response when their linear effects are, on each side of the play apart (what shapes
+        the motion before it, and the delay, which commutes with it; what acts after it): the
+        same motion then reaches the same play.
 
     """
     plays = [e for e in named if e.effect == "backlash"]

@@ -542,7 +542,13 @@ def name_causes(
     model = fit.model(base)
     same: list[dict[str, object]] = []
     # the alternatives of what is named: where a gate took a member out, of the set left
-    named = sel if fit is sel.fit else Selection(fit, delta, sel.table, n, fits=sel.fits)
+    if fit is sel.fit:
+        named = sel
+    else:  # the set left, as refitted, is what its alternatives are measured against
+        gain = bic_gain(chi0, fit.chi2, fit.parameters, n)
+        table = [r | {"delta_bic": gain} if set(r["effects"]) == set(fit.effects) else r
+                 for r in sel.table]  # type: ignore[arg-type]  # fmt: skip
+        named = Selection(fit, delta, table, n, fits=sel.fits)
     rivals = rival_explanations(named, base, evidence, fold_list, same)
     # an ambiguous set is compared with its alternatives as they are: each against the nominal
     against_nominal = held_out_set(base, fit.effects, _start(fit), fold_list) if rivals else {}

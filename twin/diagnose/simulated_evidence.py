@@ -11,8 +11,10 @@ backlash), each line weighted by its noise (measured in the old runs; the design
 for the new one), and twice the chi-square ``j`` leaves is the expected BIC difference: the
 same quantity, with the same refit, as the linear pairs'.
 
-Simulations are shared: the old runs' with a play are the same for every candidate and every
-pair (one cache), and the truth of each explanation on each run is simulated once.
+Simulations are cached (one cache for every pair and candidate, keyed by run, window, play and
+the effects simulated with it), and the truth of each explanation on each run is simulated
+once. An explanation the chain cannot run in its order (a pole beyond a run's Nyquist
+frequency) is simulated in the fast form, as the diagnosis fitted it then.
 """
 
 from __future__ import annotations
@@ -24,6 +26,7 @@ from numpy.typing import NDArray
 
 from twin.chain.extensions import Extension
 from twin.chain.signals import DescribingSignal
+from twin.core.errors import SignalError
 from twin.core.frames import dof_index
 from twin.diagnose.candidates import BEFORE_BACKLASH, Model, at_bounds, fit_set
 from twin.diagnose.data import Case, Channel
@@ -100,7 +103,11 @@ class SimulatedEvidence:
         key = (lines.channel.run, lines.window, tuple(lines.f),
                tuple((e.effect, repr(e.parameters), e.dofs) for e in extensions))  # fmt: skip
         if key not in self._truths:
-            self._truths[key] = self.model(extensions).line_prediction(lines)
+            try:
+                self._truths[key] = self.model(extensions).line_prediction(lines)
+            except SignalError:  # not in the chain's order: the fast form, as the fit did
+                fast = Model(self.case, self.dof, list(extensions), (), self.cache)
+                self._truths[key] = fast.line_prediction(lines)
         return self._truths[key]
 
     def evidence(

@@ -78,7 +78,8 @@ def record_diagnosis(d, path: str | Path) -> Path:
                     curves.append(Curve(f"measured_over_{name}{run}", lines.f, lines.db,
                                         lines.deg, COLOURS[name], bounds))  # fmt: skip
             f = np.geomspace(r.lines.f.min() / 2, d.max_hz, 300)
-            curves.append(bode_curve("extended_over_nominal", f, r.model.response(f), (0, 0, 0)))
+            h = r.model.linear_response(f)
+            curves.append(bode_curve("extended_over_nominal", f, h, (0, 0, 0)))
             log_curves(rec, f"{dof}/ratio", curves)
             log_figure(rec, f"{dof}/ratio/figure", lambda r=r: r.plot(max_hz=d.max_hz))
             log_figure(rec, f"{dof}/residual_figure", lambda dof=dof: plot_residual(d, dof))
