@@ -504,6 +504,8 @@ class Mimic:
             r = (self.response(theta, lines.f) - target) * w
             return np.concatenate([r.real, r.imag])
 
+        if not self.slots:  # nothing to refit: the nominal response
+            return np.empty(0)
         x0 = np.clip(self.start, lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo))
         return optimize.least_squares(residual, x0, bounds=(lo, hi), max_nfev=200).x
 
@@ -665,9 +667,18 @@ def design_run(
             if i is j or not i.primary or effects(i) <= effects(j):
                 continue
             (simulated if nonlinear(i) or nonlinear(j) else pairs).append((i, j))
+    # the lines are chosen on linear responses: a pair with a backlash by its linear parts (the
+    # play common to both, or not there), then weighed whole by simulation
+    def linear_part(e: Explanation) -> Explanation:
+        return Explanation(e.label, tuple(x for x in e.extensions if x.effect != "backlash"),
+                           e.primary)  # fmt: skip
+
+    proxies = [(linear_part(i), linear_part(j)) for i, j in simulated]
+    proxies = [(i, j) for i, j in proxies if not effects(i) <= effects(j)]
+    mimics |= {id(e): Mimic(case, dof, e) for pair in proxies for e in pair}
     per_line, same = {}, []
     everything = past + band
-    for n, (i, j) in enumerate(pairs):
+    for n, (i, j) in enumerate([*pairs, *proxies]):
         if progress:
             progress("design: refitting each explanation to the others", n, len(pairs))
         theta = mimics[id(j)].fit(response(i, everything.f), everything)
@@ -676,7 +687,8 @@ def design_run(
         d = response(i, band.f) - mimics[id(j)].response(theta, band.f)
         e = 2 * np.abs(d) ** 2 * band.amplitude**2 / band.noise**2
         if np.max(np.abs(d / response(i, band.f))) < SAME_RESPONSE:  # the same response
-            same.append((i, j))
+            if (i, j) in pairs:
+                same.append((i, j))
         else:
             per_line[i.label, j.label] = e
     chosen: list[int] = []
