@@ -541,11 +541,14 @@ def name_causes(
             return [], base, Selection(None, {}, sel.table, n)
     model = fit.model(base)
     same: list[dict[str, object]] = []
-    # the alternatives of what is named: where a gate took a member out, of the set left
+    # the alternatives of what is named, measured against its support: where the held-out
+    # data took a member out, the set left as refitted; where only effects too small to matter
+    # were left out, the set they were fitted in (they are part of the same explanation)
     if fit is sel.fit:
         named = sel
-    else:  # the set left, as refitted, is what its alternatives are measured against
-        gain = bic_gain(chi0, fit.chi2, fit.parameters, n)
+    else:
+        support = fit if dropped else sel.fit
+        gain = bic_gain(chi0, support.chi2, support.parameters, n)
         table = [r | {"delta_bic": gain} if set(r["effects"]) == set(fit.effects) else r
                  for r in sel.table]  # type: ignore[arg-type]  # fmt: skip
         named = Selection(fit, delta, table, n, fits=sel.fits)
