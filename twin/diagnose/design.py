@@ -667,6 +667,7 @@ def design_run(
             if i is j or not i.primary or effects(i) <= effects(j):
                 continue
             (simulated if nonlinear(i) or nonlinear(j) else pairs).append((i, j))
+
     # the lines are chosen on linear responses: a pair with a backlash by its linear parts (the
     # play common to both, or not there), then weighed whole by simulation
     def linear_part(e: Explanation) -> Explanation:
