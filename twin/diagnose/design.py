@@ -668,13 +668,15 @@ def design_run(
                 continue
             (simulated if nonlinear(i) or nonlinear(j) else pairs).append((i, j))
 
-    # the lines are chosen on linear responses: a pair with a backlash by its linear parts (the
-    # play common to both, or not there), then weighed whole by simulation
+    # the lines are chosen on linear responses: a pair whose explanations both hold a backlash
+    # by their linear parts (the play common to both), then weighed whole by simulation; a
+    # pair with a play on one side only has no linear stand-in (the play may be the difference)
     def linear_part(e: Explanation) -> Explanation:
         return Explanation(e.label, tuple(x for x in e.extensions if x.effect != "backlash"),
                            e.primary)  # fmt: skip
 
-    proxies = [(linear_part(i), linear_part(j)) for i, j in simulated]
+    proxies = [(linear_part(i), linear_part(j)) for i, j in simulated
+               if nonlinear(i) and nonlinear(j)]  # fmt: skip
     proxies = [(i, j) for i, j in proxies if not effects(i) <= effects(j)]
     mimics |= {id(e): Mimic(case, dof, e) for pair in proxies for e in pair}
     per_line, same = {}, []
