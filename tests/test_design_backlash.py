@@ -138,7 +138,7 @@ def test_a_play_the_standard_signals_hid_is_named_after_the_designed_run(tmp_pat
     write_report(first, tmp_path / "diagnosis", figures=False)
     plan = design_from(tmp_path / "diagnosis")
     assert plan.decides
-    peaks = [p for p, _ in plan.levels]
+    peaks = [p for p, *_ in plan.levels]
     assert len(peaks) >= 2 and peak_position(plan.signal, "roll") < max(peaks)
     new = play(h.truth, h.config, plan.signal, tmp_path / "designed", 7919 * h.seed + 3,
                imu=h.imu)  # fmt: skip
