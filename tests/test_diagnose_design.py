@@ -179,6 +179,54 @@ def test_the_closest_linear_sets_the_diagnosis_fitted_are_rivals_too():
     assert sets == {**expected, ("backlash",): False}
 
 
+def test_the_set_a_gate_reduced_is_an_explanation_whole():
+    """A member the held-out gate (or the negligible rule) took out leaves its set a primary."""
+    from twin.diagnose.design import explanations_of
+
+    named = {"sensor_filter": {"cutoff_hz": 8.6, "channels": ["ay"]}}
+    whole = {"platform_filter": {"break_hz": 1.08}, "sensor_filter": {"cutoff_hz": 5.1}}
+    rival = {
+        "platform_filter": {"break_hz": 1.06},
+        "resonance": {"frequency_hz": 11.7, "damping": 1.0},
+    }
+    finding = {
+        "effect": "sensor_filter",
+        "parameters": named["sensor_filter"],
+        "dofs": ["sway"],
+        "ambiguous": True,
+        "alternatives": [{"effects": ["platform_filter", "resonance"], "parameters": rival}],
+        "evidence": {"set": ["sensor_filter"], "dropped_as_negligible": ["platform_filter"]},
+    }
+    sets_tried = [
+        {"effects": ["platform_filter", "sensor_filter"], "parameters": whole, "nameable": True},
+        {"effects": ["platform_filter", "resonance"], "parameters": rival, "nameable": True},
+    ]
+    doc = {"findings": [finding], "nominal": {"dofs": {"sway": {"sets_tried": sets_tried}}}}
+    _, expls = explanations_of(doc)
+    by_set = {tuple(sorted(x.effect for x in e.extensions)): e for e in expls}
+    kept = by_set["platform_filter", "sensor_filter"]
+    assert kept.primary
+    # with the parameters of the set as fitted, not those of the member left
+    assert {x.effect: x.parameters for x in kept.extensions}["sensor_filter"]["cutoff_hz"] == 5.1
+    assert by_set["sensor_filter",].primary and by_set["platform_filter", "resonance"].primary
+
+    def primary_of_whole() -> bool:
+        return next(
+            e.primary for e in explanations_of(doc)[1] if len(e.extensions) == 2
+            and {x.effect for x in e.extensions} == {"platform_filter", "sensor_filter"}
+        )  # fmt: skip
+
+    # no member taken out: the set is only a rival (a close set the runs did not prefer)
+    finding["evidence"] = {"set": ["sensor_filter"]}
+    assert not primary_of_whole()
+    # a member the held-out gate took out counts as one too small to matter does
+    finding["evidence"] = {
+        "set": ["sensor_filter"],
+        "dropped_by_held_out_gate": ["platform_filter"],
+    }
+    assert primary_of_whole()
+
+
 def _designed() -> DesignResult:
     best = Candidate(1.0, 0.5, 100.0, 120.0, {("delay", "lead"): 60.0, ("lead", "delay"): 45.0})
     sig = SimpleNamespace(frequencies_hz=np.array([1.0]), amplitudes=np.array([0.5]))

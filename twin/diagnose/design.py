@@ -298,13 +298,22 @@ def explanations_of(doc: dict, finding: int = 0) -> tuple[str, list[Explanation]
     )
     out = [Explanation(" + ".join(x.describe() for x in named), named)]
     for a in alts:
-        exts = tuple(
-            make_extension(e, list(a["parameters"][e]), list(a["parameters"][e].values()), dof)
-            for e in a["effects"]
-        )
+        exts = _extensions(a, dof)
+        out.append(Explanation(" + ".join(x.describe() for x in exts), exts))
+    tried = doc["nominal"]["dofs"][dof]
+    # the set the runs' BIC chose, before the held-out gate or the negligible rule took a
+    # member out: the runs did not rule it out, the designed run must tell it from the rest
+    ev = f["evidence"]
+    support = (
+        members
+        | set(ev.get("dropped_by_held_out_gate") or [])
+        | set(ev.get("dropped_as_negligible") or [])
+    )
+    whole = [r for r in tried.get("sets_tried", []) if set(r["effects"]) == support]
+    if support != members and whole:
+        exts = _extensions(whole[0], dof)
         out.append(Explanation(" + ".join(x.describe() for x in exts), exts))
     have = {tuple(sorted(x.effect for x in e.extensions)) for e in out}
-    tried = doc["nominal"]["dofs"][dof]
     near = [  # the closest sets the diagnosis fitted: a new run may make any of them nameable
         r for r in tried.get("sets_tried", []) if set(r["effects"]) <= set(LINEAR_EFFECTS)
     ]  # fmt: skip
@@ -313,12 +322,17 @@ def explanations_of(doc: dict, finding: int = 0) -> tuple[str, list[Explanation]
             continue
         if "backlash" in r["effects"] and not r.get("nameable"):
             continue  # a play the runs do not ask for (its search found none): no rival
-        exts = tuple(
-            make_extension(e, list(r["parameters"][e]), list(r["parameters"][e].values()), dof)
-            for e in r["effects"]
-        )
+        exts = _extensions(r, dof)
         out.append(Explanation(" + ".join(x.describe() for x in exts), exts, primary=False))
     return dof, out
+
+
+def _extensions(row: dict, dof: str) -> tuple[Extension, ...]:
+    """Return the extensions of a fitted set as ``diagnosis.json`` lists it."""
+    return tuple(
+        make_extension(e, list(row["parameters"][e]), list(row["parameters"][e].values()), dof)
+        for e in row["effects"]
+    )
 
 
 def detection_explanations(doc: dict, dof: str, effect: str) -> list[Explanation]:
@@ -670,30 +684,42 @@ def design_run(
 
     # the lines are chosen on linear responses: a pair whose explanations both hold a backlash
     # by their linear parts (the play common to both), then weighed whole by simulation; a
-    # pair with a play on one side only has no linear stand-in (the play may be the difference)
+    # pair with a play on one side only has no linear stand-in (the play may be the
+    # difference) unless no other pair has one: then its linear parts are the guide (the
+    # play's share of the response fades as the motion grows; the amplitudes tried and the
+    # simulations weigh the rest)
     def linear_part(e: Explanation) -> Explanation:
         return Explanation(e.label, tuple(x for x in e.extensions if x.effect != "backlash"),
                            e.primary)  # fmt: skip
 
-    proxies = [(linear_part(i), linear_part(j)) for i, j in simulated
-               if nonlinear(i) and nonlinear(j)]  # fmt: skip
-    proxies = [(i, j) for i, j in proxies if not effects(i) <= effects(j)]
-    mimics |= {id(e): Mimic(case, dof, e) for pair in proxies for e in pair}
-    per_line, same = {}, []
+    def stand_ins(both: bool) -> list[tuple[Explanation, Explanation]]:
+        out = [(linear_part(i), linear_part(j)) for i, j in simulated
+               if (nonlinear(i) and nonlinear(j)) == both]  # fmt: skip
+        return [(i, j) for i, j in out if not effects(i) <= effects(j)]
+
+    per_line: dict[tuple[str, str], FloatArray] = {}
+    same: list[tuple[Explanation, Explanation]] = []
     everything = past + band
-    for n, (i, j) in enumerate([*pairs, *proxies]):
-        if progress:
-            progress("design: refitting each explanation to the others", n, len(pairs))
-        theta = mimics[id(j)].fit(response(i, everything.f), everything)
-        if mimics[id(j)].at_bound(theta):
-            continue  # j mimics i only at the edge of what it can be: not an explanation
-        d = response(i, band.f) - mimics[id(j)].response(theta, band.f)
-        e = 2 * np.abs(d) ** 2 * band.amplitude**2 / band.noise**2
-        if np.max(np.abs(d / response(i, band.f))) < SAME_RESPONSE:  # the same response
-            if (i, j) in pairs:
-                same.append((i, j))
-        else:
-            per_line[i.label, j.label] = e
+
+    def weigh_lines(todo: list[tuple[Explanation, Explanation]]) -> None:
+        mimics.update({id(e): Mimic(case, dof, e) for pair in todo for e in pair})
+        for n, (i, j) in enumerate(todo):
+            if progress:
+                progress("design: refitting each explanation to the others", n, len(todo))
+            theta = mimics[id(j)].fit(response(i, everything.f), everything)
+            if mimics[id(j)].at_bound(theta):
+                continue  # j mimics i only at the edge of what it can be: not an explanation
+            d = response(i, band.f) - mimics[id(j)].response(theta, band.f)
+            e = 2 * np.abs(d) ** 2 * band.amplitude**2 / band.noise**2
+            if np.max(np.abs(d / response(i, band.f))) < SAME_RESPONSE:  # the same response
+                if (i, j) in pairs:
+                    same.append((i, j))
+            else:
+                per_line[i.label, j.label] = e
+
+    weigh_lines([*pairs, *stand_ins(both=True)])
+    if not per_line:
+        weigh_lines(stand_ins(both=False))
     chosen: list[int] = []
 
     def score_of(sums: Sequence[float]) -> tuple[float, float]:
