@@ -15,7 +15,8 @@ from twin.chain.config import motion_system
 from twin.chain.extensions import Extension
 from twin.diagnose.diagnosis import diagnose
 from twin.diagnose.hidden import record_runs
-from twin.diagnose.sensor_side import platform_reading
+from twin.diagnose.select import Finding
+from twin.diagnose.sensor_side import platform_reading, rule_out_by_noise, ruled_out_text
 from twin.platform.payload import Payload
 from twin.platform.platform_physics import PlatformPhysics
 
@@ -77,3 +78,38 @@ def test_the_platform_reading_has_the_sensor_filters_line_response():
     cfg = motion_system("srs").replace(extensions=(platform,))
     h = cfg.response_at_hz(f)[:, 4] / motion_system("srs").response_at_hz(f)[:, 4]
     assert np.allclose(h, sensor.response(f), rtol=1e-9)  # the chain's block is the same lag
+
+
+def _finding(verdict: str, alternatives: list[dict]) -> Finding:
+    sensor = Extension("sensor_filter", {"cutoff_hz": 5.0, "channels": ("q",)}, ("pitch",))
+    side = {"verdict": verdict, "noise_evidence_platform_over_sensor": -240.0}
+    evidence = {"delta_bic": 900.0, "set": ["sensor_filter"], "side": side,
+                "alternatives": alternatives, "ambiguous": bool(alternatives)}  # fmt: skip
+    return Finding(sensor, evidence)
+
+
+def _alt(*effects: str, below: float = 6.7) -> dict:
+    return {"effects": list(effects), "parameters": {}, "delta_bic_below_named": below}
+
+
+def test_a_filtered_noise_rules_out_the_alternatives_outside_the_sensor():
+    """Delay + resonance can match a sensor filter's lines; not the noise it filtered."""
+    platform_side = _alt("delay", "resonance", below=8.0)
+    other_cutoff = _alt("delay", "sensor_filter", below=3.3)
+    (f,) = rule_out_by_noise([_finding("sensor", [platform_side])])
+    assert not f.ambiguous and f.evidence["alternatives"] == []
+    (gone,) = f.evidence["ruled_out_by_noise"]
+    assert gone["effects"] == ["delay", "resonance"] and gone["noise_evidence_against"] == 240.0
+    text = ruled_out_text(f)
+    assert text is not None and "delay + resonance" in text and "240" in text
+    # an alternative that filters the sensor too stays: the noise cannot tell the cut-offs
+    (f,) = rule_out_by_noise([_finding("sensor", [platform_side, other_cutoff])])
+    assert f.ambiguous and f.evidence["alternatives"] == [other_cutoff]
+
+
+@pytest.mark.parametrize("verdict", ["undecided", "platform"])
+def test_a_noise_that_cannot_tell_rules_nothing_out(verdict):
+    alts = [_alt("delay", "resonance")]
+    (f,) = rule_out_by_noise([_finding(verdict, alts)])
+    assert f.ambiguous and f.evidence["alternatives"] == alts
+    assert ruled_out_text(f) is None

@@ -54,7 +54,7 @@ from twin.diagnose.select import (
     negligible_text,
     same_response_text,
 )
-from twin.diagnose.sensor_side import decide_side, side_text
+from twin.diagnose.sensor_side import decide_side, rule_out_by_noise, ruled_out_text, side_text
 from twin.formats.run_checks import check_distinct, read_plausible_run
 from twin.formats.runs import RecordedRun
 
@@ -336,7 +336,7 @@ class Diagnosis:
             key = ("same", tuple(f.extension.dofs), tuple(f.evidence.get("set") or ()))
             if key not in shown:  # once per named set
                 shown.append(key)
-                for text in (same_response_text(f), negligible_text(f)):
+                for text in (same_response_text(f), negligible_text(f), ruled_out_text(f)):
                     if text is not None:
                         out.append(f"   {text}")
             side = f.evidence.get("side")
@@ -551,6 +551,7 @@ def diagnose(
         effects = tuple(e for e in DYNAMIC if e not in case.unidentifiable)
         findings, fitted, sel = name_causes(case, dof, base, val, effects, progress, max_hz)
         fitted, findings = decide_side(fitted, findings, imu_noise)  # sensor or platform
+        findings = rule_out_by_noise(findings)  # alternatives the filtered noise rules out
         if progress:
             progress(f"{dof}: noise")
         noise = judge_noise(fitted, BIC_MARGIN, max_hz, imu_noise)

@@ -17,7 +17,7 @@ from twin.diagnose.diagnosis import Diagnosis, DofReport
 from twin.diagnose.physical import SOURCE_TEXT, PhysicalResult
 from twin.diagnose.residual_figure import plot_residual
 from twin.diagnose.select import describe_alternative, negligible_text, same_response_text
-from twin.diagnose.sensor_side import side_text
+from twin.diagnose.sensor_side import ruled_out_text, side_text
 
 #: What a payload's factor means, with and without the legs' forces among the evidence.
 PAYLOAD_IMU = ("The factor is on the cabin's mass and inertia together: from the IMU alone a "
@@ -107,7 +107,7 @@ def summary(d: Diagnosis) -> str:
             out.append(f"   - {f.evidence['preference']}")
         if "side" in f.evidence:
             out.append(f"   - {side_text(f.evidence['side'])}")
-        for text in (same_response_text(f), negligible_text(f)):
+        for text in (same_response_text(f), negligible_text(f), ruled_out_text(f)):
             if text is not None:
                 out.append(f"   - {text}")
         alts = f.evidence.get("alternatives") or []

@@ -24,6 +24,12 @@ on the measurement's noise up to :data:`SIDE_BAND_HZ` (above the lines' default 
   run's off-line power is then not the IMU's noise alone (a designed run with lines at the
   platform's limits puts power between its lines: Table 5.2's two runs read -750 and -460, a
   sensor filter, and a designed run at 10-15 Hz of the same truth +3600).
+
+The same noise weighs the named set's alternatives (:func:`rule_out_by_noise`): where it
+shows the sensor filter the lines named (verdict ``sensor``), an alternative without a sensor
+filter (a delay with a resonance, say, which can match the lines as well) leaves the filtered
+noise unexplained: the noise's evidence against it is beyond the margin on top of whatever the
+lines hold against it. It is listed as ruled out by the noise, not as an alternative.
 """
 
 from __future__ import annotations
@@ -193,6 +199,52 @@ def side_verdict(
         return "undecided"  # the runs disagree: one's off-line power is not the IMU's noise
     return "platform" if evidence > BIC_MARGIN else "sensor" if evidence < -BIC_MARGIN else (
         "undecided")  # fmt: skip
+
+
+def rule_out_by_noise(findings: list[Finding]) -> list[Finding]:
+    """Take out of each finding's alternatives those its noise judgement rules out.
+
+    Where a finding's ``side`` verdict is ``sensor`` (the measurement's noise is filtered as the
+    named sensor filter says), every alternative without a ``sensor_filter`` is moved to the
+    evidence's ``ruled_out_by_noise``, each with the noise evidence against it; a finding whose
+    alternatives all go is no longer ambiguous. Alternatives that hold a sensor filter stay (the
+    noise cannot tell their cut-off from the named one's: the lines do).
+    """
+    out = []
+    for f in findings:
+        side = f.evidence.get("side")
+        alts: list[dict] = f.evidence.get("alternatives") or []  # type: ignore[assignment]
+        if not alts or not isinstance(side, dict) or side["verdict"] != "sensor":
+            out.append(f)
+            continue
+        against = -float(side["noise_evidence_platform_over_sensor"])
+        gone = [a | {"noise_evidence_against": against} for a in alts
+                if "sensor_filter" not in a["effects"]]  # fmt: skip
+        if not gone:
+            out.append(f)
+            continue
+        kept = [a for a in alts if "sensor_filter" in a["effects"]]
+        evidence = {**f.evidence, "alternatives": kept, "ambiguous": bool(kept),
+                    "ruled_out_by_noise": gone}  # fmt: skip
+        out.append(replace(f, evidence=evidence))
+    return out
+
+
+def ruled_out_text(f: Finding) -> str | None:
+    """Return the alternatives the noise ruled out beside a finding, in words (None: none)."""
+    gone = f.evidence.get("ruled_out_by_noise") or []
+    if not gone:
+        return None
+    sets = "; ".join(
+        " + ".join(a["effects"]) + f" (BIC {a['delta_bic_below_named']:.1f} lower on the lines)"
+        for a in gone  # type: ignore[union-attr]
+    )
+    against = float(gone[0]["noise_evidence_against"])  # type: ignore[index]
+    return (
+        "ruled out by the noise (the sensor's noise is filtered as the named cut-off says, which "
+        f"no effect outside the sensor explains: noise evidence {against:.0f} against each): "
+        + sets
+    )
 
 
 def decide_side(
