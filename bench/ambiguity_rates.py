@@ -65,6 +65,7 @@ from twin.diagnose.hidden import (  # noqa: E402
     play,
     record,
     truth_delta_bic,
+    values_within_tolerance,
 )
 from twin.diagnose.report import write_report  # noqa: E402
 from twin.diagnose.select import BIC_MARGIN  # noqa: E402
@@ -90,6 +91,7 @@ def _designed(h: Hidden, old: list[Path], d: Diagnosis, work: Path) -> dict[str,
     top = [f for f in again.findings if f.extension.effect != "noise" or "noise" in h.effects]
     return {
         "verdict": judged(h, again),
+        "values_within_tolerance": values_within_tolerance(h, again),
         "decides": plan.decides,
         "weakest": plan.best.weakest,
         "lines_hz": [float(f) for f in plan.signal.frequencies_hz],
@@ -125,6 +127,7 @@ def _job(
         true_dbic, named_dbic = truth_delta_bic(h, d)
         row |= {
             "verdict": verdict,
+            "values_within_tolerance": values_within_tolerance(h, d),
             "first": top.extension.describe() if top else None,
             "first_effect": top.extension.effect if top else None,
             "first_ambiguous": bool(top.ambiguous) if top else False,
@@ -215,6 +218,11 @@ def report(rows: list[dict[str, object]]) -> dict[str, object]:
           f"{len(wrong)} wrong draws with hidden effects")  # fmt: skip
     print(f"wrong draws whose first finding is the nuisance's platform filter: "
           f"{len(nuisance_filter)}")  # fmt: skip
+    right = [r for r in done if r["verdict"] == "right" and r["effects"]]
+    close = sum(1 for r in right if r.get("values_within_tolerance"))
+    summary["right_values_within_tolerance"] = [close, len(right)]
+    print(f"named right with every value within the tolerance (5 ms for a delay, 20 % "
+          f"otherwise): {close} of {len(right)}")  # fmt: skip
     ambiguous = sum(1 for r in done if r["verdict"] == "ambiguous")
     print(f"ambiguous: {ambiguous} of {len(done)}; errors: {summary['errors']}")
     designed = [r["designed"] for r in done if "designed" in r]
@@ -222,16 +230,20 @@ def report(rows: list[dict[str, object]]) -> dict[str, object]:
         after = Counter(d["verdict"] for d in designed)  # type: ignore[index]
         expected = sum(1 for d in designed if d["decides"])  # type: ignore[index]
         right = after["right"] / len(designed)
+        close = sum(1 for d in designed
+                    if d["verdict"] == "right" and d.get("values_within_tolerance"))  # type: ignore[index]  # fmt: skip
         summary |= {
             "designed": len(designed),
             "designed_counts": dict(after),
             "designed_right_rate": right,
             "designed_expected_to_decide": expected,
+            "designed_right_values_within_tolerance": close,
         }
         print(f"\nafter one designed run, of {len(designed)} draws whose first finding was "
               "ambiguous: " + " / ".join(f"{after[v]} {v}" for v in VERDICTS)
               + f"; named right {100 * right:.0f} % (target >= 90 %); the design expected "
-              f"to decide {expected}")  # fmt: skip
+              f"to decide {expected}; named right with every value within the tolerance "
+              f"{close}")  # fmt: skip
     return summary
 
 

@@ -12,6 +12,7 @@ from types import SimpleNamespace
 import pytest
 
 from twin.chain.config import motion_system
+from twin.chain.extensions import Extension
 from twin.diagnose.hidden import (
     NUISANCE_RANGES,
     Nuisance,
@@ -20,6 +21,7 @@ from twin.diagnose.hidden import (
     draw_nuisance,
     hidden_signal,
     judged,
+    values_within_tolerance,
 )
 
 
@@ -157,3 +159,26 @@ def test_the_judge_counts_the_moved_filter(truth, findings, verdict):
         config=SimpleNamespace(filter_break_hz=1.0),
     )
     assert judged(h, SimpleNamespace(findings=findings)) == verdict  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize(
+    ("named", "close"),
+    [
+        ({"delay": 0.024, "gain": 0.93}, True),
+        ({"delay": 0.0245, "gain": 0.9}, True),  # 4.5 ms off; 0.9 is 3 % off 0.93
+        ({"delay": 0.026, "gain": 0.93}, False),  # 6 ms off (5 ms allowed)
+        ({"delay": 0.02, "gain": 0.7}, False),  # 25 % off (20 % allowed)
+        ({"delay": 0.02}, False),  # the gain not named
+    ],
+)
+def test_values_within_the_tolerance(named, close):
+    """A named effect counts only with its values near the truth's (5 ms for a delay, 20 %)."""
+    delay = Extension("delay", {"extra_delay_s": 0.02}, ("heave",))
+    gain = Extension("gain", {"gain": 0.93}, ("heave",))
+    h = SimpleNamespace(extensions=(delay, gain))
+    findings = [
+        SimpleNamespace(extension=Extension("delay", {"extra_delay_s": v}, ("heave",)))
+        if e == "delay" else SimpleNamespace(extension=Extension("gain", {"gain": v}, ("heave",)))
+        for e, v in named.items()
+    ]  # fmt: skip
+    assert values_within_tolerance(h, findings) is close  # type: ignore[arg-type]

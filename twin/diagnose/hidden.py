@@ -699,6 +699,27 @@ def judged(hidden: Hidden, diagnosis: object) -> str:
     return "right" if truth <= named else "none"
 
 
+def values_within_tolerance(hidden: Hidden, diagnosis: object) -> bool:
+    """Whether every hidden effect is named with its values within the tests' tolerances.
+
+    Each numeric parameter of each hidden effect (motion noise aside: its scale is judged on its
+    own) against the finding of that effect: within :data:`TOLERANCE` (absolute) or
+    :data:`RELATIVE_TOLERANCE` of the true value. False where an effect is not named.
+    """
+    findings = list(getattr(diagnosis, "findings", diagnosis))
+    for true in hidden.extensions:
+        if true.effect == "noise":
+            continue
+        named = next((f.extension for f in findings if f.extension.effect == true.effect), None)
+        if named is None:
+            return False
+        for par in numeric_names(true.effect):
+            tol = TOLERANCE.get(par, RELATIVE_TOLERANCE * abs(true.value(par)))
+            if abs(named.value(par) - true.value(par)) > tol:
+                return False
+    return True
+
+
 def _names_moved_filter(hidden: Hidden, ext: Extension) -> bool:
     """Whether ``ext`` is a platform filter at the break the draw's nuisances moved it to."""
     moved = hidden.nuisance is not None and hidden.nuisance.filter_break != 1.0
