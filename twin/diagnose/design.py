@@ -313,20 +313,6 @@ def explanations_of(doc: dict, finding: int = 0) -> tuple[str, list[Explanation]
     if support != members and whole:
         exts = _extensions(whole[0], dof)
         out.append(Explanation(" + ".join(x.describe() for x in exts), exts))
-    # the sets the runs' BIC ranks above every explanation so far that add one effect to the
-    # named set, not nameable on its own: the runs neither show that effect nor rule it out
-    keys = {frozenset(x.effect for x in e.extensions) for e in out}
-    rows = tried.get("sets_tried", [])
-    top = max((float(r["delta_bic"]) for r in rows if frozenset(r["effects"]) in keys),
-              default=np.inf)  # fmt: skip
-    for r in rows:
-        if (
-            len(set(r["effects"]) - members) == 1
-            and members < set(r["effects"])
-            and (float(r["delta_bic"]) > top and frozenset(r["effects"]) not in keys)
-        ):
-            exts = _extensions(r, dof)
-            out.append(Explanation(" + ".join(x.describe() for x in exts), exts))
     have = {tuple(sorted(x.effect for x in e.extensions)) for e in out}
     near = [  # the closest sets the diagnosis fitted: a new run may make any of them nameable
         r for r in tried.get("sets_tried", []) if set(r["effects"]) <= set(LINEAR_EFFECTS)
