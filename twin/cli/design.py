@@ -56,8 +56,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--budget-s",
         type=BUDGET_S,
-        default=120.0,
-        help=f"longest run, s ({BUDGET_S.span}; default 120)",
+        default=300.0,
+        help=f"longest run, s ({BUDGET_S.span}; default 300: the run is the shortest "
+        "expected to decide, up to this)",
     )
     p.set_defaults(func=_cmd_design)
 

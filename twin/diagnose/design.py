@@ -41,6 +41,7 @@ if TYPE_CHECKING:
 from twin.chain.config import MotionSystem
 from twin.chain.extensions import Extension
 from twin.chain.signals import (
+    WINDOW_S,
     DescribingSignal,
     MultiSine,
     base_frequency,
@@ -90,7 +91,7 @@ LINEAR_EFFECTS = (
 #: Effects a run can be designed to show (the linear ones, and a backlash by simulation).
 DESIGNABLE = (*LINEAR_EFFECTS, "backlash")
 #: Default time budget of the designed run [s].
-BUDGET_S = 120.0
+BUDGET_S = 300.0
 #: Lines of the designed multisine.
 LINES = 3
 #: Least position amplitude of a line, in plays of an explanation's backlash: a line within the
@@ -595,10 +596,47 @@ def amplitude_levels(sig: DescribingSignal, dof: str, play: float) -> list[float
     return [1.0, *(k * play / peak for k in PLAYS_TRIED if k * play < peak)]
 
 
-def scaled(sig: DescribingSignal, dof: str, factor: float) -> DescribingSignal:
-    """Return the same multisine with every amplitude times ``factor`` (same window)."""
+def scaled(
+    sig: DescribingSignal, dof: str, factor: float, window_s: float | None = None
+) -> DescribingSignal:
+    """Return the same multisine with every amplitude times ``factor`` (window: the same)."""
     ms = MultiSine(np.asarray(sig.frequencies_hz), np.asarray(sig.amplitudes) * factor)
-    return periodic_signal(ms, dof, window_s=sig.window[1] - sig.window[0], label=sig.label)
+    window = sig.window[1] - sig.window[0] if window_s is None else window_s
+    return periodic_signal(ms, dof, window_s=window, label=sig.label)
+
+
+#: Chance to decide (:func:`deciding_chance`) a run is shortened to: the designed run is the
+#: shortest whole number of base periods whose expected evidence still reaches it.
+SURE = 0.95
+
+
+def shortest_window(evidence: Iterable[float], window_s: float, period_s: float) -> float:
+    """Return the shortest window that still decides with chance :data:`SURE` (or the whole).
+
+    The evidence of the new run grows with its measured time: each pair's is taken as
+    proportional to the window (the old runs' share, which does not shrink, left out: the
+    window returned is never too short). Where the whole window's chance is below
+    :data:`SURE`, the whole window is returned (the budget is the limit). Never shorter than
+    Table 5.2's window of :data:`twin.chain.signals.WINDOW_S` (20 s), in whole base periods.
+
+    Examples
+    --------
+    >>> shortest_window([400.0, 60.0], 100.0, 10.0)  # 60 -> 30 at 50 s: sure (24 is not)
+    50.0
+    >>> shortest_window([1e5], 100.0, 10.0)  # never below 20 s
+    20.0
+    >>> shortest_window([12.0], 100.0, 10.0)  # not sure to decide: the whole budget
+    100.0
+
+    """
+    e = np.asarray(list(evidence), dtype=float)
+    if deciding_chance(e) < SURE:
+        return window_s
+    first = max(1, int(np.ceil(WINDOW_S / period_s - 1e-9)))
+    for k in range(first, round(window_s / period_s) + 1):
+        if deciding_chance(e * k * period_s / window_s) >= SURE:
+            return k * period_s
+    return window_s
 
 
 def design_run(
@@ -769,6 +807,13 @@ def design_run(
     chances = [deciding_chance(r[3].values()) for r in runs]
     likely = [r for r, c in zip(runs, chances, strict=True) if c >= max(chances) - AS_LIKELY]
     _, n_best, sig, evidence = max(likely, key=lambda r: r[1])
+    # no longer than it needs to be: the shortest window still sure to decide
+    period = 1.0 / base_frequency(np.asarray(sig.frequencies_hz))
+    w_short = shortest_window(evidence.values(), w_new, period)
+    shortened = w_short < w_new - 1e-9
+    if shortened:
+        evidence = {k: v * w_short / w_new for k, v in evidence.items()}
+        sig, w_new = scaled(sig, dof, 1.0, w_short), w_short
     run = Candidate(
         float(sig.frequencies_hz.min()),
         float(np.max(sig.amplitudes)),
@@ -792,6 +837,12 @@ def design_run(
             + ", ".join(f"{c:.2f}" for *_, c in tried)
             + f"): the run is the one at {tried[n_best][0]:.3g}, the smallest motion of those "
             f"within {AS_LIKELY:g} of the likeliest"
+        )
+    if shortened:
+        notes.append(
+            f"the run is as short as it can be: {w_new:.0f} s measured, of {budget_s:g} s the "
+            f"budget allows, is expected to decide with a chance of {SURE:g} or more (each "
+            "pair's evidence taken as growing with the measured time)"
         )
     singles = tuple(
         Candidate(float(f), float(a), window, 0.0, {k: float(v[n]) for k, v in per_line.items()})
