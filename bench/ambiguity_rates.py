@@ -56,6 +56,8 @@ from twin.diagnose.hidden import (  # noqa: E402
     DOFS,
     DRAWN,
     NUISANCE_RANGES,
+    RELATIVE_TOLERANCE,
+    TOLERANCE,
     VERDICTS,
     Hidden,
     NuisanceRanges,
@@ -221,27 +223,27 @@ def report(rows: list[dict[str, object]]) -> dict[str, object]:
     right = [r for r in done if r["verdict"] == "right" and r["effects"]]
     close = sum(1 for r in right if r.get("values_within_tolerance"))
     summary["right_values_within_tolerance"] = [close, len(right)]
-    print(f"named right with every value within the tolerance (5 ms for a delay, 20 % "
-          f"otherwise): {close} of {len(right)}")  # fmt: skip
+    print(f"named right with every value within the tolerance ({TOLERANCE}, else "
+          f"{100 * RELATIVE_TOLERANCE:g} %): {close} of {len(right)}")  # fmt: skip
     ambiguous = sum(1 for r in done if r["verdict"] == "ambiguous")
     print(f"ambiguous: {ambiguous} of {len(done)}; errors: {summary['errors']}")
     designed = [r["designed"] for r in done if "designed" in r]
     if designed:
         after = Counter(d["verdict"] for d in designed)  # type: ignore[index]
         expected = sum(1 for d in designed if d["decides"])  # type: ignore[index]
-        right = after["right"] / len(designed)
+        rate = after["right"] / len(designed)
         close = sum(1 for d in designed
                     if d["verdict"] == "right" and d.get("values_within_tolerance"))  # type: ignore[index]  # fmt: skip
         summary |= {
             "designed": len(designed),
             "designed_counts": dict(after),
-            "designed_right_rate": right,
+            "designed_right_rate": rate,
             "designed_expected_to_decide": expected,
             "designed_right_values_within_tolerance": close,
         }
         print(f"\nafter one designed run, of {len(designed)} draws whose first finding was "
               "ambiguous: " + " / ".join(f"{after[v]} {v}" for v in VERDICTS)
-              + f"; named right {100 * right:.0f} % (target >= 90 %); the design expected "
+              + f"; named right {100 * rate:.0f} % (target >= 90 %); the design expected "
               f"to decide {expected}; named right with every value within the tolerance "
               f"{close}")  # fmt: skip
     return summary

@@ -8,6 +8,8 @@ MuJoCo model, with a heavier cabin); the diagnosis must name the right side.
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -15,7 +17,7 @@ from twin.chain.config import motion_system
 from twin.chain.extensions import Extension
 from twin.diagnose.diagnosis import diagnose
 from twin.diagnose.hidden import record_runs
-from twin.diagnose.select import Finding
+from twin.diagnose.select import MAX_ALTERNATIVES, Finding
 from twin.diagnose.sensor_side import platform_reading, rule_out_by_noise, ruled_out_text
 from twin.platform.payload import Payload
 from twin.platform.platform_physics import PlatformPhysics
@@ -80,36 +82,54 @@ def test_the_platform_reading_has_the_sensor_filters_line_response():
     assert np.allclose(h, sensor.response(f), rtol=1e-9)  # the chain's block is the same lag
 
 
-def _finding(verdict: str, alternatives: list[dict]) -> Finding:
+def _finding(verdict: str, alternatives: list[dict], ambiguous: bool = True) -> Finding:
     sensor = Extension("sensor_filter", {"cutoff_hz": 5.0, "channels": ("q",)}, ("pitch",))
     side = {"verdict": verdict, "noise_evidence_platform_over_sensor": -240.0}
     evidence = {"delta_bic": 900.0, "set": ["sensor_filter"], "side": side,
-                "alternatives": alternatives, "ambiguous": bool(alternatives)}  # fmt: skip
+                "alternatives": alternatives, "ambiguous": ambiguous}  # fmt: skip
     return Finding(sensor, evidence)
 
 
-def _alt(*effects: str, below: float = 6.7) -> dict:
-    return {"effects": list(effects), "parameters": {}, "delta_bic_below_named": below}
+def _alt(below: float = 6.7, **parameters) -> dict:
+    return {"effects": sorted(parameters), "parameters": parameters, "delta_bic_below_named": below}
 
 
-def test_a_filtered_noise_rules_out_the_alternatives_outside_the_sensor():
-    """Delay + resonance can match a sensor filter's lines; not the noise it filtered."""
-    platform_side = _alt("delay", "resonance", below=8.0)
-    other_cutoff = _alt("delay", "sensor_filter", below=3.3)
-    (f,) = rule_out_by_noise([_finding("sensor", [platform_side])])
-    assert not f.ambiguous and f.evidence["alternatives"] == []
-    (gone,) = f.evidence["ruled_out_by_noise"]
-    assert gone["effects"] == ["delay", "resonance"] and gone["noise_evidence_against"] == 240.0
-    text = ruled_out_text(f)
-    assert text is not None and "delay + resonance" in text and "240" in text
-    # an alternative that filters the sensor too stays: the noise cannot tell the cut-offs
-    (f,) = rule_out_by_noise([_finding("sensor", [platform_side, other_cutoff])])
-    assert f.ambiguous and f.evidence["alternatives"] == [other_cutoff]
+DELAY_RESONANCE = _alt(8.0, delay={"extra_delay_s": 0.03},
+                       resonance={"frequency_hz": 6.0, "damping": 0.7})  # fmt: skip
 
 
-@pytest.mark.parametrize("verdict", ["undecided", "platform"])
-def test_a_noise_that_cannot_tell_rules_nothing_out(verdict):
-    alts = [_alt("delay", "resonance")]
-    (f,) = rule_out_by_noise([_finding(verdict, alts)])
-    assert f.ambiguous and f.evidence["alternatives"] == alts
-    assert ruled_out_text(f) is None
+@pytest.mark.parametrize(
+    ("verdict", "alternatives", "ambiguous"),
+    [
+        ("undecided", [DELAY_RESONANCE], True),  # the noise cannot tell
+        ("platform", [DELAY_RESONANCE], True),
+        ("sensor", [DELAY_RESONANCE], False),  # alternatives beside a finding not ambiguous
+        ("sensor", [DELAY_RESONANCE] * MAX_ALTERNATIVES, True),  # others may not be weighed
+        ("sensor", [_alt(delay={"extra_delay_s": 0.0}, sensor_filter={"cutoff_hz": 6.0})], True),
+        ("sensor", [_alt(backlash={"play": 0.002})], True),  # its own off-line power
+    ],
+)
+def test_what_the_noise_leaves_alone(verdict, alternatives, ambiguous):
+    """Nothing is ruled out (nor a model needed) where the noise cannot or should not decide."""
+    f = _finding(verdict, alternatives, ambiguous)
+    (g,) = rule_out_by_noise(None, [f])  # type: ignore[arg-type]
+    assert g is f and ruled_out_text(g) is None
+
+
+def test_a_filtered_noise_rules_out_an_alternative_outside_the_sensor(tmp_path):
+    """Delay + resonance may match a 3 Hz gyro filter's lines; not the noise it filtered."""
+    srs = motion_system("srs")
+    filt = Extension("sensor_filter", {"cutoff_hz": 3.0, "channels": ("q",)}, ())
+    d = diagnose(record_runs(srs.replace(extensions=(filt,)), srs, "pitch", tmp_path, 4))
+    report = d.dofs["pitch"]
+    (named,) = report.findings
+    inside = _alt(3.0, gain={"gain": 0.98}, sensor_filter={"cutoff_hz": 3.2})
+    f = replace(named, evidence={**named.evidence, "ambiguous": True,
+                                 "alternatives": [DELAY_RESONANCE, inside]})  # fmt: skip
+    (g,) = rule_out_by_noise(report.model, [f])
+    assert g.ambiguous and g.evidence["alternatives"] == [inside]  # the other filter stays
+    (gone,) = g.evidence["ruled_out_by_noise"]
+    assert gone["effects"] == ["delay", "resonance"]
+    assert gone["noise_evidence_against"] > 10  # its own, beyond the BIC margin
+    text = ruled_out_text(g)
+    assert text is not None and "delay extra_delay_s 0.03 + resonance" in text

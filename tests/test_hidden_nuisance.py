@@ -175,7 +175,7 @@ def test_values_within_the_tolerance(named, close):
     """A named effect counts only with its values near the truth's (5 ms for a delay, 20 %)."""
     delay = Extension("delay", {"extra_delay_s": 0.02}, ("heave",))
     gain = Extension("gain", {"gain": 0.93}, ("heave",))
-    h = SimpleNamespace(extensions=(delay, gain))
+    h = SimpleNamespace(extensions=(delay, gain), dof="heave")
     findings = [
         SimpleNamespace(extension=Extension("delay", {"extra_delay_s": v}, ("heave",)))
         if e == "delay" else SimpleNamespace(extension=Extension("gain", {"gain": v}, ("heave",)))

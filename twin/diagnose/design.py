@@ -311,10 +311,14 @@ def explanations_of(doc: dict, finding: int = 0) -> tuple[str, list[Explanation]
         | set(ev.get("dropped_as_negligible") or [])
     )
     whole = [r for r in tried.get("sets_tried", []) if set(r["effects"]) == support]
-    if support != members and whole:
+    if (
+        support != members and whole and ("backlash" not in support or whole[0].get("nameable"))
+    ):  # a play the runs do not ask for (its search found none) is no explanation
         exts = _extensions(whole[0], dof)
         out.append(Explanation(" + ".join(x.describe() for x in exts), exts))
     have = {tuple(sorted(x.effect for x in e.extensions)) for e in out}
+    # what the noise ruled out is no rival (a new run's lines would not revive it)
+    have |= {tuple(sorted(a["effects"])) for a in ev.get("ruled_out_by_noise") or []}
     near = [  # the closest sets the diagnosis fitted: a new run may make any of them nameable
         r for r in tried.get("sets_tried", []) if set(r["effects"]) <= set(LINEAR_EFFECTS)
     ]  # fmt: skip
@@ -599,7 +603,10 @@ def amplitude_levels(sig: DescribingSignal, dof: str, play: float) -> list[float
 def scaled(
     sig: DescribingSignal, dof: str, factor: float, window_s: float | None = None
 ) -> DescribingSignal:
-    """Return the same multisine with every amplitude times ``factor`` (window: the same)."""
+    """Return the same multisine with every amplitude times ``factor``.
+
+    Its measurement window is ``window_s`` (default: the same as ``sig``'s).
+    """
     ms = MultiSine(np.asarray(sig.frequencies_hz), np.asarray(sig.amplitudes) * factor)
     window = sig.window[1] - sig.window[0] if window_s is None else window_s
     return periodic_signal(ms, dof, window_s=window, label=sig.label)
@@ -633,7 +640,7 @@ def shortest_window(evidence: Iterable[float], window_s: float, period_s: float)
     if deciding_chance(e) < SURE:
         return window_s
     first = max(1, int(np.ceil(WINDOW_S / period_s - 1e-9)))
-    for k in range(first, round(window_s / period_s) + 1):
+    for k in range(first, int(np.floor(window_s / period_s + 1e-9)) + 1):
         if deciding_chance(e * k * period_s / window_s) >= SURE:
             return k * period_s
     return window_s
@@ -664,7 +671,10 @@ def design_run(
     at the largest amplitude and at :data:`PLAYS_TRIED` plays of peak motion
     (:func:`amplitude_levels`). The run kept is the one likeliest to separate every pair
     (:func:`deciding_chance`) or, of runs within :data:`AS_LIKELY` of it, the smallest motion:
-    a stated preference, where a play shows most.
+    a stated preference, where a play shows most. Where only pairs with a play on one side
+    are left, their linear parts guide the lines. The run kept is then shortened to the
+    fewest whole base periods (at least 20 s) still expected to decide with a chance of
+    :data:`SURE` (:func:`shortest_window`); a run not expected to decide keeps the budget.
 
     Raises
     ------
@@ -809,7 +819,8 @@ def design_run(
     _, n_best, sig, evidence = max(likely, key=lambda r: r[1])
     # no longer than it needs to be: the shortest window still sure to decide
     period = 1.0 / base_frequency(np.asarray(sig.frequencies_hz))
-    w_short = shortest_window(evidence.values(), w_new, period)
+    decided = bool(evidence) and min(evidence.values()) > BIC_MARGIN
+    w_short = shortest_window(evidence.values(), w_new, period) if decided else w_new
     shortened = w_short < w_new - 1e-9
     if shortened:
         evidence = {k: v * w_short / w_new for k, v in evidence.items()}
@@ -840,9 +851,11 @@ def design_run(
         )
     if shortened:
         notes.append(
-            f"the run is as short as it can be: {w_new:.0f} s measured, of {budget_s:g} s the "
-            f"budget allows, is expected to decide with a chance of {SURE:g} or more (each "
-            "pair's evidence taken as growing with the measured time)"
+            f"shortened to {sig.commands.duration:.0f} s ({w_new:.0f} s measured; budget "
+            f"{budget_s:g} s): the fewest whole base periods, at least {WINDOW_S:g} s, expected "
+            f"to decide with a chance of {SURE:g} or more; the evidence above is scaled with "
+            "the measured time, the old runs' share too (a lower bound), and the amplitudes "
+            "tried are weighed at the whole budget"
         )
     singles = tuple(
         Candidate(float(f), float(a), window, 0.0, {k: float(v[n]) for k, v in per_line.items()})

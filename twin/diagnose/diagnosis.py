@@ -551,7 +551,7 @@ def diagnose(
         effects = tuple(e for e in DYNAMIC if e not in case.unidentifiable)
         findings, fitted, sel = name_causes(case, dof, base, val, effects, progress, max_hz)
         fitted, findings = decide_side(fitted, findings, imu_noise)  # sensor or platform
-        findings = rule_out_by_noise(findings)  # alternatives the filtered noise rules out
+        findings = rule_out_by_noise(fitted, findings, imu_noise)  # what the noise rules out
         if progress:
             progress(f"{dof}: noise")
         noise = judge_noise(fitted, BIC_MARGIN, max_hz, imu_noise)

@@ -702,15 +702,28 @@ def judged(hidden: Hidden, diagnosis: object) -> str:
 def values_within_tolerance(hidden: Hidden, diagnosis: object) -> bool:
     """Whether every hidden effect is named with its values within the tests' tolerances.
 
-    Each numeric parameter of each hidden effect (motion noise aside: its scale is judged on its
-    own) against the finding of that effect: within :data:`TOLERANCE` (absolute) or
-    :data:`RELATIVE_TOLERANCE` of the true value. False where an effect is not named.
+    Parameters
+    ----------
+    hidden : Hidden
+        The draw.
+    diagnosis : Diagnosis
+        Its diagnosis (or a list of findings).
+
+    Returns
+    -------
+    bool
+        Each numeric parameter of each hidden effect (motion noise aside: its scale is judged
+        on its own) against the finding of that effect in the draw's DOF: within
+        :data:`TOLERANCE` (absolute) or :data:`RELATIVE_TOLERANCE` of the true value. False
+        where an effect is not named there.
+
     """
     findings = list(getattr(diagnosis, "findings", diagnosis))
     for true in hidden.extensions:
         if true.effect == "noise":
             continue
-        named = next((f.extension for f in findings if f.extension.effect == true.effect), None)
+        named = next((f.extension for f in findings if f.extension.effect == true.effect
+                      and hidden.dof in f.extension.dofs), None)  # fmt: skip
         if named is None:
             return False
         for par in numeric_names(true.effect):

@@ -40,10 +40,10 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from twin.chain.extensions import Extension
-from twin.diagnose.candidates import Model
+from twin.diagnose.candidates import Model, make_extension
 from twin.diagnose.nuisance import fit_noise
 from twin.diagnose.residuals import segment
-from twin.diagnose.select import BIC_MARGIN, Finding
+from twin.diagnose.select import BIC_MARGIN, MAX_ALTERNATIVES, Finding, describe_alternative
 
 #: Top of the band the two readings' noise is scored on [Hz]. The nominal noise model follows
 #: the measured noise up to about 30 Hz of the 100 Hz analysis grid; above it the IMU
@@ -201,29 +201,65 @@ def side_verdict(
         "undecided")  # fmt: skip
 
 
-def rule_out_by_noise(findings: list[Finding]) -> list[Finding]:
-    """Take out of each finding's alternatives those its noise judgement rules out.
+def rule_out_by_noise(
+    model: Model, findings: list[Finding], imu_noise: float | None = None
+) -> list[Finding]:
+    """Take out of each ambiguous finding's alternatives those the noise rules out.
 
-    Where a finding's ``side`` verdict is ``sensor`` (the measurement's noise is filtered as the
-    named sensor filter says), every alternative without a ``sensor_filter`` is moved to the
-    evidence's ``ruled_out_by_noise``, each with the noise evidence against it; a finding whose
-    alternatives all go is no longer ambiguous. Alternatives that hold a sensor filter stay (the
-    noise cannot tell their cut-off from the named one's: the lines do).
+    Only where the finding's ``side`` verdict is ``sensor`` (the measurement's noise is filtered
+    as the named sensor filter says): each alternative without a ``sensor_filter`` (and
+    without an effect of :data:`OFF_LINE_EFFECTS`, whose own off-line power the noise cannot
+    tell from the sensor's) is scored on the same noise as the named model, its own
+    ``2 (log L_named - log L_alternative)``; past the margin, with no run past it the other
+    way, it is moved to the evidence's ``ruled_out_by_noise`` with that figure. A finding whose
+    alternatives all go is no longer ambiguous. Where the alternatives listed reached
+    :data:`twin.diagnose.select.MAX_ALTERNATIVES` (others may not have been weighed), nothing
+    is taken out.
+
+    Parameters
+    ----------
+    model : Model
+        The DOF's fitted model (the named extensions), as :func:`judge_side` weighed it.
+    findings : list of Finding
+        The DOF's findings, each with its ``side`` judgement.
+    imu_noise : float, optional
+        The IMU's noise over its data sheet's when known (else fitted for each model).
+
     """
+    known = None if imu_noise is None else float(imu_noise) ** 2
+    segments: list | None = None
     out = []
     for f in findings:
         side = f.evidence.get("side")
         alts: list[dict] = f.evidence.get("alternatives") or []  # type: ignore[assignment]
-        if not alts or not isinstance(side, dict) or side["verdict"] != "sensor":
+        if (not f.ambiguous or not alts or len(alts) >= MAX_ALTERNATIVES
+                or not isinstance(side, dict) or side["verdict"] != "sensor"):  # fmt: skip
             out.append(f)
             continue
-        against = -float(side["noise_evidence_platform_over_sensor"])
-        gone = [a | {"noise_evidence_against": against} for a in alts
-                if "sensor_filter" not in a["effects"]]  # fmt: skip
+        kept, gone = [], []
+        for a in alts:
+            if "sensor_filter" in a["effects"] or set(a["effects"]) & set(OFF_LINE_EFFECTS):
+                kept.append(a)
+                continue
+            if segments is None:
+                segments = [segment(c, max_hz=SIDE_BAND_HZ) for c in model.case.of(model.dof)]
+            exts = [make_extension(e, list(a["parameters"][e]), list(a["parameters"][e].values()),
+                                   model.dof) for e in a["effects"]]  # fmt: skip
+            other = Model(model.case, model.dof, exts, None, model._cache)
+            per_run = [
+                2.0 * (fit_noise(model, [g], imu_fixed=known).loglik
+                       - fit_noise(other, [g], imu_fixed=known).loglik)
+                for g in segments
+            ]  # fmt: skip
+            against = 2.0 * (fit_noise(model, segments, imu_fixed=known).loglik
+                             - fit_noise(other, segments, imu_fixed=known).loglik)  # fmt: skip
+            if against > BIC_MARGIN and min(per_run) > -BIC_MARGIN:
+                gone.append(a | {"noise_evidence_against": float(against)})
+            else:
+                kept.append(a)
         if not gone:
             out.append(f)
             continue
-        kept = [a for a in alts if "sensor_filter" in a["effects"]]
         evidence = {**f.evidence, "alternatives": kept, "ambiguous": bool(kept),
                     "ruled_out_by_noise": gone}  # fmt: skip
         out.append(replace(f, evidence=evidence))
@@ -235,15 +271,13 @@ def ruled_out_text(f: Finding) -> str | None:
     gone = f.evidence.get("ruled_out_by_noise") or []
     if not gone:
         return None
-    sets = "; ".join(
-        " + ".join(a["effects"]) + f" (BIC {a['delta_bic_below_named']:.1f} lower on the lines)"
+    parts = "; ".join(
+        f"{describe_alternative(a)}, noise evidence {a['noise_evidence_against']:.0f} against it"
         for a in gone  # type: ignore[union-attr]
     )
-    against = float(gone[0]["noise_evidence_against"])  # type: ignore[index]
     return (
         "ruled out by the noise (the sensor's noise is filtered as the named cut-off says, which "
-        f"no effect outside the sensor explains: noise evidence {against:.0f} against each): "
-        + sets
+        "no effect outside the sensor explains): " + parts
     )
 
 
