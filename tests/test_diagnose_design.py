@@ -264,3 +264,19 @@ def test_a_design_follows_the_result_protocol():
     ]
     fig = d.plot()
     assert len(fig.axes[0].patches) == 2  # one bar per pair
+
+
+def test_the_cli_budget_is_the_designs():
+    """`twin design`'s default budget is the one `design_from` uses."""
+    from twin.cli.main import build_parser
+
+    args = build_parser().parse_args(["design", "some-diagnosis"])
+    assert args.budget_s == BUDGET_S
+
+
+def test_a_window_is_never_shortened_below_table_5_2s_nor_beyond_the_budget():
+    from twin.diagnose.design import shortest_window
+
+    assert shortest_window([1e5], 15.0, 10.0) == 15.0  # a budget shorter than 20 s: itself
+    assert shortest_window([1e5, 1e5], 300.0, 7.0) == 21.0  # whole periods, at least 20 s
+    assert shortest_window([], 300.0, 10.0) == 300.0  # nothing weighed: not sure of anything

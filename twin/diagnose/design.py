@@ -637,7 +637,7 @@ def shortest_window(evidence: Iterable[float], window_s: float, period_s: float)
 
     """
     e = np.asarray(list(evidence), dtype=float)
-    if deciding_chance(e) < SURE:
+    if not e.size or deciding_chance(e) < SURE:  # nothing weighed, or not sure: the budget
         return window_s
     first = max(1, int(np.ceil(WINDOW_S / period_s - 1e-9)))
     for k in range(first, int(np.floor(window_s / period_s + 1e-9)) + 1):
