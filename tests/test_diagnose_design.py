@@ -17,15 +17,13 @@ import pytest
 
 from twin.chain.config import motion_system
 from twin.chain.extensions import Extension
-from twin.chain.signals import WINDOW_S, check_signal
+from twin.chain.signals import check_signal
 from twin.chain.simulate import prepare
 from twin.cli.main import main
 from twin.diagnose.design import (
     BUDGET_S,
-    SURE,
     Candidate,
     DesignResult,
-    deciding_chance,
     design_from,
 )
 from twin.diagnose.diagnosis import diagnose
@@ -71,10 +69,6 @@ def test_design_writes_a_run_the_platform_can_play(diagnosed, tmp_path, capsys):
     run = doc["run"]
     assert len(run["frequencies_hz"]) == 3 and max(run["frequencies_hz"]) <= 15.0
     assert run["duration_s"] <= BUDGET_S + 1e-9
-    # no longer than it needs to be: a run half as long would not be as sure to decide
-    if doc["decides"] and run["window_s"] >= 2 * WINDOW_S:
-        half = [x["delta_bic"] / 2 for x in doc["expected_evidence"]]
-        assert deciding_chance(half) < SURE
     commands = read_commands(out / "commands.csv")
     check_signal(commands, "mpi")  # within the platform's limits (raises otherwise)
     # the schedule makes the same commands (the fade-out's end rounded to the command grid)

@@ -56,9 +56,14 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--budget-s",
         type=BUDGET_S,
-        default=300.0,
-        help=f"longest run, s ({BUDGET_S.span}; default 300: the run is the shortest "
-        "expected to decide, up to this)",
+        default=120.0,
+        help=f"longest run, s ({BUDGET_S.span}; default 120)",
+    )
+    p.add_argument(
+        "--shortest",
+        action="store_true",
+        help="shorten the run to the fewest whole base periods (at least 20 s) expected to "
+        "decide with chance 0.95 (off: the whole budget, evidence to spare)",
     )
     p.set_defaults(func=_cmd_design)
 
@@ -75,6 +80,7 @@ def _cmd_design(args: argparse.Namespace) -> int:
         args.dof,
         args.budget_s,
         common.progress(args),
+        args.shortest,
     )
     with replacing_dir(out, "design.json") as tmp:
         write_design(result, tmp)
