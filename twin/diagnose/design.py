@@ -753,11 +753,11 @@ def design_run(
     same: list[tuple[Explanation, Explanation]] = []
     everything = past + band
 
-    def weigh_lines(todo: list[tuple[Explanation, Explanation]]) -> None:
-        mimics.update({id(e): Mimic(case, dof, e) for pair in todo for e in pair})
-        for n, (i, j) in enumerate(todo):
+    def weigh_lines(to_weigh: list[tuple[Explanation, Explanation]]) -> None:
+        mimics.update({id(e): Mimic(case, dof, e) for pair in to_weigh for e in pair})
+        for n, (i, j) in enumerate(to_weigh):
             if progress:
-                progress("design: refitting each explanation to the others", n, len(todo))
+                progress("design: refitting each explanation to the others", n, len(to_weigh))
             theta = mimics[id(j)].fit(response(i, everything.f), everything)
             if mimics[id(j)].at_bound(theta):
                 continue  # j mimics i only at the edge of what it can be: not an explanation
