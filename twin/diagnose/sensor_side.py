@@ -42,7 +42,7 @@ import numpy as np
 from twin.chain.extensions import Extension
 from twin.diagnose.candidates import Model, make_extension
 from twin.diagnose.nuisance import fit_noise
-from twin.diagnose.residuals import segment
+from twin.diagnose.residuals import Segment, segment
 from twin.diagnose.select import BIC_MARGIN, MAX_ALTERNATIVES, Finding, describe_alternative
 
 #: Top of the band the two readings' noise is scored on [Hz]. The nominal noise model follows
@@ -151,17 +151,28 @@ def judge_side(model: Model, imu_noise: float | None = None) -> SideJudgement | 
     alternative = Model(model.case, model.dof, [*others, platform], model.anchor, model._cache)
     segments = [segment(c, max_hz=SIDE_BAND_HZ) for c in model.case.of(model.dof)]
     known = None if imu_noise is None else float(imu_noise) ** 2
-    l_sensor = fit_noise(model, segments, imu_fixed=known).loglik
-    l_platform = fit_noise(alternative, segments, imu_fixed=known).loglik
-    evidence = 2.0 * (l_platform - l_sensor)
-    per_run = [
-        2.0 * (fit_noise(alternative, [g], imu_fixed=known).loglik
-               - fit_noise(model, [g], imu_fixed=known).loglik)
-        for g in segments
-    ] if len(segments) > 1 else [evidence]  # fmt: skip
+    evidence, per_run = noise_evidence(alternative, model, segments, known)
     beside = any(e.effect in OFF_LINE_EFFECTS for e in others)
     verdict = side_verdict(evidence, per_run, sensor.value("cutoff_hz"), beside)
     return SideJudgement(sensor, platform, float(evidence), verdict, tuple(per_run))
+
+
+def noise_evidence(
+    a: Model, b: Model, segments: Sequence[Segment], imu_fixed: float | None
+) -> tuple[float, list[float]]:
+    """Return ``2 (log L_a - log L_b)`` of the noise over every run, and of each run alone.
+
+    Each model's noise power factors are fitted (the IMU's held at ``imu_fixed`` when known).
+    With one run, its own evidence is the total.
+    """
+
+    def loglik(m: Model, segs: Sequence[Segment]) -> float:
+        return fit_noise(m, segs, imu_fixed=imu_fixed).loglik
+
+    total = 2.0 * (loglik(a, segments) - loglik(b, segments))
+    if len(segments) < 2:
+        return total, [total]
+    return total, [2.0 * (loglik(a, [g]) - loglik(b, [g])) for g in segments]
 
 
 def side_verdict(
@@ -246,13 +257,7 @@ def rule_out_by_noise(
             exts = [make_extension(e, list(a["parameters"][e]), list(a["parameters"][e].values()),
                                    model.dof) for e in a["effects"]]  # fmt: skip
             other = Model(model.case, model.dof, exts, None, model._cache)
-            per_run = [
-                2.0 * (fit_noise(model, [g], imu_fixed=known).loglik
-                       - fit_noise(other, [g], imu_fixed=known).loglik)
-                for g in segments
-            ]  # fmt: skip
-            against = 2.0 * (fit_noise(model, segments, imu_fixed=known).loglik
-                             - fit_noise(other, segments, imu_fixed=known).loglik)  # fmt: skip
+            against, per_run = noise_evidence(model, other, segments, known)
             if against > BIC_MARGIN and min(per_run) > -BIC_MARGIN:
                 gone.append(a | {"noise_evidence_against": float(against)})
             else:
