@@ -26,9 +26,12 @@ from twin.cli.main import main
 from twin.diagnose.candidates import Model, SetFit
 from twin.diagnose.data import load_case
 from twin.diagnose.design import (
+    BEYOND_PLAY,
+    Explanation,
     _multisine,
     amplitude_levels,
     design_from,
+    design_run,
     measured_noise,
     peak_position,
     scaled,
@@ -166,3 +169,21 @@ def test_a_run_is_designed_to_show_a_play_the_runs_could_not(tmp_path, capsys):
                  "--out", str(tmp_path / "no")]) == 2  # fmt: skip
     err = capsys.readouterr().err
     assert "backlash" in err and "'noise'" in err and err.count("\n") == 1
+
+
+def test_small_fast_lines_ride_on_one_that_takes_the_play_up(weighed):
+    """A play with a delay against the same play with a lead: they differ at high frequency,
+    where no line the limits allow moves a few plays. A line that does carries the others."""
+    case, _ = weighed
+    delay = Extension("delay", {"extra_delay_s": -0.008}, ("roll",))
+    lead = Extension("lead", {"time_constant_s": 0.008}, ("roll",))
+    expls = [Explanation("play + delay", (BACKLASH, delay)),
+             Explanation("play + lead", (BACKLASH, lead))]  # fmt: skip
+    plan = design_run(case, expls, "roll")
+    f = np.asarray(plan.signal.frequencies_hz)
+    moves = np.asarray(plan.signal.amplitudes) / (2 * np.pi * f) ** 2  # position amplitude [rad]
+    # a fast line within the play (the old rule dropped every line moving under 3 plays)...
+    assert f.max() >= 5.0 and moves[np.argmax(f)] < BEYOND_PLAY * PLAY
+    # ... rides on a slower line: together they move through the play
+    assert moves.max() > 10 * moves[np.argmax(f)]
+    assert peak_position(plan.signal, "roll") > 2 * PLAY

@@ -22,6 +22,7 @@ from twin.chain.simulate import prepare
 from twin.cli.main import main
 from twin.diagnose.design import (
     BUDGET_S,
+    LINES,
     Candidate,
     DesignResult,
     design_from,
@@ -67,7 +68,7 @@ def test_design_writes_a_run_the_platform_can_play(diagnosed, tmp_path, capsys):
     assert main(["design", str(root / "diag"), "--out", str(out), "--json", "--quiet"]) == 0
     doc = json.loads(capsys.readouterr().out)
     run = doc["run"]
-    assert len(run["frequencies_hz"]) == 3 and max(run["frequencies_hz"]) <= 15.0
+    assert 1 <= len(run["frequencies_hz"]) <= LINES and max(run["frequencies_hz"]) <= 15.0
     assert run["duration_s"] <= BUDGET_S + 1e-9
     commands = read_commands(out / "commands.csv")
     check_signal(commands, "mpi")  # within the platform's limits (raises otherwise)

@@ -94,9 +94,12 @@ DESIGNABLE = (*LINEAR_EFFECTS, "backlash")
 BUDGET_S = 120.0
 #: Lines of the designed multisine.
 LINES = 3
-#: Least position amplitude of a line, in plays of an explanation's backlash: a line within the
-#: play moves nothing behind it (a run of such lines shows a platform at rest, which the run
-#: checks refuse as an IMU that does not follow its commands).
+#: Least position amplitude of a carrying line, in plays of an explanation's backlash: a line
+#: within the play moves nothing behind it (a run of such lines shows a platform at rest, which
+#: the run checks refuse as an IMU that does not follow its commands). Smaller, faster lines
+#: ride on a carrying one: its motion takes the play up, and they pass through the contact
+#: (where two explanations with the same play differ only at high frequency, a delay and a
+#: lead, only riders can tell them apart).
 BEYOND_PLAY = 3.0
 #: Expected evidence of a pair beyond which the design seeks no more for it (twice the
 #: margin: lines go to the pairs still below it, not to those already told apart).
@@ -573,6 +576,31 @@ def deciding_chance(evidence: Iterable[float]) -> float:
     return float(np.prod(stats.norm.cdf((e - BIC_MARGIN) / (2 * np.sqrt(e)))))
 
 
+def fewest_needed(
+    options: Sequence[tuple[DescribingSignal, dict[tuple[str, str], float]]],
+) -> DescribingSignal:
+    """Return the run to keep of ``options`` (most lines first, each with its evidence).
+
+    The likeliest to separate every pair (:func:`deciding_chance`); of those within
+    :data:`AS_LIKELY` of it, the one with the most lines (more of the band seen). Where none
+    is likely to (every chance within :data:`AS_LIKELY` of 0), the one whose weakest pair is
+    strongest: the run nearest to deciding.
+
+    Examples
+    --------
+    >>> fewest_needed([("three lines", {("a", "b"): 4.0}), ("one", {("a", "b"): 9.0})])
+    'one'
+    >>> fewest_needed([("three lines", {("a", "b"): 60.0}), ("one", {("a", "b"): 90.0})])
+    'three lines'
+
+    """
+    chances = [deciding_chance(ev.values()) for _, ev in options]
+    if max(chances) > AS_LIKELY:
+        return next(s for (s, _), c in zip(options, chances, strict=True)
+                    if c >= max(chances) - AS_LIKELY)  # fmt: skip
+    return max(options, key=lambda o: min(o[1].values(), default=np.inf))[0]
+
+
 def position_unit(dof: str) -> str:
     """Return the unit of a DOF's motion: m or rad."""
     return "m" if dof_index(dof) < 3 else "rad"
@@ -673,12 +701,16 @@ def design_run(
     (:func:`amplitude_levels`). The run kept is the one likeliest to separate every pair
     (:func:`deciding_chance`) or, of runs within :data:`AS_LIKELY` of it, the smallest motion:
     a stated preference, where a play shows most. Where only pairs with a play on one side
-    are left, their linear parts guide the lines. With ``shortest``, the run kept is then
-    shortened to the fewest whole base periods (at least 20 s) still expected to decide with a
-    chance of :data:`SURE` (:func:`shortest_window`); a run not expected to decide keeps the
-    budget. Off by default: on a hold-out the project does not see, a 15 ms delay that a
-    120 s run decided stayed ambiguous after the 22 s run this chose (the expected evidence
-    is a model's, and a run at the margin of it has none to spare).
+    are left, their linear parts guide the lines. With a play, at least one line carries (moves
+    :data:`BEYOND_PLAY` plays or more); smaller lines count only beside one. The multisine of
+    the lines chosen is weighed against those of its first two lines and its first line
+    (:func:`fewest_needed`): scaled as a whole to the limits, a line added can cost the others
+    more evidence than it brings. With ``shortest``, the run kept is then shortened to the
+    fewest whole base periods (at least 20 s) still expected to decide with a chance of
+    :data:`SURE` (:func:`shortest_window`); a run not expected to decide keeps the budget.
+    Off by default: on a hold-out the project does not see, a 15 ms delay that a 120 s run
+    decided stayed ambiguous after the 22 s run this chose (the expected evidence is a
+    model's, and a run at the margin of it has none to spare).
 
     Raises
     ------
@@ -693,18 +725,18 @@ def design_run(
     # a line that moves less than a few times the play of a backlash among the explanations
     # to tell apart shows only that nothing moves
     play = play_of(expls)
-    tops, keep = [], []
+    tops, keep, carries = [], [], []
     for f in freqs:
         top = _largest_amplitude(platform, dof, float(f))
-        if top is not None and top / (2 * np.pi * f) ** 2 < BEYOND_PLAY * play:
-            top = None
         if top is not None and _multisine(platform, dof, [(float(f), top)], budget_s):
             tops.append(top)
+            carries.append(top / (2 * np.pi * f) ** 2 >= BEYOND_PLAY * play)
             keep.append(True)
         else:
             keep.append(False)
     freqs, noise = freqs[keep], noise[keep]
-    if not freqs.size:
+    carrying = np.array(carries, dtype=bool)
+    if not carrying.any():
         raise SignalError(
             f"a budget of {budget_s:g} s is too short for any sine in {dof} "
             "(fades, settling and one period), or none fits the limits"
@@ -779,6 +811,8 @@ def design_run(
         return (sum(min(x, ENOUGH) for x in sums), min(sums, default=0.0))
 
     def score(lines_: list[int]) -> tuple[float, float]:
+        # lines within a few plays count only where a carrying line takes the play up
+        lines_ = lines_ if carrying[lines_].any() else []
         if not per_line:  # only pairs that need simulating: the lines the noise favours
             return (float(np.sum(band.amplitude[lines_] / band.noise[lines_])), 0.0)
         return score_of([float(v[lines_].sum()) for v in per_line.values()])
@@ -787,26 +821,48 @@ def design_run(
         best = max((k for k in range(freqs.size) if k not in chosen),
                    key=lambda k: score([*chosen, k]))  # fmt: skip
         chosen.append(best)
-    sig = _multisine(platform, dof, [(float(freqs[k]), tops[k]) for k in sorted(chosen)], budget_s)
-    if sig is None:
-        k = chosen[0]
-        sig = _multisine(platform, dof, [(float(freqs[k]), tops[k])], budget_s)
+    if not carrying[chosen].any():  # nothing takes the play up: the last line carries
+        chosen[-1] = max((k for k in np.flatnonzero(carrying) if k not in chosen),
+                         key=lambda k: score([*chosen[:-1], k]))  # fmt: skip
+
+    def noise_of(cand: DescribingSignal) -> FloatArray:
+        w = cand.window[1] - cand.window[0]
+        return np.interp(np.log(cand.frequencies_hz), np.log(freqs), noise) * np.sqrt(t_old / w)
+
+    def line_evidence(cand: DescribingSignal, noise_c: FloatArray) -> dict[tuple[str, str], float]:
+        both = past + LineSet(cand.frequencies_hz, np.asarray(cand.amplitudes), noise_c)
+        out = {}
+        for i, j in pairs:
+            if (i, j) not in same:
+                v = mimics[id(j)].evidence(response(i, both.f), both)
+                if v is not None:  # left out: j's refit lies at a bound (no explanation)
+                    out[i.label, j.label] = v
+        return out
+
+    # the lines chosen, then fewer of them: each multisine is scaled as a whole to the limits,
+    # so a line added can cost the others more than it brings
+    options = []
+    for n in range(len(chosen), 0, -1):
+        if carrying[chosen[:n]].any():
+            s = _multisine(platform, dof, [(float(freqs[k]), tops[k])
+                                           for k in sorted(chosen[:n])], budget_s)  # fmt: skip
+            if s is not None:
+                options.append(s)
+    if not options:
+        k = next(k for k in chosen if carrying[k])
+        options = [_multisine(platform, dof, [(float(freqs[k]), tops[k])], budget_s)]
+    sig = options[0]
     assert sig is not None
+    if len(options) > 1 and any(p not in same for p in pairs):
+        sig = fewest_needed([(s, line_evidence(s, noise_of(s))) for s in options])
     w_new = sig.window[1] - sig.window[0]
-    noise_new = np.interp(np.log(sig.frequencies_hz), np.log(freqs), noise) * np.sqrt(t_old / w_new)
+    noise_new = noise_of(sig)
     sim = SimulatedEvidence(case, dof, max_hz) if simulated else None
     levels = [1.0] if sim is None else amplitude_levels(sig, dof, play)
     runs = []
     for n, factor in enumerate(levels):
         cand = sig if factor == 1.0 else scaled(sig, dof, factor)
-        new = LineSet(cand.frequencies_hz, np.asarray(cand.amplitudes), noise_new)
-        both = past + new
-        evidence = {}
-        for i, j in pairs:
-            if (i, j) not in same:
-                v = mimics[id(j)].evidence(response(i, both.f), both)
-                if v is not None:
-                    evidence[i.label, j.label] = v
+        evidence = line_evidence(cand, noise_new)
         if sim is not None:
             if progress:
                 progress("design: simulating each explanation at each amplitude", n, len(levels))
