@@ -94,12 +94,9 @@ DESIGNABLE = (*LINEAR_EFFECTS, "backlash")
 BUDGET_S = 120.0
 #: Lines of the designed multisine.
 LINES = 3
-#: Least position amplitude of a carrying line, in plays of an explanation's backlash: a line
-#: within the play moves nothing behind it (a run of such lines shows a platform at rest, which
-#: the run checks refuse as an IMU that does not follow its commands). Smaller, faster lines
-#: ride on a carrying one: its motion takes the play up, and they pass through the contact
-#: (where two explanations with the same play differ only at high frequency, a delay and a
-#: lead, only riders can tell them apart).
+#: Least position amplitude of a line, in plays of an explanation's backlash: a line within the
+#: play moves nothing behind it (a run of such lines shows a platform at rest, which the run
+#: checks refuse as an IMU that does not follow its commands).
 BEYOND_PLAY = 3.0
 #: Expected evidence of a pair beyond which the design seeks no more for it (twice the
 #: margin: lines go to the pairs still below it, not to those already told apart).
@@ -701,8 +698,7 @@ def design_run(
     (:func:`amplitude_levels`). The run kept is the one likeliest to separate every pair
     (:func:`deciding_chance`) or, of runs within :data:`AS_LIKELY` of it, the smallest motion:
     a stated preference, where a play shows most. Where only pairs with a play on one side
-    are left, their linear parts guide the lines. With a play, at least one line carries (moves
-    :data:`BEYOND_PLAY` plays or more); smaller lines count only beside one. The multisine of
+    are left, their linear parts guide the lines. The multisine of
     the lines chosen is weighed against those of its first two lines and its first line
     (:func:`fewest_needed`): scaled as a whole to the limits, a line added can cost the others
     more evidence than it brings. With ``shortest``, the run kept is then shortened to the
@@ -725,18 +721,18 @@ def design_run(
     # a line that moves less than a few times the play of a backlash among the explanations
     # to tell apart shows only that nothing moves
     play = play_of(expls)
-    tops, keep, carries = [], [], []
+    tops, keep = [], []
     for f in freqs:
         top = _largest_amplitude(platform, dof, float(f))
+        if top is not None and top / (2 * np.pi * f) ** 2 < BEYOND_PLAY * play:
+            top = None
         if top is not None and _multisine(platform, dof, [(float(f), top)], budget_s):
             tops.append(top)
-            carries.append(top / (2 * np.pi * f) ** 2 >= BEYOND_PLAY * play)
             keep.append(True)
         else:
             keep.append(False)
     freqs, noise = freqs[keep], noise[keep]
-    carrying = np.array(carries, dtype=bool)
-    if not carrying.any():
+    if not freqs.size:
         raise SignalError(
             f"a budget of {budget_s:g} s is too short for any sine in {dof} "
             "(fades, settling and one period), or none fits the limits"
@@ -811,8 +807,6 @@ def design_run(
         return (sum(min(x, ENOUGH) for x in sums), min(sums, default=0.0))
 
     def score(lines_: list[int]) -> tuple[float, float]:
-        # lines within a few plays count only where a carrying line takes the play up
-        lines_ = lines_ if carrying[lines_].any() else []
         if not per_line:  # only pairs that need simulating: the lines the noise favours
             return (float(np.sum(band.amplitude[lines_] / band.noise[lines_])), 0.0)
         return score_of([float(v[lines_].sum()) for v in per_line.values()])
@@ -821,9 +815,6 @@ def design_run(
         best = max((k for k in range(freqs.size) if k not in chosen),
                    key=lambda k: score([*chosen, k]))  # fmt: skip
         chosen.append(best)
-    if not carrying[chosen].any():  # nothing takes the play up: the last line carries
-        chosen[-1] = max((k for k in np.flatnonzero(carrying) if k not in chosen),
-                         key=lambda k: score([*chosen[:-1], k]))  # fmt: skip
 
     def noise_of(cand: DescribingSignal) -> FloatArray:
         w = cand.window[1] - cand.window[0]
@@ -843,13 +834,12 @@ def design_run(
     # so a line added can cost the others more than it brings
     options = []
     for n in range(len(chosen), 0, -1):
-        if carrying[chosen[:n]].any():
-            s = _multisine(platform, dof, [(float(freqs[k]), tops[k])
-                                           for k in sorted(chosen[:n])], budget_s)  # fmt: skip
-            if s is not None:
-                options.append(s)
+        s = _multisine(platform, dof, [(float(freqs[k]), tops[k])
+                                       for k in sorted(chosen[:n])], budget_s)  # fmt: skip
+        if s is not None:
+            options.append(s)
     if not options:
-        k = next(k for k in chosen if carrying[k])
+        k = chosen[0]
         options = [_multisine(platform, dof, [(float(freqs[k]), tops[k])], budget_s)]
     sig = options[0]
     assert sig is not None
