@@ -580,22 +580,25 @@ def fewest_needed(
 
     The likeliest to separate every pair (:func:`deciding_chance`); of those within
     :data:`AS_LIKELY` of it, the one with the most lines (more of the band seen). Where none
-    is likely to (every chance within :data:`AS_LIKELY` of 0), the one whose weakest pair is
-    strongest: the run nearest to deciding.
+    is likely to (every chance within :data:`AS_LIKELY` of 0), the one with the most lines:
+    nothing then speaks for fewer, and the band it covers may show what no explanation
+    foresaw.
 
     Examples
     --------
-    >>> fewest_needed([("three lines", {("a", "b"): 4.0}), ("one", {("a", "b"): 9.0})])
+    >>> fewest_needed([("three lines", {("a", "b"): 8.0}), ("one", {("a", "b"): 12.0})])
     'one'
     >>> fewest_needed([("three lines", {("a", "b"): 60.0}), ("one", {("a", "b"): 90.0})])
+    'three lines'
+    >>> fewest_needed([("three lines", {("a", "b"): 0.1}), ("one", {("a", "b"): 0.5})])
     'three lines'
 
     """
     chances = [deciding_chance(ev.values()) for _, ev in options]
-    if max(chances) > AS_LIKELY:
-        return next(s for (s, _), c in zip(options, chances, strict=True)
-                    if c >= max(chances) - AS_LIKELY)  # fmt: skip
-    return max(options, key=lambda o: min(o[1].values(), default=np.inf))[0]
+    best = max(chances)
+    if best <= AS_LIKELY:
+        return options[0][0]
+    return next(s for (s, _), c in zip(options, chances, strict=True) if c >= best - AS_LIKELY)
 
 
 def position_unit(dof: str) -> str:
