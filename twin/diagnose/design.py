@@ -573,32 +573,29 @@ def deciding_chance(evidence: Iterable[float]) -> float:
     return float(np.prod(stats.norm.cdf((e - BIC_MARGIN) / (2 * np.sqrt(e)))))
 
 
-def fewest_needed(
+def lines_kept(
     options: Sequence[tuple[DescribingSignal, dict[tuple[str, str], float]]],
-) -> DescribingSignal:
-    """Return the run to keep of ``options`` (most lines first, each with its evidence).
+) -> int:
+    """Return the index of the run to keep of ``options``, ordered most lines first.
 
-    The likeliest to separate every pair (:func:`deciding_chance`); of those within
-    :data:`AS_LIKELY` of it, the one with the most lines (more of the band seen). Where none
-    is likely to (every chance within :data:`AS_LIKELY` of 0), the one with the most lines:
-    nothing then speaks for fewer, and the band it covers may show what no explanation
-    foresaw.
+    The likeliest to separate every pair (:func:`deciding_chance`) or, of those within
+    :data:`AS_LIKELY` of it, the one with the most lines: more of the band seen. (So where none
+    is likely to decide, the most lines: nothing then speaks for fewer, and the band they cover
+    may show what no explanation foresaw.) An option without evidence (every rival's refit at
+    a bound: no explanation left) decides.
 
     Examples
     --------
-    >>> fewest_needed([("three lines", {("a", "b"): 8.0}), ("one", {("a", "b"): 12.0})])
-    'one'
-    >>> fewest_needed([("three lines", {("a", "b"): 60.0}), ("one", {("a", "b"): 90.0})])
-    'three lines'
-    >>> fewest_needed([("three lines", {("a", "b"): 0.1}), ("one", {("a", "b"): 0.5})])
-    'three lines'
+    >>> lines_kept([("three lines", {("a", "b"): 8.0}), ("one", {("a", "b"): 12.0})])
+    1
+    >>> lines_kept([("three lines", {("a", "b"): 60.0}), ("one", {("a", "b"): 90.0})])
+    0
+    >>> lines_kept([("three lines", {("a", "b"): 0.1}), ("one", {("a", "b"): 0.5})])
+    0
 
     """
     chances = [deciding_chance(ev.values()) for _, ev in options]
-    best = max(chances)
-    if best <= AS_LIKELY:
-        return options[0][0]
-    return next(s for (s, _), c in zip(options, chances, strict=True) if c >= best - AS_LIKELY)
+    return next(n for n, c in enumerate(chances) if c >= max(chances) - AS_LIKELY)
 
 
 def position_unit(dof: str) -> str:
@@ -701,10 +698,11 @@ def design_run(
     (:func:`amplitude_levels`). The run kept is the one likeliest to separate every pair
     (:func:`deciding_chance`) or, of runs within :data:`AS_LIKELY` of it, the smallest motion:
     a stated preference, where a play shows most. Where only pairs with a play on one side
-    are left, their linear parts guide the lines. The multisine of
-    the lines chosen is weighed against those of its first two lines and its first line
-    (:func:`fewest_needed`): scaled as a whole to the limits, a line added can cost the others
-    more evidence than it brings. With ``shortest``, the run kept is then shortened to the
+    are left, their linear parts guide the lines. Before the amplitudes are tried, the
+    multisine of the lines chosen is weighed, on the linear pairs, against those of its first
+    two lines and its first line (:func:`lines_kept`): scaled as a whole to the limits, a line
+    added can cost the others more evidence than it brings (where only pairs with a play are
+    left, the lines chosen are kept). With ``shortest``, the run kept is then shortened to the
     fewest whole base periods (at least 20 s) still expected to decide with a chance of
     :data:`SURE` (:func:`shortest_window`); a run not expected to decide keeps the budget.
     Off by default: on a hold-out the project does not see, a 15 ms delay that a 120 s run
@@ -835,19 +833,24 @@ def design_run(
 
     # the lines chosen, then fewer of them: each multisine is scaled as a whole to the limits,
     # so a line added can cost the others more than it brings
-    options = []
+    options: list[DescribingSignal] = []
     for n in range(len(chosen), 0, -1):
         s = _multisine(platform, dof, [(float(freqs[k]), tops[k])
                                        for k in sorted(chosen[:n])], budget_s)  # fmt: skip
-        if s is not None:
+        if s is not None:  # the first line alone fits (each kept frequency was tried alone)
             options.append(s)
-    if not options:
-        k = chosen[0]
-        options = [_multisine(platform, dof, [(float(freqs[k]), tops[k])], budget_s)]
-    sig = options[0]
-    assert sig is not None
+    sig, known, kept_note = options[0], None, []
     if len(options) > 1 and any(p not in same for p in pairs):
-        sig = fewest_needed([(s, line_evidence(s, noise_of(s))) for s in options])
+        weighed = [(s, line_evidence(s, noise_of(s))) for s in options]
+        sig, known = weighed[lines_kept(weighed)]
+        if sig is not options[0]:
+            kept_note.append(
+                f"{len(sig.frequencies_hz)} of the {len(options[0].frequencies_hz)} lines "
+                "chosen: their multisine, scaled as a whole to the limits, is likelier to "
+                "decide (chance " + ", ".join(f"{deciding_chance(ev.values()):.2f}"
+                                             for _, ev in weighed) + " with "
+                + ", ".join(str(len(s.frequencies_hz)) for s, _ in weighed) + " lines)"
+            )  # fmt: skip
     w_new = sig.window[1] - sig.window[0]
     noise_new = noise_of(sig)
     sim = SimulatedEvidence(case, dof, max_hz) if simulated else None
@@ -855,7 +858,8 @@ def design_run(
     runs = []
     for n, factor in enumerate(levels):
         cand = sig if factor == 1.0 else scaled(sig, dof, factor)
-        evidence = line_evidence(cand, noise_new)
+        evidence = dict(known) if factor == 1.0 and known is not None \
+            else line_evidence(cand, noise_new)  # fmt: skip
         if sim is not None:
             if progress:
                 progress("design: simulating each explanation at each amplitude", n, len(levels))
@@ -890,7 +894,7 @@ def design_run(
         "them apart, the measured noise does (a run at rest, at the IMU's full rate)"
         for i, j in same
         if i.primary and j.primary and expls.index(i) < expls.index(j)
-    ]
+    ] + kept_note
     tried = tuple((peak_position(r[2], dof), r[0], c) for r, c in zip(runs, chances, strict=True))
     if sim is not None:
         notes.append(
