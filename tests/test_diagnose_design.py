@@ -69,6 +69,10 @@ def test_design_writes_a_run_the_platform_can_play(diagnosed, tmp_path, capsys):
     doc = json.loads(capsys.readouterr().out)
     run = doc["run"]
     assert 1 <= len(run["frequencies_hz"]) <= LINES and max(run["frequencies_hz"]) <= 15.0
+    # fewer lines than chosen are kept only as likelier to decide, and the notes say so
+    fewer = [n for n in doc["notes"] if f"of the {LINES} lines chosen" in n]
+    assert (len(run["frequencies_hz"]) < LINES) == bool(fewer)
+    assert all("likelier to decide (chance" in n for n in fewer)
     assert run["duration_s"] <= BUDGET_S + 1e-9
     commands = read_commands(out / "commands.csv")
     check_signal(commands, "mpi")  # within the platform's limits (raises otherwise)
