@@ -82,7 +82,8 @@ def ar144a() -> dict:
 
 
 def main() -> None:
-    tmp = Path(tempfile.mkdtemp())
+    work = tempfile.TemporaryDirectory()  # removed when this returns
+    tmp = Path(work.name)
     path = tmp / "ar144a.json"
     path.write_text(json.dumps(ar144a()), encoding="utf-8")
     schedule = read_schedule(path)

@@ -274,7 +274,8 @@ def main() -> None:
         jobs = [j for j in jobs if j in keep]
     print(f"{len(jobs)} draws ({a.draws} per effect type, {pairs} pairs, {cleans} clean), "
           f"nuisances {ranges}, {a.workers} workers")  # fmt: skip
-    tmp = tempfile.mkdtemp(prefix="ambiguity-rates-")
+    work = tempfile.TemporaryDirectory(prefix="ambiguity-rates-")  # removed when this returns
+    tmp = work.name
     rows = []
     t0 = time.perf_counter()
     with ProcessPoolExecutor(a.workers) as pool:

@@ -43,7 +43,8 @@ def timed(name: str, runs: list[Path], seed: int, folder: Path) -> None:
 
 
 def main() -> None:
-    tmp = Path(tempfile.mkdtemp())
+    work = tempfile.TemporaryDirectory()  # removed when this returns
+    tmp = Path(work.name)
     mpi = motion_system("mpi")
     truth = mpi.replace(extensions=(Extension("delay", {"extra_delay_s": 0.020}, ("heave",)),))
     runs = record_runs(truth, mpi, "heave", tmp / "runs", 3, signals=(2,))

@@ -39,7 +39,8 @@ GOALS = {"reduced": 10.0, "full": 20.0}
 
 
 def main():
-    tmp = Path(tempfile.mkdtemp())
+    work = tempfile.TemporaryDirectory()  # removed when this returns
+    tmp = Path(work.name)
     mpi = motion_system("mpi")
     truth = mpi.replace(extensions=(Extension("delay", {"extra_delay_s": 0.03}, ("pitch",)),))
     noisy = default_imu("mpi").with_noise(2.0)

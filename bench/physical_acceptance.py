@@ -42,7 +42,8 @@ def _detectable(d, hidden) -> bool:
 def main() -> None:
     draws = int(sys.argv[1]) if len(sys.argv) > 1 else 10
     first = int(sys.argv[2]) if len(sys.argv) > 2 else 0
-    tmp = Path(tempfile.mkdtemp())
+    work = tempfile.TemporaryDirectory()  # removed when this returns
+    tmp = Path(work.name)
     summary = {}
     for kind in KINDS:
         counts = {"right": 0, "wrong": 0, "ambiguous": 0, "none": 0, "below detectability": 0}

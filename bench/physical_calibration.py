@@ -29,7 +29,8 @@ from twin.platform.platform_physics import PlatformPhysics
 
 
 def main() -> None:
-    tmp = Path(tempfile.mkdtemp())
+    work = tempfile.TemporaryDirectory()  # removed when this returns
+    tmp = Path(work.name)
     mpi = motion_system("mpi")
     heavier = mpi.replace(physics=PlatformPhysics(payload=Payload.scaling("mpi", 1.6)))
     run = record_runs(heavier, mpi, "pitch", tmp, 5, "full", (1,), imu=default_imu("mpi"))[0]
