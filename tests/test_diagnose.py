@@ -15,7 +15,7 @@ import pytest
 from twin.chain.config import motion_system
 from twin.chain.extensions import Extension
 from twin.cli.main import main
-from twin.core.errors import RunFormatError
+from twin.core.errors import RunFormatError, SignalError
 from twin.diagnose.diagnosis import diagnose
 from twin.diagnose.hidden import clean, record, record_runs
 
@@ -219,3 +219,20 @@ def test_same_seed_same_diagnosis(delay_runs):
     a = diagnose(delay_runs[0][:1], seed=3, realisations=2).to_dict()
     b = diagnose(delay_runs[0][:1], seed=3, realisations=2).to_dict()
     assert json.dumps(a) == json.dumps(b)
+
+
+def test_runs_naming_different_nominals_ask_for_one(tmp_path, capsys):
+    """A run simulated with its truth as the configuration names that truth as its nominal:
+    the first run's nominal is not taken silently for all (the order would decide)."""
+    mpi = motion_system("mpi")
+    truth = mpi.replace(extensions=(Extension("delay", {"extra_delay_s": 0.02}, ("heave",)),))
+    old = record_runs(truth, mpi, "heave", tmp_path / "old", 3, signals=(1,))
+    new = record_runs(truth, truth, "heave", tmp_path / "new", 4, signals=(2,))
+    out = tmp_path / "diag"
+    for order in ([*old, *new], [*new, *old]):
+        assert main(["diagnose", *map(str, order), "--out", str(out)]) == 2
+        err = capsys.readouterr().err.strip()
+        assert "different nominal configurations" in err and "--config" in err
+        assert "\n" not in err and not out.exists()
+    with pytest.raises(SignalError, match="different nominal configurations"):
+        diagnose([*old, *new])

@@ -15,6 +15,7 @@ of the run, with no model of the post-processing needed.
 from __future__ import annotations
 
 import functools
+import json
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -241,6 +242,12 @@ def measurement_channels(
     return out
 
 
+def _as_nominal(config: MotionSystem) -> str:
+    """Return what a configuration says of the platform (its name and description aside)."""
+    meta = {k: v for k, v in config.to_meta().items() if k not in ("name", "description")}
+    return json.dumps(meta, sort_keys=True, default=str)
+
+
 def load_case(
     runs: Sequence[str | Path | RecordedRun],
     config: str | MotionSystem | None = None,
@@ -257,8 +264,8 @@ def load_case(
     runs : sequence of path
         ``twin-run/1`` folders of the same platform.
     config : str or MotionSystem, optional
-        Nominal configuration; the first run's ``meta.json`` (``platform`` and
-        ``platform_config``) by default.
+        Nominal configuration; by default the runs' ``meta.json`` (``platform`` and
+        ``platform_config``), which must then name the same one.
     model : str
         ``"reduced"`` (default) or ``"full"``.
     seed : int
@@ -276,7 +283,8 @@ def load_case(
         A run folder is malformed (also for a malformed ``platform_config``), or a run is
         given twice (:func:`twin.formats.run_checks.check_distinct`).
     SignalError
-        Unknown model, platforms that differ, nothing driven.
+        Unknown model, platforms that differ, runs naming different nominal configurations
+        without ``config``, nothing driven.
 
     """
     if model not in MODELS:
@@ -298,6 +306,14 @@ def load_case(
         raise SignalError(f"the runs are of different platforms ({', '.join(sorted(platforms))})")
     if config is None:
         nominal = measurements[0].config
+        other = next((m for m in measurements if _as_nominal(m.config) != _as_nominal(nominal)),
+                     None)  # fmt: skip
+        if other is not None:
+            raise SignalError(
+                f"the runs name different nominal configurations ({measurements[0].source}: "
+                f"{nominal.name!r}; {other.source}: {other.config.name!r}); the nominal is the "
+                "model every run is compared with: give it (--config NAME or FILE)"
+            )
     else:
         nominal = resolve(config)
         if nominal.platform not in platforms:
