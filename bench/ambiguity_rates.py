@@ -88,7 +88,10 @@ def _designed(h: Hidden, old: list[Path], d: Diagnosis, work: Path) -> dict[str,
     """Design the next run of an ambiguous diagnosis, play it through the truth, judge again."""
     write_report(d, work / "diagnosis", figures=False)
     plan = design_from(work / "diagnosis")
-    new = play(h.truth, h.config, plan.signal, work / "designed", 7919 * h.seed + 3, imu=h.imu)
+    # at the filter setting the design asks for, as a lab would record it: the truth's filter
+    # (and any off-setting of it) scaled with the setting, the run's meta naming the setting
+    new = play(plan.at_setting(h.truth), plan.setting or h.config, plan.signal,
+               work / "designed", 7919 * h.seed + 3, imu=h.imu)  # fmt: skip
     again = diagnose([*old, new], seed=h.seed)
     top = [f for f in again.findings if f.extension.effect != "noise" or "noise" in h.effects]
     return {
@@ -97,6 +100,7 @@ def _designed(h: Hidden, old: list[Path], d: Diagnosis, work: Path) -> dict[str,
         "decides": plan.decides,
         "weakest": plan.best.weakest,
         "lines_hz": [float(f) for f in plan.signal.frequencies_hz],
+        "filter_hz": None if plan.setting is None else plan.setting.filter_break_hz,
         "duration_s": plan.signal.commands.duration,
         "first": top[0].extension.describe() if top else None,
         "alternatives": [a.get("effects") for a in (top[0].evidence.get("alternatives") or [])]
@@ -176,7 +180,9 @@ def _line(row: dict[str, object]) -> str:
                  f"{row['named_delta_bic']:.1f}]")  # fmt: skip
     des = row.get("designed")
     if des:
-        text += f"\n          designed run {des['lines_hz']} Hz: {des['verdict']} -> {des['first']}"  # type: ignore[index]
+        at = f", filter at {des['filter_hz']:g} Hz" if des.get("filter_hz") else ""  # type: ignore[union-attr]
+        text += f"\n          designed run {des['lines_hz']} Hz{at}: "  # type: ignore[index]
+        text += f"{des['verdict']} -> {des['first']}"  # type: ignore[index]
         if des["alternatives"]:  # type: ignore[index]
             text += " (ambiguous: " + "; ".join("+".join(a) for a in des["alternatives"]) + ")"  # type: ignore[index]
     return text + f" ({row['seconds']:.0f} s)"

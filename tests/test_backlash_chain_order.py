@@ -27,7 +27,8 @@ FILTER = Extension("platform_filter", {"break_hz": 2.4}, ("roll",))
 def test_the_start_of_the_chain_order_search_weighs_the_lines_by_their_motion():
     """Table 5.2 signal 2's lines, equal accelerations: the excursion is the low lines'."""
     f = np.array([0.2, 0.45, 1.35, 2.3, 5.5, 7.1])
-    lines = SimpleNamespace(f=f, nominal=np.ones(f.size, dtype=complex), size=f.size)
+    lines = SimpleNamespace(f=f, nominal=np.ones(f.size, dtype=complex), size=f.size,
+                            channel=SimpleNamespace(filter_scale=1.0))  # fmt: skip
     ratio = _amplitude_ratio([FILTER], [lines], SimpleNamespace(nominal_break=None))
     low = abs(FILTER.response(np.array([0.2]), None)[0])
     assert ratio == pytest.approx(low, rel=0.01)  # the 0.2 Hz line makes the excursion

@@ -15,7 +15,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from twin.chain.config import motion_system
+from twin.chain.config import motion_system, resolve
 from twin.chain.extensions import Extension
 from twin.chain.signals import check_signal
 from twin.chain.simulate import prepare
@@ -83,15 +83,24 @@ def test_design_writes_a_run_the_platform_can_play(diagnosed, tmp_path, capsys):
     assert np.abs(sched.values - commands.values).max() < 0.01 * scale
     labels = {e["label"].split(":")[0] for e in doc["explanations"]}
     assert {"delay", "platform_lag"} <= labels
+    # behind the 1 Hz filter the lines that tell a delay from a lag are cut to nothing: the
+    # run is to be recorded with the filter opened (the thesis' Ch. 4 settings), and says so
+    assert run["filter_break_hz"] in (5.0, 10.0) and run["config"] == "config.json"
+    setting = resolve(out / "config.json")
+    assert setting.filter_break_hz == run["filter_break_hz"] and setting.delay_s == MPI.delay_s
+    assert any(f"filter set to {run['filter_break_hz']:g} Hz" in n for n in doc["notes"])
+    assert (out / "schedule.toml").read_text().startswith("# record with the platform filter")
 
 
 def test_the_designed_run_separates_what_it_predicts(diagnosed, tmp_path):
     root, runs = diagnosed
     design = design_from(root / "diag")
     predicted = design.best.evidence
-    run = prepare(TRUTH, design.signal.commands, "reduced", 11)
+    # recorded as a lab would: at the filter setting the design asks for
+    run = prepare(design.at_setting(TRUTH), design.signal.commands, "reduced", 11)
     new = tmp_path / "designed"
-    execute(run, run_meta(run, "designed run", config=MPI, signal=design.signal), new)
+    meta = run_meta(run, "designed run", config=design.setting or MPI, signal=design.signal)
+    execute(run, meta, new)
     d = diagnose([*map(str, runs), str(new)], seed=3)
     top = d.findings[0]
     still = {" + ".join(a["effects"]) for a in top.evidence.get("alternatives") or []}

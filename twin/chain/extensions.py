@@ -221,12 +221,17 @@ class Extension:
 
     # --- frequency responses of the linear effects ------------------------------------------
 
-    def response(self, f: ArrayLike, nominal_break_hz: float | None = None) -> ComplexArray:
+    def response(
+        self, f: ArrayLike, nominal_break_hz: float | None = None, filter_scale: float = 1.0
+    ) -> ComplexArray:
         """Return the factor the extension multiplies a DOF's response by, at ``f`` [Hz].
 
         ``platform_filter`` is relative to the configuration's own filter (``nominal_break_hz``;
-        None: no filter). Non-linear effects (``backlash``, ``noise``) have none, nor has
-        ``imu_alignment``, which mixes the IMU's channels (:func:`imu_rotation`).
+        None: no filter); in a run recorded with the filter set ``filter_scale`` times higher
+        both breaks are that many times higher (:meth:`MotionSystem.filter_scaled
+        <twin.chain.config.MotionSystem.filter_scaled>`). Non-linear effects (``backlash``,
+        ``noise``) have none, nor has ``imu_alignment``, which mixes the IMU's channels
+        (:func:`imu_rotation`).
 
         Raises
         ------
@@ -241,11 +246,12 @@ class Extension:
         if self.effect == "gain":
             return np.full(s.shape, p("gain"), dtype=complex)
         if self.effect == "platform_filter":
-            new = 1.0 / (1.0 + s / (2 * np.pi * p("break_hz"))) ** 2
+            k = filter_scale if nominal_break_hz is not None else 1.0
+            new = 1.0 / (1.0 + s / (2 * np.pi * k * p("break_hz"))) ** 2
             old = (
                 1.0
                 if nominal_break_hz is None
-                else 1.0 / (1.0 + s / (2 * np.pi * nominal_break_hz)) ** 2
+                else 1.0 / (1.0 + s / (2 * np.pi * k * nominal_break_hz)) ** 2
             )
             return new / old
         if self.effect == "resonance":

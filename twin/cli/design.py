@@ -93,6 +93,17 @@ def _cmd_design(args: argparse.Namespace) -> int:
         f"wrote {out}/commands.csv (twin-run/1 commands), {out}/schedule.toml "
         f"(twin-schedule/1) and {out}/design.json"
     )
+    if result.setting is not None:
+        print(
+            f"wrote {out}/config.json: the nominal with the platform filter at "
+            f"{result.setting.filter_break_hz:g} Hz, the setting to record the run at"
+        )
+        print(
+            "next: run it on the platform with the filter at that setting, import it (twin "
+            f"import --config {out}/config.json), then twin diagnose the old runs and the new "
+            "one together, without --config (each is compared at its own filter setting)"
+        )
+        return 0
     print(
         "next: run it on the platform, import it (twin import), then twin diagnose the old "
         "runs and the new one together"

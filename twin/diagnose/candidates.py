@@ -105,14 +105,14 @@ class Model:
         plays = tuple(e.value("play") for e in self.extensions if e.effect == "backlash")
         if not plays:
             return None
-        return (ch.run, ch.dof, ch.window, plays,
+        return (ch.run, ch.dof, ch.window, ch.filter_scale, plays,
                 tuple((e.effect, repr(e.parameters), e.dofs) for e in self.anchor))  # fmt: skip
 
     def _simulate_base(self, ch: Channel) -> FloatArray:
         """Simulate the channel with the backlash (behind the anchor): :meth:`base`'s value."""
         plays = [e for e in self.extensions if e.effect == "backlash"]
         exts = (*self.case.clean.extensions, *self.anchor, *plays)
-        cfg = self.case.clean.replace(extensions=exts)
+        cfg = self.case.config_of(ch, self.case.clean.replace(extensions=exts))
         pred = simulate_measurement(
             cfg, ch.commands, ch.t, self.case.model, self.case.seed, self.case.imu.ideal()
         )
@@ -145,15 +145,18 @@ class Model:
         """The nominal configuration's filter break in this DOF [Hz] (None: no filter)."""
         return self.case.config.breaks_hz[dof_index(self.dof)]
 
-    def response(self, f: FloatArray) -> ComplexArray:
-        """Product of the linear extensions' responses at ``f`` [Hz] (those not simulated)."""
-        h = self.linear_response(f)
+    def response(self, f: FloatArray, filter_scale: float = 1.0) -> ComplexArray:
+        """Product of the linear extensions' responses at ``f`` [Hz] (those not simulated).
+
+        ``filter_scale``: the run's filter setting over the nominal's (:class:`Channel`).
+        """
+        h = self.linear_response(f, filter_scale)
         if self.anchor and any(e.effect == "backlash" for e in self.extensions):
             for e in self.anchor:  # simulated with the backlash already (see anchored)
-                h = h / e.response(f, self.nominal_break)
+                h = h / e.response(f, self.nominal_break, filter_scale)
         return h
 
-    def linear_response(self, f: FloatArray) -> ComplexArray:
+    def linear_response(self, f: FloatArray, filter_scale: float = 1.0) -> ComplexArray:
         """Product of the linear extensions' responses at ``f`` [Hz], whatever the anchor.
 
         What the extensions multiply the nominal response by (the anchor only says which of
@@ -162,7 +165,7 @@ class Model:
         h = np.ones(np.size(f), dtype=complex)
         for e in self.extensions:
             if e.effect in LINEAR:
-                h = h * e.response(f, self.nominal_break)
+                h = h * e.response(f, self.nominal_break, filter_scale)
         return h
 
     def psd_factor(self, f: FloatArray) -> FloatArray:
@@ -175,7 +178,11 @@ class Model:
 
     def predict(self, ch: Channel) -> FloatArray:
         """Full-length prediction of a channel."""
-        return apply_response(self.base(ch), ch.rate_hz, self.response)
+        return apply_response(
+            self.base(ch),
+            ch.rate_hz,
+            functools.partial(self.response, filter_scale=ch.filter_scale),
+        )
 
     def line_prediction(self, lines: Lines) -> ComplexArray:
         """Predicted amplitudes at the lines: H(f) times the (re-simulated) base's."""
@@ -187,7 +194,7 @@ class Model:
             base = self._cache[key]
         else:
             base = lines.nominal
-        return base * self.response(lines.f)
+        return base * self.response(lines.f, lines.channel.filter_scale)
 
     def chi2(self, evidence: Sequence[Lines]) -> float:
         """Sum over the evidence of ``|Y - Yhat|^2 / sd^2`` (minus the log-likelihood)."""
@@ -470,7 +477,7 @@ def _grid_best(effect: str, model: Model, evidence: Sequence[Lines], layout: _La
     costs = []
     for g in grid:
         ext = make_extension(effect, sp.names, g, model.dof)
-        h = [ext.response(x.f, model.nominal_break) for x in evidence]
+        h = [ext.response(x.f, model.nominal_break, x.channel.filter_scale) for x in evidence]
         costs.append(sum(x.chi2(b * hh) for x, b, hh in zip(evidence, base, h, strict=True)))
     return grid[int(np.argmin(costs))]
 
@@ -492,7 +499,7 @@ def _fit_linear(
         for x, b in zip(evidence, base, strict=True):
             h = np.ones(x.size, dtype=complex)
             for e in exts:
-                h = h * e.response(x.f, model.nominal_break)
+                h = h * e.response(x.f, model.nominal_break, x.channel.filter_scale)
             out.append(x.residuals(b * h))
         return np.concatenate(out)
 
@@ -664,7 +671,7 @@ def _amplitude_ratio(
         w = np.abs(x.nominal) ** 2 / (2 * np.pi * x.f) ** 4
         h = np.ones(x.size, dtype=complex)
         for e in shaping:
-            h = h * e.response(x.f, model.nominal_break)
+            h = h * e.response(x.f, model.nominal_break, x.channel.filter_scale)
         num += float(np.sum(w * np.log(np.maximum(np.abs(h), 1e-12))))
         den += float(np.sum(w))
     return float(np.exp(num / den)) if den > 0 else 1.0

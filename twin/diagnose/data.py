@@ -79,6 +79,9 @@ class Channel:
         Measurement window [s] (whole periods of the signal).
     commands : Trajectory
         The run's command trajectory (for re-simulation).
+    filter_scale : float
+        The run's platform-filter setting over the case's nominal one (1: the nominal's;
+        :meth:`Case.config_of`).
 
     """
 
@@ -91,6 +94,7 @@ class Channel:
     lines_hz: FloatArray
     window: tuple[float, float]
     commands: Trajectory = field(repr=False)
+    filter_scale: float = 1.0
 
     @property
     def noise(self) -> FloatArray:
@@ -122,6 +126,11 @@ class Channel:
 @dataclass(frozen=True, eq=False)
 class Case:
     """Runs to diagnose against one nominal configuration.
+
+    Each run may have been recorded at its own setting of the platform filter (the thesis'
+    Ch. 4 measured the MPI at 1, 5 and 10 Hz): its channels say how many times the nominal's
+    (:attr:`Channel.filter_scale`), and :meth:`config_of` gives any configuration at a
+    channel's setting. Every explanation is stated at the nominal's setting.
 
     Attributes
     ----------
@@ -165,6 +174,23 @@ class Case:
     def of(self, dof: str) -> list[Channel]:
         """Channels of one DOF."""
         return [c for c in self.channels if c.dof == dof]
+
+    def config_of(self, ch: Channel, config: MotionSystem | None = None) -> MotionSystem:
+        """Return ``config`` (the noise-free nominal by default) at the setting of ``ch``'s run."""
+        return (self.clean if config is None else config).filter_scaled(ch.filter_scale)
+
+    @property
+    def filter_scales(self) -> tuple[float, ...]:
+        """Each run's platform-filter setting over the nominal's, in the order of :attr:`runs`."""
+        scale = {c.run: c.filter_scale for c in self.channels}
+        return tuple(scale.get(m.source, 1.0) for _, m in self.runs)
+
+    @property
+    def settings_hz(self) -> dict[str, float]:
+        """Runs recorded at another filter setting than the nominal's: run -> break [Hz]."""
+        fb = self.config.filter_break_hz
+        return {c.run: fb * c.filter_scale for c in self.channels
+                if fb is not None and c.filter_scale != 1.0}  # fmt: skip
 
 
 def nominal_imu(meta: dict, platform: str) -> ImuSpec:
@@ -213,11 +239,14 @@ def measurement_channels(
     offset: int = 0,
     dofs: Sequence[str] | None = None,
     realisations: int = NOISE_REALISATIONS,
+    filter_scale: float = 1.0,
 ) -> list[Channel]:
     """Return the channels of one measurement: nominal prediction and noise per driven DOF.
 
-    Realisation ``i`` of each source is simulated with seed ``seed + offset + i + 1``.
+    Realisation ``i`` of each source is simulated with seed ``seed + offset + i + 1``;
+    ``nominal`` is taken at the run's filter setting (``filter_scale`` times its own).
     """
+    nominal = nominal.filter_scaled(filter_scale)
     clean = clean_config(nominal)
     driven = driven_dofs(m, dofs)
     if nominal.noise and dof_index("heave") in driven:  # the motion noise (heave only) is told
@@ -238,13 +267,18 @@ def measurement_channels(
         lines, window = periodic_design(m, k)
         sources = np.array([[r[:, k] for r in motion], [r[:, k] for r in sensor]])
         out.append(Channel(m.source, DOF_NAMES[k], m.t, m.measured[:, k], pred[:, k], sources,
-                           lines, tuple(window), m.commands))  # fmt: skip
+                           lines, tuple(window), m.commands, filter_scale))  # fmt: skip
     return out
 
 
 def _as_nominal(config: MotionSystem) -> str:
-    """Return what a configuration says of the platform (its name and description aside)."""
+    """Return what a configuration says of the platform (name, description, filter setting aside).
+
+    The filter's break is a setting a run may change (:meth:`Case.config_of`): runs that
+    differ only in it name one nominal, with or without a filter.
+    """
     meta = {k: v for k, v in config.to_meta().items() if k not in ("name", "description")}
+    meta["filter_break_hz"] = config.filter_break_hz is not None
     return json.dumps(meta, sort_keys=True, default=str)
 
 
@@ -256,6 +290,7 @@ def load_case(
     dofs: Sequence[str] | None = None,
     realisations: int = NOISE_REALISATIONS,
     progress: ProgressFn | None = None,
+    filter_scales: Sequence[float] | None = None,
 ) -> Case:
     """Read runs, simulate the nominal twin on their commands and its noise.
 
@@ -264,8 +299,10 @@ def load_case(
     runs : sequence of path
         ``twin-run/1`` folders of the same platform.
     config : str or MotionSystem, optional
-        Nominal configuration; by default the runs' ``meta.json`` (``platform`` and
-        ``platform_config``), which must then name the same one.
+        Nominal configuration, for every run; by default the runs' ``meta.json``
+        (``platform`` and ``platform_config``), which must then name the same one, but for
+        the platform filter's setting: each run is then compared at its own (the nominal is
+        the first run's).
     model : str
         ``"reduced"`` (default) or ``"full"``.
     seed : int
@@ -276,6 +313,9 @@ def load_case(
         Noise realisations per run.
     progress : callable, optional
         Called with a message per run.
+    filter_scales : sequence of float, optional
+        Each run's platform-filter setting over the nominal's (as a diagnosis wrote them:
+        ``nominal.filter_scales``); by default 1 with ``config``, the runs' own without.
 
     Raises
     ------
@@ -304,6 +344,7 @@ def load_case(
     platforms = {m.config.platform for m in measurements}
     if len(platforms) > 1:
         raise SignalError(f"the runs are of different platforms ({', '.join(sorted(platforms))})")
+    scales = [1.0] * len(measurements)
     if config is None:
         nominal = measurements[0].config
         other = next((m for m in measurements if _as_nominal(m.config) != _as_nominal(nominal)),
@@ -314,6 +355,9 @@ def load_case(
                 f"{nominal.name!r}; {other.source}: {other.config.name!r}); the nominal is the "
                 "model every run is compared with: give it (--config NAME or FILE)"
             )
+        if nominal.filter_break_hz is not None:  # each run at its own filter setting
+            scales = [m.config.filter_break_hz / nominal.filter_break_hz  # type: ignore[operator]
+                      for m in measurements]  # fmt: skip
     else:
         nominal = resolve(config)
         if nominal.platform not in platforms:
@@ -321,6 +365,15 @@ def load_case(
                 f"configuration {nominal.name!r} is of the {nominal.platform} platform; the runs "
                 f"are of the {platforms.pop()}"
             )
+    if filter_scales is not None:
+        if len(filter_scales) != len(measurements) or not all(
+            np.isfinite(k) and k > 0 for k in filter_scales
+        ):
+            raise SignalError(
+                f"filter_scales: one positive number per run ({len(measurements)}); got "
+                f"{list(filter_scales)!r}"
+            )
+        scales = [float(k) for k in filter_scales]
     imu = nominal_imu(measurements[0].meta, nominal.platform)
     unidentifiable = {}
     for m in measurements:
@@ -334,6 +387,7 @@ def load_case(
     for r, m in enumerate(measurements):
         if progress:
             progress(f"nominal twin on {m.source} ({model})")
-        channels += measurement_channels(m, nominal, model, imu, seed, 1000 * r, dofs, realisations)
+        channels += measurement_channels(m, nominal, model, imu, seed, 1000 * r, dofs, realisations,
+                                         scales[r])  # fmt: skip
     pairs = tuple(zip(recs, measurements, strict=True))
     return Case(nominal, model, imu, channels, seed, unidentifiable, pairs)

@@ -101,6 +101,9 @@ BEYOND_PLAY = 3.0
 #: Expected evidence of a pair beyond which the design seeks no more for it (twice the
 #: margin: lines go to the pairs still below it, not to those already told apart).
 ENOUGH = 2 * BIC_MARGIN
+#: Platform-filter settings a run may be recorded at [Hz], besides the nominal's: those the
+#: thesis measured the MPI at (Ch. 4: 1, 5 and 10 Hz; "values up to 10 Hz").
+FILTER_SETTINGS_HZ = (5.0, 10.0)
 #: Factors tried on the lines' amplitudes, together, until the multisine fits the limits.
 SCALES = (1.0, 0.7, 0.5, 0.35, 0.25, 0.18, 0.12, 0.08, 0.05)
 
@@ -124,6 +127,17 @@ class Explanation:
         return nominal.replace(extensions=(*nominal.extensions, *self.extensions))
 
 
+#: The lines chosen at one filter setting: the run, its evidence on the linear pairs (None:
+#: none weighed), notes, each line's evidence per pair, and the pairs that respond alike.
+_Chosen = tuple[
+    DescribingSignal,
+    dict[tuple[str, str], float] | None,
+    list[str],
+    dict[tuple[str, str], FloatArray],
+    list[tuple[Explanation, Explanation]],
+]
+
+
 @dataclass(frozen=True)
 class Candidate:
     """One candidate run and the evidence it is expected to give."""
@@ -142,7 +156,11 @@ class Candidate:
 
 @dataclass(frozen=True)
 class DesignResult:
-    """The designed run, why, and what else was weighed."""
+    """The designed run, why, and what else was weighed.
+
+    ``setting``: the configuration to record the run at, where the design opens the platform
+    filter (None: the diagnosed runs' nominal setting), ``filter_scale`` times the nominal's.
+    """
 
     dof: str
     platform: str
@@ -153,6 +171,12 @@ class DesignResult:
     source: str
     notes: tuple[str, ...] = field(default_factory=tuple)
     levels: tuple[tuple[float, float, float], ...] = ()
+    setting: MotionSystem | None = None
+    filter_scale: float = 1.0
+
+    def at_setting(self, config: MotionSystem) -> MotionSystem:
+        """Return ``config`` (a truth, the nominal) at the filter setting of the designed run."""
+        return config.filter_scaled(self.filter_scale)
 
     @property
     def decides(self) -> bool:
@@ -208,6 +232,8 @@ class DesignResult:
                 "amplitude_unit": acceleration_unit(self.dof),
                 "window_s": b.window_s,
                 "duration_s": b.duration_s,
+                "filter_break_hz": None if self.setting is None else self.setting.filter_break_hz,
+                "config": None if self.setting is None else "config.json",
             },
             "expected_evidence": [
                 {"true": i, "other": j, "delta_bic": v} for (i, j), v in b.evidence.items()
@@ -242,8 +268,11 @@ class DesignResult:
             f"{f:g} Hz {a:.3g} {unit}"
             for f, a in zip(sig.frequencies_hz, sig.amplitudes, strict=True)
         )  # type: ignore[arg-type]
+        at = "" if self.setting is None else \
+            f", with the platform filter at {self.setting.filter_break_hz:g} Hz"  # fmt: skip
         out = [
-            f"run: {self.dof}, lines {lines}; {b.duration_s:.0f} s ({b.window_s:.0f} s measured)",
+            f"run: {self.dof}, lines {lines}; {b.duration_s:.0f} s ({b.window_s:.0f} s "
+            f"measured){at}",
             "expected evidence (BIC) of the old runs and this one, if one explanation is true, "
             "against each other refitted to it:",
         ]
@@ -446,19 +475,28 @@ def _multisine(
 
 @dataclass(frozen=True)
 class LineSet:
-    """Lines a set of runs measures: frequency, acceleration amplitude, noise of the amplitude."""
+    """Lines a set of runs measures: frequency, acceleration amplitude, noise of the amplitude.
+
+    ``scale``: each line's platform-filter setting over the nominal's (None: the nominal's).
+    """
 
     f: FloatArray
     amplitude: FloatArray
     noise: FloatArray
+    scale: FloatArray | None = None
+
+    @property
+    def scales(self) -> FloatArray:
+        """Each line's filter setting over the nominal's."""
+        return np.ones(self.f.size) if self.scale is None else self.scale
 
     def __add__(self, other: LineSet) -> LineSet:
         return LineSet(
             *(
                 np.concatenate([a, b])
                 for a, b in zip(
-                    (self.f, self.amplitude, self.noise),
-                    (other.f, other.amplitude, other.noise),
+                    (self.f, self.amplitude, self.noise, self.scales),
+                    (other.f, other.amplitude, other.noise, other.scales),
                     strict=True,
                 )
             )
@@ -476,7 +514,7 @@ def old_lines(case: Case, dof: str) -> LineSet:
         f = np.asarray(ch.lines_hz, dtype=float)
         u = fourier_coefficients(ch.t, ch.commands.at(ch.t, 2)[:, dof_index(dof)], f, ch.window)
         noise, _ = measured_noise(case, dof, f, [ch])
-        parts.append(LineSet(f, np.abs(u), noise))
+        parts.append(LineSet(f, np.abs(u), noise, np.full(f.size, ch.filter_scale)))
     out = parts[0]
     for p in parts[1:]:
         out = out + p
@@ -504,14 +542,25 @@ class Mimic:
         """Return the parameters the diagnosis fitted, in slot order."""
         return np.array([v for _, _, values, _ in self.slots for v in values])
 
-    def response(self, theta: FloatArray, f: FloatArray) -> ComplexArray:
-        """Return the explanation's response at ``f`` with parameters ``theta``."""
+    def response(
+        self, theta: FloatArray, f: FloatArray, scale: FloatArray | float = 1.0
+    ) -> ComplexArray:
+        """Return the explanation's response at ``f`` with parameters ``theta``.
+
+        ``scale``: the filter setting over the nominal's, of all lines or of each.
+        """
         exts, i = [], 0
         for effect, names, _, _ in self.slots:
             exts.append(make_extension(effect, names, theta[i : i + len(names)], self.dof))
             i += len(names)
         cfg = self.nominal.replace(extensions=(*self.nominal.extensions, *exts))
-        return cfg.response_at_hz(f)[:, self.k]
+        f = np.asarray(f, dtype=float)
+        scale = np.broadcast_to(np.asarray(scale, dtype=float), f.shape)
+        out = np.empty(f.shape, dtype=complex)
+        for k in np.unique(scale):
+            at = scale == k
+            out[at] = cfg.filter_scaled(float(k)).response_at_hz(f[at])[:, self.k]
+        return out
 
     def fit(self, target: ComplexArray, lines: LineSet) -> FloatArray:
         """Return the parameters whose response is nearest ``target`` at ``lines``."""
@@ -520,7 +569,7 @@ class Mimic:
         w = lines.amplitude / lines.noise
 
         def residual(theta: FloatArray) -> FloatArray:
-            r = (self.response(theta, lines.f) - target) * w
+            r = (self.response(theta, lines.f, lines.scales) - target) * w
             return np.concatenate([r.real, r.imag])
 
         if not self.slots:  # nothing to refit: the nominal response
@@ -545,7 +594,7 @@ class Mimic:
         theta = self.fit(target, lines)
         if self.at_bound(theta):
             return None
-        return lines.evidence(target, self.response(theta, lines.f))
+        return lines.evidence(target, self.response(theta, lines.f, lines.scales))
 
 
 #: Peak motions tried for a run where a backlash is among the explanations, in plays (besides
@@ -744,8 +793,8 @@ def design_run(
     past = old_lines(case, dof)
     mimics = {id(e): Mimic(case, dof, e) for e in expls}
 
-    def response(e: Explanation, f: FloatArray) -> ComplexArray:
-        return mimics[id(e)].response(mimics[id(e)].start, f)
+    def response(e: Explanation, f: FloatArray, scale: FloatArray | float = 1.0) -> ComplexArray:
+        return mimics[id(e)].response(mimics[id(e)].start, f, scale)
 
     def nonlinear(e: Explanation) -> bool:
         return any(x.effect == "backlash" for x in e.extensions)
@@ -778,79 +827,111 @@ def design_run(
                if (nonlinear(i) and nonlinear(j)) == both]  # fmt: skip
         return [(i, j) for i, j in out if not effects(i) <= effects(j)]
 
-    per_line: dict[tuple[str, str], FloatArray] = {}
-    same: list[tuple[Explanation, Explanation]] = []
-    everything = past + band
-
-    def weigh_lines(to_weigh: list[tuple[Explanation, Explanation]]) -> None:
-        mimics.update({id(e): Mimic(case, dof, e) for pair in to_weigh for e in pair})
-        for n, (i, j) in enumerate(to_weigh):
-            if progress:
-                progress("design: refitting each explanation to the others", n, len(to_weigh))
-            theta = mimics[id(j)].fit(response(i, everything.f), everything)
-            if mimics[id(j)].at_bound(theta):
-                continue  # j mimics i only at the edge of what it can be: not an explanation
-            d = response(i, band.f) - mimics[id(j)].response(theta, band.f)
-            e = 2 * np.abs(d) ** 2 * band.amplitude**2 / band.noise**2
-            if np.max(np.abs(d / response(i, band.f))) < SAME_RESPONSE:  # the same response
-                if (i, j) in pairs:
-                    same.append((i, j))
-            else:
-                per_line[i.label, j.label] = e
-
-    weigh_lines([*pairs, *stand_ins(both=True)])
-    if not per_line:
-        weigh_lines(stand_ins(both=False))
-    chosen: list[int] = []
-
-    def score_of(sums: Sequence[float]) -> tuple[float, float]:
-        """Pairs brought past twice the margin count no more; then the weakest pair."""
-        return (sum(min(x, ENOUGH) for x in sums), min(sums, default=0.0))
-
-    def score(lines_: list[int]) -> tuple[float, float]:
-        if not per_line:  # only pairs that need simulating: the lines the noise favours
-            return (float(np.sum(band.amplitude[lines_] / band.noise[lines_])), 0.0)
-        return score_of([float(v[lines_].sum()) for v in per_line.values()])
-
-    for _ in range(min(LINES, freqs.size)):
-        best = max((k for k in range(freqs.size) if k not in chosen),
-                   key=lambda k: score([*chosen, k]))  # fmt: skip
-        chosen.append(best)
-
     def noise_of(cand: DescribingSignal) -> FloatArray:
         w = cand.window[1] - cand.window[0]
         return np.interp(np.log(cand.frequencies_hz), np.log(freqs), noise) * np.sqrt(t_old / w)
 
-    def line_evidence(cand: DescribingSignal, noise_c: FloatArray) -> dict[tuple[str, str], float]:
-        both = past + LineSet(cand.frequencies_hz, np.asarray(cand.amplitudes), noise_c)
+    def line_evidence(
+        cand: DescribingSignal, scale: float, same: list[tuple[Explanation, Explanation]]
+    ) -> dict[tuple[str, str], float]:
+        f_c = np.asarray(cand.frequencies_hz, dtype=float)
+        both = past + LineSet(f_c, np.asarray(cand.amplitudes), noise_of(cand),
+                              np.full(f_c.size, scale))  # fmt: skip
         out = {}
         for i, j in pairs:
             if (i, j) not in same:
-                v = mimics[id(j)].evidence(response(i, both.f), both)
+                v = mimics[id(j)].evidence(response(i, both.f, both.scales), both)
                 if v is not None:  # left out: j's refit lies at a bound (no explanation)
                     out[i.label, j.label] = v
         return out
 
-    # the lines chosen, then fewer of them: each multisine is scaled as a whole to the limits,
-    # so a line added can cost the others more than it brings
-    options: list[DescribingSignal] = []
-    for n in range(len(chosen), 0, -1):
-        s = _multisine(platform, dof, [(float(freqs[k]), tops[k])
-                                       for k in sorted(chosen[:n])], budget_s)  # fmt: skip
-        if s is not None:  # the first line alone fits (each kept frequency was tried alone)
-            options.append(s)
-    sig, known, kept_note = options[0], None, []
-    if len(options) > 1 and any(p not in same for p in pairs):
-        weighed = [(s, line_evidence(s, noise_of(s))) for s in options]
-        sig, known = weighed[lines_kept(weighed)]
-        if sig is not options[0]:
-            kept_note.append(
-                f"{len(sig.frequencies_hz)} of the {len(options[0].frequencies_hz)} lines "
-                "chosen: their multisine, scaled as a whole to the limits, is likelier to "
-                "decide (chance " + ", ".join(f"{deciding_chance(ev.values()):.2f}"
-                                             for _, ev in weighed) + " with "
-                + ", ".join(str(len(s.frequencies_hz)) for s, _ in weighed) + " lines)"
-            )  # fmt: skip
+    def choose(scale: float) -> _Chosen:
+        """Choose the lines of a run at filter setting ``scale`` x the nominal's; weigh them."""
+        at = LineSet(band.f, band.amplitude, band.noise, np.full(band.f.size, scale))
+        per_line: dict[tuple[str, str], FloatArray] = {}
+        same: list[tuple[Explanation, Explanation]] = []
+        everything = past + at
+
+        def weigh_lines(to_weigh: list[tuple[Explanation, Explanation]]) -> None:
+            mimics.update({id(e): Mimic(case, dof, e) for pair in to_weigh for e in pair})
+            for n, (i, j) in enumerate(to_weigh):
+                if progress:
+                    progress("design: refitting each explanation to the others", n, len(to_weigh))
+                theta = mimics[id(j)].fit(response(i, everything.f, everything.scales), everything)
+                if mimics[id(j)].at_bound(theta):
+                    continue  # j mimics i only at the edge of what it can be: not an explanation
+                hi = response(i, at.f, scale)
+                d = hi - mimics[id(j)].response(theta, at.f, scale)
+                e = 2 * np.abs(d) ** 2 * at.amplitude**2 / at.noise**2
+                if np.max(np.abs(d / hi)) < SAME_RESPONSE:  # the same response
+                    if (i, j) in pairs:
+                        same.append((i, j))
+                else:
+                    per_line[i.label, j.label] = e
+
+        weigh_lines([*pairs, *stand_ins(both=True)])
+        if not per_line:
+            weigh_lines(stand_ins(both=False))
+        chosen: list[int] = []
+
+        def score_of(sums: Sequence[float]) -> tuple[float, float]:
+            """Pairs brought past twice the margin count no more; then the weakest pair."""
+            return (sum(min(x, ENOUGH) for x in sums), min(sums, default=0.0))
+
+        def score(lines_: list[int]) -> tuple[float, float]:
+            if not per_line:  # only pairs that need simulating: the lines the noise favours
+                return (float(np.sum(at.amplitude[lines_] / at.noise[lines_])), 0.0)
+            return score_of([float(v[lines_].sum()) for v in per_line.values()])
+
+        for _ in range(min(LINES, freqs.size)):
+            best = max((k for k in range(freqs.size) if k not in chosen),
+                       key=lambda k: score([*chosen, k]))  # fmt: skip
+            chosen.append(best)
+        # the lines chosen, then fewer of them: each multisine is scaled as a whole to the
+        # limits, so a line added can cost the others more than it brings
+        options: list[DescribingSignal] = []
+        for n in range(len(chosen), 0, -1):
+            s = _multisine(platform, dof, [(float(freqs[k]), tops[k])
+                                           for k in sorted(chosen[:n])], budget_s)  # fmt: skip
+            if s is not None:  # the first line alone fits (each kept frequency was tried alone)
+                options.append(s)
+        sig, known, note = options[0], None, []
+        if len(options) > 1 and any(p not in same for p in pairs):
+            weighed = [(s, line_evidence(s, scale, same)) for s in options]
+            sig, known = weighed[lines_kept(weighed)]
+            if sig is not options[0]:
+                note.append(
+                    f"{len(sig.frequencies_hz)} of the {len(options[0].frequencies_hz)} lines "
+                    "chosen: their multisine, scaled as a whole to the limits, is likelier to "
+                    "decide (chance " + ", ".join(f"{deciding_chance(ev.values()):.2f}"
+                                                 for _, ev in weighed) + " with "
+                    + ", ".join(str(len(s.frequencies_hz)) for s, _ in weighed) + " lines)"
+                )  # fmt: skip
+        if known is None and any(p not in same for p in pairs):
+            known = line_evidence(sig, scale, same)
+        return sig, known, note, per_line, same
+
+    # at the nominal filter setting, and, where the platform has a filter, at the settings
+    # the thesis measured the MPI at (Ch. 4): a filter opened lets the lines through
+    nominal_hz = case.config.breaks_hz[dof_index(dof)]
+    scales = [1.0]
+    if nominal_hz is not None and pairs and not case.config.of("platform_filter"):
+        scales += [hz / nominal_hz for hz in FILTER_SETTINGS_HZ if hz > nominal_hz * (1 + 1e-9)]
+    chosen_runs = [choose(k) for k in scales]
+    at_setting = [deciding_chance((r[1] or {}).values()) for r in chosen_runs]
+    pick = next(n for n, c in enumerate(at_setting) if c >= max(at_setting) - AS_LIKELY)
+    scale = scales[pick]
+    sig, known, kept_note, per_line, same = chosen_runs[pick]
+    if pick:
+        kept_note.append(
+            f"record this run with the platform filter set to {nominal_hz * scale:g} Hz "
+            f"(nominal {nominal_hz:g} Hz; the thesis' Ch. 4 measured the MPI at 1, 5 and "
+            "10 Hz): at the nominal setting the filter hides the lines that tell the "
+            "explanations apart (chance to decide " + ", ".join(
+                f"{c:.2f} at {nominal_hz * k:g} Hz" for k, c in zip(scales, at_setting, strict=True)
+            ) + "); twin design writes the setting as config.json: import the run with "
+            "--config config.json, then diagnose the old runs and the new one without --config"
+        )  # fmt: skip
     w_new = sig.window[1] - sig.window[0]
     noise_new = noise_of(sig)
     sim = SimulatedEvidence(case, dof, max_hz) if simulated else None
@@ -859,11 +940,11 @@ def design_run(
     for n, factor in enumerate(levels):
         cand = sig if factor == 1.0 else scaled(sig, dof, factor)
         evidence = dict(known) if factor == 1.0 and known is not None \
-            else line_evidence(cand, noise_new)  # fmt: skip
+            else line_evidence(cand, scale, same)  # fmt: skip
         if sim is not None:
             if progress:
                 progress("design: simulating each explanation at each amplitude", n, len(levels))
-            lines_new = sim.candidate(cand, noise_new, f"designed run x{factor!r}")
+            lines_new = sim.candidate(cand, noise_new, f"designed run x{factor!r}", scale)
             for i, j in simulated:
                 v = sim.evidence(i.extensions, j.extensions, lines_new)
                 if v is not None:
@@ -898,7 +979,8 @@ def design_run(
     tried = tuple((peak_position(r[2], dof), r[0], c) for r, c in zip(runs, chances, strict=True))
     if sim is not None:
         notes.append(
-            "a backlash among the explanations: its pairs simulated and refitted at "
+            "a backlash among the explanations or their rivals: its pairs simulated and "
+            "refitted at "
             f"{len(levels)} amplitude(s) of the lines (peak motion "
             + ", ".join(f"{p:.3g}" for p, *_ in tried)
             + f" {position_unit(dof)}; the chance that every pair passes the margin "
@@ -918,8 +1000,16 @@ def design_run(
         Candidate(float(f), float(a), window, 0.0, {k: float(v[n]) for k, v in per_line.items()})
         for n, (f, a) in enumerate(zip(freqs, tops, strict=True))
     )
+    setting = None
+    if scale != 1.0:
+        setting = case.config.filter_scaled(scale)
+        setting = setting.replace(
+            name=f"{case.config.name}-fb{setting.filter_break_hz:g}",
+            description=f"{case.config.name} with the platform filter set to "
+            f"{setting.filter_break_hz:g} Hz: the setting of a designed run",
+        )
     return DesignResult(dof, platform, tuple(expls), run, singles, sig, source, tuple(notes),
-                        tried)  # fmt: skip
+                        tried, setting, scale)  # fmt: skip
 
 
 def design_from(
@@ -975,6 +1065,7 @@ def design_from(
         dofs=[dof],  # type: ignore[index]
         realisations=2,
         progress=progress,
+        filter_scales=doc["nominal"].get("filter_scales"),  # type: ignore[union-attr]
     )
     band = doc["nominal"].get("band_hz") or [None, None]  # type: ignore[union-attr]
     max_hz = float(band[1]) if band[1] is not None else np.inf
@@ -995,7 +1086,13 @@ def _run_paths(nominal: dict, path: Path) -> list[str]:
 
 
 def write_design(result: DesignResult, out: Path) -> None:
-    """Write ``design.json``, ``commands.csv`` (twin-run/1) and ``schedule.toml`` into ``out``."""
+    """Write ``design.json``, ``commands.csv`` (twin-run/1) and ``schedule.toml`` into ``out``.
+
+    Where the run is to be recorded at another filter setting, also ``config.json``
+    (``twin-config/1``: the nominal at that setting, for ``twin import --config``).
+    """
+    if result.setting is not None:
+        result.setting.save(out / "config.json")
     (out / "design.json").write_text(
         json.dumps(result.to_dict(), indent=2) + "\n", encoding="utf-8"
     )
@@ -1003,8 +1100,13 @@ def write_design(result: DesignResult, out: Path) -> None:
     sig = result.signal
     f = [float(x) for x in sig.frequencies_hz]
     position = [float(a) / (2 * np.pi * x) ** 2 for a, x in zip(sig.amplitudes, f, strict=True)]  # type: ignore[arg-type]
+    at = [] if result.setting is None else [
+        f"# record with the platform filter set to {result.setting.filter_break_hz:g} Hz "
+        "(config.json)"
+    ]  # fmt: skip
     schedule = "\n".join(
         [
+            *at,
             'schedule = "twin-schedule/1"',
             f'name = "designed run in {result.dof}"',
             "",

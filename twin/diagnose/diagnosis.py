@@ -390,6 +390,7 @@ class Diagnosis:
             "nominal": {
                 "platform": self.case.config.platform,
                 "platform_config": self.case.config.to_meta(),
+                "filter_scales": list(self.case.filter_scales),
                 "model": self.case.model,
                 "runs": self.runs,
                 "run_paths": [str(Path(r).resolve()) for r in self.runs],
@@ -587,7 +588,8 @@ def diagnose(
     if physics:
         if progress:
             progress("physical causes (full model)")
-        d.physical = calibrate(case.config, case.runs, case.imu, seed, max_hz, progress)
+        d.physical = calibrate(case.config, case.runs, case.imu, seed, max_hz, progress,
+                               case.filter_scales)  # fmt: skip
         chain = [f for f in d.chain_findings if f.extension.effect != "noise"]
         extended = case.config.replace(extensions=(*case.config.extensions,
                                                    *(f.extension for f in chain)))  # fmt: skip

@@ -173,6 +173,9 @@ class Calibration:
         Top of the band.
     progress : callable, optional
         Called with a count of the simulations done.
+    filter_scales : sequence of float
+        Each run's platform-filter setting over the nominal's (empty: all at the nominal's;
+        :meth:`twin.diagnose.data.Case.config_of`).
 
     """
 
@@ -182,6 +185,7 @@ class Calibration:
     seed: int
     max_hz: float
     progress: ProgressFn | None = None
+    filter_scales: Sequence[float] = ()
     done: int = 0
     total: int = 0
 
@@ -206,7 +210,8 @@ class Calibration:
         lock = threading.Lock()  # local: a result that holds this calibration pickles
 
         def one(cfg: MotionSystem, r: int) -> Simulated:
-            sim = simulate_run(cfg, self.runs[r][1], self.imu, self.seed)
+            scale = self.filter_scales[r] if self.filter_scales else 1.0
+            sim = simulate_run(cfg.filter_scaled(scale), self.runs[r][1], self.imu, self.seed)
             with lock:
                 self.done += 1
                 if self.progress:
@@ -419,6 +424,7 @@ def calibrate(
     seed: int = 0,
     max_hz: float = 15.0,
     progress: ProgressFn | None = None,
+    filter_scales: Sequence[float] = (),
 ) -> PhysicalResult:
     """Fit the physical vocabulary to recorded runs on the full model (see the module).
 
@@ -436,9 +442,11 @@ def calibrate(
         Top of the analysis band [Hz].
     progress : callable, optional
         Called with the count of simulations.
+    filter_scales : sequence of float
+        Each run's platform-filter setting over the nominal's (empty: the nominal's).
 
     """
-    cal = Calibration(config, runs, imu, seed, max_hz, progress)
+    cal = Calibration(config, runs, imu, seed, max_hz, progress, filter_scales)
     r0 = cal.residuals(cal.nominal)
     chi2_0 = cal.chi2(cal.nominal)
     cands = candidates(config)

@@ -55,7 +55,11 @@ def summary(d: Diagnosis) -> str:
         f"- nominal: `{cfg.name}` on the {cfg.platform} platform ({d.case.model} model); "
         f"filter {f'{cfg.filter_break_hz:g} Hz' if cfg.filter_break_hz else 'none'}, "
         f"delay {cfg.delay_s * 1e3:.1f} ms, "
-        f"noise {'on' if cfg.noise else 'off'}",
+        f"noise {'on' if cfg.noise else 'off'}"
+        + "".join(
+            f"; {run} recorded with the filter at {hz:g} Hz"
+            for run, hz in d.case.settings_hz.items()
+        ),
         f"- evidence: the excited lines up to {d.max_hz:g} Hz, their uncertainty from the "
         "measurement's own noise (neighbouring bins); every effect and pair of effects fitted "
         "jointly; a set is named when its BIC and each member's improve by more than 10 and "

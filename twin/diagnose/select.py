@@ -209,13 +209,24 @@ def select(
                 refined.add(k)
 
     def needed(es: tuple[str, ...]) -> dict[str, float]:
-        """BIC improvement of each member over the set without it (inf for a single)."""
+        """BIC improvement of each member over the set without it (inf for a single).
+
+        A rest with a backlash that was only screened is refined first, from the set's own
+        values too: a refined set against a screened one would make any member look needed
+        (a lead at 0 beside a play and a moved filter, whose screen left the play at half).
+        """
         f = fits[tuple(sorted(es))]
         out = {}
         for e in es:
             rest = tuple(x for x in es if x != e)
             if rest:
                 r = fit(rest)
+                key = tuple(sorted(rest))
+                if "backlash" in key and len(key) > 1 and key not in refined:
+                    own = {k: v for k, v in _start(f).items() if k in key}
+                    tries = [fit_set(key, model, evidence, start) for start in (_start(r), own)]
+                    fits[key] = r = min(tries, key=lambda x: x.chi2)
+                    refined.add(key)
                 out[e] = bic_gain(r.chi2, f.chi2, f.parameters - r.parameters, n)
             else:
                 out[e] = gain_of(es)
@@ -224,14 +235,23 @@ def select(
     def named_ok(k: tuple[str, ...]) -> bool:
         return gain_of(k) > BIC_MARGIN and all(v > BIC_MARGIN for v in needed(k).values())
 
-    passing = [k for k in fits if named_ok(k)]
-    chosen: tuple[str, ...] = ()
-    if passing:  # Occam's window: the fewest parameters among the sets near the best
+    def occam() -> tuple[str, ...]:
+        """Return the fewest parameters among the nameable sets near the best (none: ())."""
+        passing = [k for k in fits if named_ok(k)]
+        if not passing:
+            return ()
         top = max(gain_of(k) for k in passing)
         near = [k for k in passing if gain_of(k) >= top - OCCAM_WINDOW]
-        chosen = min(near, key=lambda k: (fits[k].parameters, -gain_of(k)))
-    if "backlash" in chosen and len(chosen) > 1 and chosen not in refined:  # screened only
-        fits[chosen] = fit_set(chosen, model, evidence, _start(fits[chosen]))
+        return min(near, key=lambda k: (fits[k].parameters, -gain_of(k)))
+
+    def refine(chosen: tuple[str, ...]) -> None:
+        if "backlash" in chosen and len(chosen) > 1 and chosen not in refined:  # screened only
+            fits[chosen] = fit_set(chosen, model, evidence, _start(fits[chosen]))
+            refined.add(chosen)
+
+    chosen = occam()
+    refine(chosen)
+    screened = len(refined)
     if len(chosen) == 2:  # forward: a third effect on top of the named pair
         best = None
         for e in effects:
@@ -251,6 +271,9 @@ def select(
                 best = trio
         if best is not None:
             chosen = best
+        if len(refined) > screened:  # a pair with a play refined only now may be the better
+            chosen = occam()
+            refine(chosen)
     table = [
         {
             "effects": list(k),

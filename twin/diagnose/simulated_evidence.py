@@ -82,25 +82,29 @@ class SimulatedEvidence:
                 m = m.anchored(shaping)
         return m
 
-    def candidate(self, sig: DescribingSignal, sd: FloatArray, name: str) -> Lines:
+    def candidate(
+        self, sig: DescribingSignal, sd: FloatArray, name: str, filter_scale: float = 1.0
+    ) -> Lines:
         """Return the lines of a candidate run: the nominal twin simulated on its commands.
 
-        ``sd``: the noise expected of each line's amplitude over the run's window.
+        ``sd``: the noise expected of each line's amplitude over the run's window;
+        ``filter_scale``: the run's platform-filter setting over the nominal's.
         """
         cmd = sig.commands
         t = np.arange(round(cmd.duration * ANALYSIS_RATE_HZ)) / ANALYSIS_RATE_HZ
         pred = simulate_measurement(
-            self.case.clean, cmd, t, self.case.model, self.case.seed, self.case.imu.ideal()
-        )
+            self.case.clean.filter_scaled(filter_scale), cmd, t, self.case.model,
+            self.case.seed, self.case.imu.ideal(),
+        )  # fmt: skip
         k = dof_index(self.dof)
         lines_hz = np.asarray(sig.frequencies_hz, dtype=float)
         ch = Channel(name, self.dof, t, pred[:, k], pred[:, k], np.zeros((2, 1, t.size)),
-                     lines_hz, tuple(sig.window), cmd)  # fmt: skip
+                     lines_hz, tuple(sig.window), cmd, filter_scale)  # fmt: skip
         return self._lines(ch, sd)
 
     def truth(self, extensions: Sequence[Extension], lines: Lines) -> ComplexArray:
         """Return the line amplitudes of one run if ``extensions`` were true (noise-free)."""
-        key = (lines.channel.run, lines.window, tuple(lines.f),
+        key = (lines.channel.run, lines.channel.filter_scale, lines.window, tuple(lines.f),
                tuple((e.effect, repr(e.parameters), e.dofs) for e in extensions))  # fmt: skip
         if key not in self._truths:
             try:
