@@ -115,6 +115,20 @@ def test_the_designed_run_separates_what_it_predicts(diagnosed, tmp_path):
     assert named == "delay" or "delay" in still
 
 
+def test_a_platform_whose_filter_cannot_change_keeps_its_setting(diagnosed, tmp_path, capsys):
+    root, _ = diagnosed
+    capsys.readouterr()
+    out = tmp_path / "kept"
+    assert main(["design", str(root / "diag"), "--out", str(out), "--json", "--quiet",
+                 "--keep-filter"]) == 0  # fmt: skip
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["run"]["filter_break_hz"] is None and doc["run"]["config"] is None
+    assert not (out / "config.json").exists()
+    assert not any("filter set to" in n for n in doc["notes"])
+    # behind the 1 Hz filter no run within the budget decides it, and the design says so
+    assert not doc["decides"]
+
+
 def test_design_refuses_what_it_cannot_design_in_one_line(diagnosed, tmp_path, capsys):
     root, _ = diagnosed
     assert main(["design", str(root / "diag"), "--finding", "9", "--out", str(tmp_path / "a")]) == 2
@@ -257,10 +271,13 @@ def test_a_design_decides_when_every_pair_passes_the_margin():
     tried = _designed().to_dict()["amplitudes_tried"]
     assert tried == [{"peak_motion": 0.1, "motion_unit": "rad", "weakest_delta_bic": 45.0,
                       "chance_to_decide": 0.99}]  # fmt: skip
-    weak = Candidate(1.0, 0.5, 100.0, 120.0, {("delay", "lead"): BIC_MARGIN / 2})
+    weak = Candidate(1.0, 0.5, 100.0, 120.0, {("delay", "lead"): BIC_MARGIN / 2,
+                                              ("lead", "delay"): 3 * BIC_MARGIN})  # fmt: skip
     d = DesignResult("roll", "mpi", (), weak, (weak,), _designed().signal, "d")
     assert not d.decides
-    assert "not expected to decide within the budget" in d.summary_lines()[-1]
+    last = d.summary_lines()[-1]
+    assert "not expected to decide within the budget" in last
+    assert "if delay, against lead" in last  # the pair that falls short, named
 
 
 def test_a_design_follows_the_result_protocol():

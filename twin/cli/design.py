@@ -65,6 +65,13 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         help="shorten the run to the fewest whole base periods (at least 20 s) expected to "
         "decide with chance 0.95 (off: the whole budget, evidence to spare)",
     )
+    p.add_argument(
+        "--keep-filter",
+        action="store_true",
+        help="keep the platform filter at the diagnosed runs' setting (a platform whose filter "
+        "cannot be changed; by default the design may ask for it opened to 5 or 10 Hz, the "
+        "settings the thesis measured the MPI at)",
+    )
     p.set_defaults(func=_cmd_design)
 
 
@@ -81,6 +88,7 @@ def _cmd_design(args: argparse.Namespace) -> int:
         args.budget_s,
         common.progress(args),
         args.shortest,
+        args.keep_filter,
     )
     with replacing_dir(out, "design.json") as tmp:
         write_design(result, tmp)

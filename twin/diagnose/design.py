@@ -263,6 +263,7 @@ class DesignResult:
     def summary_lines(self) -> list[str]:
         """Return the design as the terminal shows it."""
         b, unit = self.best, acceleration_unit(self.dof)
+        weakest = min(b.evidence, key=b.evidence.__getitem__, default=("-", "-"))
         sig = self.signal
         lines = ", ".join(
             f"{f:g} Hz {a:.3g} {unit}"
@@ -282,7 +283,8 @@ class DesignResult:
             f"expected to decide (every pair above {BIC_MARGIN:g})"
             if self.decides
             else f"not expected to decide within the budget (weakest pair {b.weakest:.1f}, "
-            f"below {BIC_MARGIN:g}); the evidence grows with the measured time: about "
+            f"below {BIC_MARGIN:g}: if {weakest[0]}, against {weakest[1]}); the evidence grows "
+            "with the measured time: about "
             f"{b.window_s * BIC_MARGIN / max(b.weakest, 1e-9):.3g} s of it would be needed"
         )
         return [*out, *(f"note: {n}" for n in self.notes)]
@@ -729,6 +731,7 @@ def design_run(
     progress: ProgressFn | None = None,
     source: str = "",
     shortest: bool = False,
+    filter_settings_hz: Sequence[float] = FILTER_SETTINGS_HZ,
 ) -> DesignResult:
     """Choose the multisine within ``budget_s`` that best tells ``expls`` apart.
 
@@ -757,6 +760,14 @@ def design_run(
     Off by default: on a hold-out the project does not see, a 15 ms delay that a 120 s run
     decided stayed ambiguous after the 22 s run this chose (the expected evidence is a
     model's, and a run at the margin of it has none to spare).
+
+    Where the platform has a filter (and no explanation of the nominal moves it already),
+    the lines are chosen and weighed at the nominal setting and at each of
+    ``filter_settings_hz`` above it (the thesis' Ch. 4 settings of the MPI by default; empty:
+    the nominal's only, for a platform whose filter cannot be changed); another setting is
+    kept only where its chance to decide (on the linear pairs) beats the nominal's by more
+    than :data:`AS_LIKELY` (a lower one first, of settings as likely). The run is then to be
+    recorded at that setting (:attr:`DesignResult.setting`).
 
     Raises
     ------
@@ -916,7 +927,8 @@ def design_run(
     nominal_hz = case.config.breaks_hz[dof_index(dof)]
     scales = [1.0]
     if nominal_hz is not None and pairs and not case.config.of("platform_filter"):
-        scales += [hz / nominal_hz for hz in FILTER_SETTINGS_HZ if hz > nominal_hz * (1 + 1e-9)]
+        scales += [hz / nominal_hz for hz in sorted(filter_settings_hz)
+                   if hz > nominal_hz * (1 + 1e-9)]  # fmt: skip
     chosen_runs = [choose(k) for k in scales]
     at_setting = [deciding_chance((r[1] or {}).values()) for r in chosen_runs]
     pick = next(n for n, c in enumerate(at_setting) if c >= max(at_setting) - AS_LIKELY)
@@ -1020,6 +1032,7 @@ def design_from(
     budget_s: float = BUDGET_S,
     progress: ProgressFn | None = None,
     shortest: bool = False,
+    keep_filter: bool = False,
 ) -> DesignResult:
     """Design the next run of a diagnosis folder (``twin diagnose --out``'s).
 
@@ -1040,6 +1053,9 @@ def design_from(
         Called with what is being done.
     shortest : bool
         Shorten the run to the fewest base periods expected to decide (see :func:`design_run`).
+    keep_filter : bool
+        Keep the platform filter at the diagnosed runs' setting (a platform whose filter
+        cannot be changed); by default the thesis' 5 and 10 Hz are weighed too.
 
     Raises
     ------
@@ -1069,7 +1085,8 @@ def design_from(
     )
     band = doc["nominal"].get("band_hz") or [None, None]  # type: ignore[union-attr]
     max_hz = float(band[1]) if band[1] is not None else np.inf
-    return design_run(case, expls, dof, budget_s, max_hz, progress, str(path), shortest)
+    return design_run(case, expls, dof, budget_s, max_hz, progress, str(path), shortest,
+                      () if keep_filter else FILTER_SETTINGS_HZ)  # fmt: skip
 
 
 def _run_paths(nominal: dict, path: Path) -> list[str]:
