@@ -100,7 +100,7 @@ def _designed(h: Hidden, old: list[Path], d: Diagnosis, work: Path) -> dict[str,
         "decides": plan.decides,
         "weakest": plan.best.weakest,
         "lines_hz": [float(f) for f in plan.signal.frequencies_hz],
-        "filter_hz": None if plan.setting is None else plan.setting.filter_break_hz,
+        "filter_hz": plan.setting.filter_break_hz if plan.filter_changed else None,  # type: ignore[union-attr]
         "duration_s": plan.signal.commands.duration,
         "first": top[0].extension.describe() if top else None,
         "alternatives": [a.get("effects") for a in (top[0].evidence.get("alternatives") or [])]

@@ -85,7 +85,8 @@ def test_design_writes_a_run_the_platform_can_play(diagnosed, tmp_path, capsys):
     assert {"delay", "platform_lag"} <= labels
     # behind the 1 Hz filter the lines that tell a delay from a lag are cut to nothing: the
     # run is to be recorded with the filter opened (the thesis' Ch. 4 settings), and says so
-    assert run["filter_break_hz"] in (5.0, 10.0) and run["config"] == "config.json"
+    assert run["filter_break_hz"] in (5.0, 10.0) and run["filter_changed"]
+    assert run["config"] == "config.json"
     setting = resolve(out / "config.json")
     assert setting.filter_break_hz == run["filter_break_hz"] and setting.delay_s == MPI.delay_s
     assert any(f"filter set to {run['filter_break_hz']:g} Hz" in n for n in doc["notes"])
@@ -122,8 +123,8 @@ def test_a_platform_whose_filter_cannot_change_keeps_its_setting(diagnosed, tmp_
     assert main(["design", str(root / "diag"), "--out", str(out), "--json", "--quiet",
                  "--keep-filter"]) == 0  # fmt: skip
     doc = json.loads(capsys.readouterr().out)
-    assert doc["run"]["filter_break_hz"] is None and doc["run"]["config"] is None
-    assert not (out / "config.json").exists()
+    assert doc["run"]["filter_break_hz"] == 1.0 and not doc["run"]["filter_changed"]
+    assert resolve(out / "config.json").filter_break_hz == 1.0  # the setting to record at
     assert not any("filter set to" in n for n in doc["notes"])
     # behind the 1 Hz filter no run within the budget decides it, and the design says so
     assert not doc["decides"]

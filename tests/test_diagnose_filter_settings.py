@@ -14,7 +14,7 @@ import pytest
 from twin.chain.config import motion_system
 from twin.chain.extensions import Extension
 from twin.chain.signals import MultiSine, periodic_signal
-from twin.core.errors import ConfigError
+from twin.core.errors import ConfigError, SignalError
 from twin.diagnose.data import load_case
 from twin.diagnose.diagnosis import diagnose
 from twin.diagnose.hidden import NUISANCE_RANGES, draw, judged, play, record, record_runs
@@ -43,8 +43,23 @@ def test_runs_at_other_filter_settings_are_each_compared_at_their_own(tmp_path):
     assert np.all(np.abs(ratio - 1) < 0.1), ratio
     d = diagnose([*old, *new], seed=3)
     assert not d.findings, [f.extension.describe() for f in d.findings]
-    # with --config every run is compared with the configuration given (its setting too)
-    assert {c.filter_scale for c in load_case([*old, *new], mpi, realisations=2).channels} == {1}
+    # the nominal is the one at the lowest setting, whatever the runs' order
+    assert [c.filter_scale for c in load_case([*new, *old], realisations=2).channels] == [10, 1]
+    # a run at 10 Hz validates a diagnosis of the 1 Hz one, each at its own setting
+    assert not diagnose(old, validate=new, seed=3).findings
+    opened_val = load_case(new, mpi, realisations=2, own_filter=True)
+    assert opened_val.channels[0].filter_scale == 10.0
+    # a configuration given compares every run at its one setting: refused for runs that say
+    # they were recorded at different ones
+    with pytest.raises(SignalError, match="different platform-filter settings"):
+        load_case([*old, *new], mpi, realisations=2)
+    with pytest.raises(SignalError, match="filter_scales: one positive number per run"):
+        load_case([*old, *new], mpi, realisations=2, filter_scales=[1.0, None])
+    # other parts of the nominal must agree: a run naming another delay is refused
+    slower = record_runs(mpi, mpi.replace(delay_s=0.06), "heave", tmp_path / "slow", 5,
+                         signals=(2,))  # fmt: skip
+    with pytest.raises(SignalError, match="different nominal configurations"):
+        load_case([*old, *slower], realisations=2)
 
 
 def test_a_true_filter_off_its_setting_is_off_by_the_same_factor_at_another():

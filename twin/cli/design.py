@@ -22,7 +22,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         parents=[
             common.out_parent(
                 common.default_out_help(
-                    "folder for design.json, commands.csv and schedule.toml",
+                    "folder for design.json, commands.csv, schedule.toml and config.json",
                     "design",
                     "<diagnosis folder's name>",
                 )
@@ -68,7 +68,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--keep-filter",
         action="store_true",
-        help="keep the platform filter at the diagnosed runs' setting (a platform whose filter "
+        help="keep the platform filter at the nominal's setting (a platform whose filter "
         "cannot be changed; by default the design may ask for it opened to 5 or 10 Hz, the "
         "settings the thesis measured the MPI at)",
     )
@@ -101,11 +101,13 @@ def _cmd_design(args: argparse.Namespace) -> int:
         f"wrote {out}/commands.csv (twin-run/1 commands), {out}/schedule.toml "
         f"(twin-schedule/1) and {out}/design.json"
     )
-    if result.setting is not None:
-        print(
-            f"wrote {out}/config.json: the nominal with the platform filter at "
-            f"{result.setting.filter_break_hz:g} Hz, the setting to record the run at"
-        )
+    fb = result.setting.filter_break_hz if result.setting is not None else None
+    print(
+        f"wrote {out}/config.json: the configuration to record the run at ("
+        + ("no platform filter" if fb is None else f"platform filter at {fb:g} Hz")
+        + ")"
+    )
+    if result.filter_changed:
         print(
             "next: run it on the platform with the filter at that setting, import it (twin "
             f"import --config {out}/config.json), then twin diagnose the old runs and the new "
@@ -113,7 +115,7 @@ def _cmd_design(args: argparse.Namespace) -> int:
         )
         return 0
     print(
-        "next: run it on the platform, import it (twin import), then twin diagnose the old "
-        "runs and the new one together"
+        f"next: run it on the platform, import it (twin import --config {out}/config.json), "
+        "then twin diagnose the old runs and the new one together"
     )
     return 0

@@ -271,11 +271,17 @@ def measurement_channels(
     return out
 
 
+def _setting(config: MotionSystem) -> str:
+    """Return a configuration's filter setting in words."""
+    fb = config.filter_break_hz
+    return "no filter" if fb is None else f"filter at {fb:g} Hz"
+
+
 def _as_nominal(config: MotionSystem) -> str:
     """Return what a configuration says of the platform (name, description, filter setting aside).
 
     The filter's break is a setting a run may change (:meth:`Case.config_of`): runs that
-    differ only in it name one nominal, with or without a filter.
+    differ only in it name one nominal (whether there is a filter at all is not a setting).
     """
     meta = {k: v for k, v in config.to_meta().items() if k not in ("name", "description")}
     meta["filter_break_hz"] = config.filter_break_hz is not None
@@ -291,6 +297,7 @@ def load_case(
     realisations: int = NOISE_REALISATIONS,
     progress: ProgressFn | None = None,
     filter_scales: Sequence[float] | None = None,
+    own_filter: bool = False,
 ) -> Case:
     """Read runs, simulate the nominal twin on their commands and its noise.
 
@@ -299,10 +306,10 @@ def load_case(
     runs : sequence of path
         ``twin-run/1`` folders of the same platform.
     config : str or MotionSystem, optional
-        Nominal configuration, for every run; by default the runs' ``meta.json``
-        (``platform`` and ``platform_config``), which must then name the same one, but for
-        the platform filter's setting: each run is then compared at its own (the nominal is
-        the first run's).
+        Nominal configuration, for every run at its setting of the platform filter; by
+        default the runs' ``meta.json`` (``platform`` and ``platform_config``), which must
+        then name the same one but for the filter's setting: each run is then compared at its
+        own, and the nominal is the one at the lowest setting among them.
     model : str
         ``"reduced"`` (default) or ``"full"``.
     seed : int
@@ -316,6 +323,10 @@ def load_case(
     filter_scales : sequence of float, optional
         Each run's platform-filter setting over the nominal's (as a diagnosis wrote them:
         ``nominal.filter_scales``); by default 1 with ``config``, the runs' own without.
+    own_filter : bool
+        With ``config``: compare each run at its own filter setting over ``config``'s (the
+        runs must then name ``config`` but for the setting: validation runs of a diagnosis
+        without ``config``).
 
     Raises
     ------
@@ -324,7 +335,9 @@ def load_case(
         given twice (:func:`twin.formats.run_checks.check_distinct`).
     SignalError
         Unknown model, platforms that differ, runs naming different nominal configurations
-        without ``config``, nothing driven.
+        without ``config`` (or with ``own_filter``), runs at different filter settings with
+        ``config`` (without ``own_filter`` or ``filter_scales``), ``filter_scales`` that are
+        not one positive number per run, nothing driven.
 
     """
     if model not in MODELS:
@@ -344,20 +357,10 @@ def load_case(
     platforms = {m.config.platform for m in measurements}
     if len(platforms) > 1:
         raise SignalError(f"the runs are of different platforms ({', '.join(sorted(platforms))})")
-    scales = [1.0] * len(measurements)
-    if config is None:
-        nominal = measurements[0].config
-        other = next((m for m in measurements if _as_nominal(m.config) != _as_nominal(nominal)),
-                     None)  # fmt: skip
-        if other is not None:
-            raise SignalError(
-                f"the runs name different nominal configurations ({measurements[0].source}: "
-                f"{nominal.name!r}; {other.source}: {other.config.name!r}); the nominal is the "
-                "model every run is compared with: give it (--config NAME or FILE)"
-            )
-        if nominal.filter_break_hz is not None:  # each run at its own filter setting
-            scales = [m.config.filter_break_hz / nominal.filter_break_hz  # type: ignore[operator]
-                      for m in measurements]  # fmt: skip
+    settings = [m.config.filter_break_hz for m in measurements]
+    if config is None:  # the nominal: the runs' own, at the lowest filter setting among them
+        nominal = min(measurements, key=lambda m: m.config.filter_break_hz or 0.0).config
+        own_filter = True
     else:
         nominal = resolve(config)
         if nominal.platform not in platforms:
@@ -365,15 +368,36 @@ def load_case(
                 f"configuration {nominal.name!r} is of the {nominal.platform} platform; the runs "
                 f"are of the {platforms.pop()}"
             )
+    if own_filter:
+        other = next((m for m in measurements if _as_nominal(m.config) != _as_nominal(nominal)),
+                     None)  # fmt: skip
+        if other is not None:
+            raise SignalError(
+                f"the runs name different nominal configurations ({other.source}: "
+                f"{other.config.name!r}; the nominal: {nominal.name!r}); the nominal is the "
+                "model every run is compared with: give it (--config NAME or FILE)"
+            )
+    elif filter_scales is None and len(set(settings)) > 1:
+        raise SignalError(
+            "the runs were recorded at different platform-filter settings ("
+            + ", ".join(f"{m.source}: {_setting(m.config)}" for m in measurements)
+            + "); a configuration given (--config or an override) compares every run at its "
+            f"setting ({_setting(nominal)}): leave it out to compare each run at its own"
+        )
+    scales = [1.0] * len(measurements)
+    if own_filter and nominal.filter_break_hz is not None:  # each run at its own setting
+        scales = [s / nominal.filter_break_hz for s in settings]  # type: ignore[operator]
     if filter_scales is not None:
-        if len(filter_scales) != len(measurements) or not all(
-            np.isfinite(k) and k > 0 for k in filter_scales
-        ):
+        try:
+            given = [float(k) for k in filter_scales]
+        except (TypeError, ValueError):
+            given = []
+        if len(given) != len(measurements) or not all(np.isfinite(k) and k > 0 for k in given):
             raise SignalError(
                 f"filter_scales: one positive number per run ({len(measurements)}); got "
                 f"{list(filter_scales)!r}"
             )
-        scales = [float(k) for k in filter_scales]
+        scales = given
     imu = nominal_imu(measurements[0].meta, nominal.platform)
     unidentifiable = {}
     for m in measurements:

@@ -158,8 +158,8 @@ class Candidate:
 class DesignResult:
     """The designed run, why, and what else was weighed.
 
-    ``setting``: the configuration to record the run at, where the design opens the platform
-    filter (None: the diagnosed runs' nominal setting), ``filter_scale`` times the nominal's.
+    ``setting``: the configuration to record the run at (the diagnosis's nominal, with the
+    platform filter ``filter_scale`` times its setting where the design opens it).
     """
 
     dof: str
@@ -173,6 +173,11 @@ class DesignResult:
     levels: tuple[tuple[float, float, float], ...] = ()
     setting: MotionSystem | None = None
     filter_scale: float = 1.0
+
+    @property
+    def filter_changed(self) -> bool:
+        """Whether the run is to be recorded at another filter setting than the old runs'."""
+        return self.filter_scale != 1.0
 
     def at_setting(self, config: MotionSystem) -> MotionSystem:
         """Return ``config`` (a truth, the nominal) at the filter setting of the designed run."""
@@ -233,6 +238,7 @@ class DesignResult:
                 "window_s": b.window_s,
                 "duration_s": b.duration_s,
                 "filter_break_hz": None if self.setting is None else self.setting.filter_break_hz,
+                "filter_changed": self.filter_changed,
                 "config": None if self.setting is None else "config.json",
             },
             "expected_evidence": [
@@ -269,7 +275,7 @@ class DesignResult:
             f"{f:g} Hz {a:.3g} {unit}"
             for f, a in zip(sig.frequencies_hz, sig.amplitudes, strict=True)
         )  # type: ignore[arg-type]
-        at = "" if self.setting is None else \
+        at = "" if not self.filter_changed or self.setting is None else \
             f", with the platform filter at {self.setting.filter_break_hz:g} Hz"  # fmt: skip
         out = [
             f"run: {self.dof}, lines {lines}; {b.duration_s:.0f} s ({b.window_s:.0f} s "
@@ -761,13 +767,14 @@ def design_run(
     decided stayed ambiguous after the 22 s run this chose (the expected evidence is a
     model's, and a run at the margin of it has none to spare).
 
-    Where the platform has a filter (and no explanation of the nominal moves it already),
-    the lines are chosen and weighed at the nominal setting and at each of
-    ``filter_settings_hz`` above it (the thesis' Ch. 4 settings of the MPI by default; empty:
-    the nominal's only, for a platform whose filter cannot be changed); another setting is
-    kept only where its chance to decide (on the linear pairs) beats the nominal's by more
-    than :data:`AS_LIKELY` (a lower one first, of settings as likely). The run is then to be
-    recorded at that setting (:attr:`DesignResult.setting`).
+    Where the platform has a filter (not moved by an extension of the nominal: a setting
+    would then name another break than the one set), the lines are chosen and weighed at the
+    nominal setting
+    and at each of ``filter_settings_hz`` above it (the thesis' Ch. 4 settings of the MPI by
+    default; empty: the nominal's only, for a platform whose filter cannot be changed);
+    another setting is kept only where its chance to decide (on the linear pairs) beats the
+    nominal's by more than :data:`AS_LIKELY` (a lower one first, of settings as likely). The
+    run is then to be recorded at that setting (:attr:`DesignResult.setting`).
 
     Raises
     ------
@@ -1012,7 +1019,7 @@ def design_run(
         Candidate(float(f), float(a), window, 0.0, {k: float(v[n]) for k, v in per_line.items()})
         for n, (f, a) in enumerate(zip(freqs, tops, strict=True))
     )
-    setting = None
+    setting = case.config  # the configuration to record the run at
     if scale != 1.0:
         setting = case.config.filter_scaled(scale)
         setting = setting.replace(
@@ -1105,8 +1112,9 @@ def _run_paths(nominal: dict, path: Path) -> list[str]:
 def write_design(result: DesignResult, out: Path) -> None:
     """Write ``design.json``, ``commands.csv`` (twin-run/1) and ``schedule.toml`` into ``out``.
 
-    Where the run is to be recorded at another filter setting, also ``config.json``
-    (``twin-config/1``: the nominal at that setting, for ``twin import --config``).
+    And ``config.json`` (``twin-config/1``): the configuration to record the run at, for
+    ``twin import --config`` (the diagnosis's nominal, at another filter setting where the
+    design asks for one).
     """
     if result.setting is not None:
         result.setting.save(out / "config.json")
@@ -1117,7 +1125,7 @@ def write_design(result: DesignResult, out: Path) -> None:
     sig = result.signal
     f = [float(x) for x in sig.frequencies_hz]
     position = [float(a) / (2 * np.pi * x) ** 2 for a, x in zip(sig.amplitudes, f, strict=True)]  # type: ignore[arg-type]
-    at = [] if result.setting is None else [
+    at = [] if result.setting is None or not result.filter_changed else [
         f"# record with the platform filter set to {result.setting.filter_break_hz:g} Hz "
         "(config.json)"
     ]  # fmt: skip

@@ -542,7 +542,8 @@ def diagnose(
     case = load_case(recs, config, model, seed, dofs, realisations, progress)
     val = None
     if vals:
-        val = load_case(vals, case.config, model, seed + 1, None, realisations, progress)
+        val = load_case(vals, case.config, model, seed + 1, None, realisations, progress,
+                        own_filter=config is None)  # fmt: skip
     reports = {}
     for i, dof in enumerate(case.dofs):
         if progress:

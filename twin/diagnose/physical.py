@@ -49,6 +49,7 @@ from numpy.typing import NDArray
 from twin.chain.config import MotionSystem
 from twin.chain.extensions import Extension, imu_rotation
 from twin.chain.imu import ImuRecord, ImuSpec, rotate_readings
+from twin.core.errors import SignalError
 from twin.core.progress import ProgressFn
 from twin.core.threads import concurrently
 from twin.diagnose.candidates import numeric_names
@@ -190,6 +191,10 @@ class Calibration:
     total: int = 0
 
     def __post_init__(self) -> None:
+        if self.filter_scales and len(self.filter_scales) != len(self.runs):
+            raise SignalError(
+                f"filter_scales: one per run ({len(self.runs)}); got {len(self.filter_scales)}"
+            )
         self.nominal = self.simulate([self.config])[0]
         self.evidence: dict[str, list[Block]] = {"full": [], "half1": [], "half2": []}
         for i, (rec, m) in enumerate(self.runs):

@@ -245,14 +245,13 @@ def select(
         return min(near, key=lambda k: (fits[k].parameters, -gain_of(k)))
 
     def refine(chosen: tuple[str, ...]) -> None:
-        if "backlash" in chosen and len(chosen) > 1 and chosen not in refined:  # screened only
+        """Refine a pair with a play that was only screened (a trio is fitted whole)."""
+        if "backlash" in chosen and len(chosen) == 2 and chosen not in refined:
             fits[chosen] = fit_set(chosen, model, evidence, _start(fits[chosen]))
             refined.add(chosen)
 
-    chosen = occam()
-    refine(chosen)
-    screened = len(refined)
-    if len(chosen) == 2:  # forward: a third effect on top of the named pair
+    def forward(chosen: tuple[str, ...]) -> tuple[str, ...]:
+        """Return the pair with a third effect on top where each member is then needed."""
         best = None
         for e in effects:
             if e in chosen or e == "backlash":
@@ -269,11 +268,19 @@ def select(
                 best is None or gain_of(trio) > gain_of(best)
             ):
                 best = trio
-        if best is not None:
-            chosen = best
+        return chosen if best is None else best
+
+    chosen = occam()
+    refine(chosen)
+    screened = len(refined)
+    if len(chosen) == 2:
+        chosen = forward(chosen)
         if len(refined) > screened:  # a pair with a play refined only now may be the better
-            chosen = occam()
-            refine(chosen)
+            again = occam()
+            if again != chosen and len(again) == 2:
+                refine(again)
+                again = forward(again)
+            chosen = again
     table = [
         {
             "effects": list(k),
