@@ -51,8 +51,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("runs", nargs="+", metavar="RUN_DIR", help="twin-run/1 folders (same platform)")
     p.add_argument("--config", metavar=common.CONFIG,
-                   help="nominal configuration (name or twin-config/1 file); default: the "
-                   "runs' meta.json; the overrides below apply to it")  # fmt: skip
+                   help="nominal configuration (name or twin-config/1 file), for every run "
+                   "at its one filter setting; default: the runs' meta.json, each run at its "
+                   "own filter setting; the overrides below apply to it")  # fmt: skip
     p.add_argument("--validate", nargs="+", default=[], metavar="RUN_DIR",
                    help="runs only for measuring the gain (default: held-out halves)")  # fmt: skip
     p.add_argument(
