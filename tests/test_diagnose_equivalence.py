@@ -162,3 +162,17 @@ def test_the_same_response_says_how_far_apart():
     """Identical to the refit's precision, or within a stated per cent."""
     assert _apart(2.5e-11) == " (identical)"
     assert _apart(0.0015) == " (within 0.15 %)"
+
+
+def test_the_same_response_at_one_filter_setting_is_not_at_another():
+    """The MPI's filter moved to 0.79 Hz is a lead with a lag within 0.87 % at the nominal
+    setting; with a run at the filter opened tenfold, the two differ where that run's lines
+    are: no longer one explanation."""
+    named = [Extension("platform_filter", {"break_hz": 0.79}, ("heave",))]
+    start = {"lead": {"time_constant_s": 0.05}, "platform_lag": {"lag_s": 0.2}}
+    case = _case("mpi")
+    at_nominal = [SimpleNamespace(filter_scale=1.0)]
+    eq = same_response(named, ("lead", "platform_lag"), start, case, "heave", at_nominal)  # type: ignore[arg-type]
+    assert eq is not None and eq["max_relative_difference"] < SAME_RESPONSE
+    both = [*at_nominal, SimpleNamespace(filter_scale=10.0)]
+    assert same_response(named, ("lead", "platform_lag"), start, case, "heave", both) is None  # type: ignore[arg-type]

@@ -59,13 +59,22 @@ FREQUENCIES_HZ = np.geomspace(0.05, 50.0, 120)
 
 
 def relative_response(
-    extensions: Sequence[Extension], f: FloatArray, nominal_break_hz: float | None
+    extensions: Sequence[Extension],
+    f: FloatArray,
+    nominal_break_hz: float | None,
+    filter_scales: Sequence[float] = (1.0,),
 ) -> ComplexArray:
-    """Return the factor a set of linear extensions multiplies a DOF's response by at ``f``."""
-    out = np.ones(np.shape(f), dtype=complex)
-    for ext in extensions:
-        out = out * ext.response(f, nominal_break_hz)
-    return out
+    """Return the factor a set of linear extensions multiplies a DOF's response by at ``f``.
+
+    At each filter setting of ``filter_scales`` (times the nominal's), one after the other.
+    """
+    parts = []
+    for k in filter_scales:
+        out = np.ones(np.shape(f), dtype=complex)
+        for ext in extensions:
+            out = out * ext.response(f, nominal_break_hz, k)
+        parts.append(out)
+    return np.concatenate(parts)
 
 
 def same_response(
@@ -142,7 +151,8 @@ def _same_linear(
         return None
     nominal_break = case.clean.filter_break_hz
     f = FREQUENCIES_HZ
-    target = relative_response(named, f, nominal_break)
+    settings = sorted({ch.filter_scale for ch in channels}) or [1.0]  # each run's setting
+    target = relative_response(named, f, nominal_break, settings)
     slots, x0, lo, hi = [], [], [], []
     for effect in effects:
         names = list(numeric_names(effect))
@@ -164,12 +174,12 @@ def _same_linear(
         return out
 
     def residual(theta: FloatArray) -> FloatArray:
-        r = relative_response(extensions(theta), f, nominal_break) / target - 1.0
+        r = relative_response(extensions(theta), f, nominal_break, settings) / target - 1.0
         return np.concatenate([r.real, r.imag])
 
     fit = optimize.least_squares(residual, np.array(x0), bounds=(lo, hi), max_nfev=400)
     exts = extensions(fit.x)
-    diff = float(np.max(np.abs(relative_response(exts, f, nominal_break) / target - 1.0)))
+    diff = float(np.max(np.abs(relative_response(exts, f, nominal_break, settings) / target - 1.0)))
     if diff > SAME_RESPONSE:
         return None
     return {
