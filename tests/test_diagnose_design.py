@@ -83,6 +83,9 @@ def test_design_writes_a_run_the_platform_can_play(diagnosed, tmp_path, capsys):
     assert np.abs(sched.values - commands.values).max() < 0.01 * scale
     labels = {e["label"].split(":")[0] for e in doc["explanations"]}
     assert {"delay", "platform_lag"} <= labels
+    # the ambiguous ones first, then the rivals (other effects the diagnosis fitted)
+    rivals = [e["rival"] for e in doc["explanations"]]
+    assert not rivals[0] and rivals == sorted(rivals)
     # behind the 1 Hz filter the lines that tell a delay from a lag are cut to nothing: the
     # run is to be recorded with the filter opened (the thesis' Ch. 4 settings), and says so
     assert run["filter_break_hz"] in (5.0, 10.0) and run["filter_changed"]
@@ -121,8 +124,11 @@ def test_a_platform_whose_filter_cannot_change_keeps_its_setting(diagnosed, tmp_
     capsys.readouterr()
     out = tmp_path / "kept"
     assert main(["design", str(root / "diag"), "--out", str(out), "--json", "--quiet",
-                 "--keep-filter"]) == 0  # fmt: skip
+                 "--keep-filter", "--budget-s", "15", "--shortest"]) == 0  # fmt: skip
     doc = json.loads(capsys.readouterr().out)
+    # a budget that leaves less than Table 5.2's 20 s measured: nothing to shorten, and said
+    assert doc["run"]["window_s"] < 20.0
+    assert any("nothing to shorten" in n for n in doc["notes"])
     assert doc["run"]["filter_break_hz"] == 1.0 and not doc["run"]["filter_changed"]
     assert resolve(out / "config.json").filter_break_hz == 1.0  # the setting to record at
     assert not any("filter set to" in n for n in doc["notes"])

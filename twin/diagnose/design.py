@@ -227,7 +227,11 @@ class DesignResult:
             "platform": self.platform,
             "diagnosis": self.source,
             "explanations": [
-                {"label": e.label, "extensions": [x.to_json() for x in e.extensions]}
+                {
+                    "label": e.label,
+                    "extensions": [x.to_json() for x in e.extensions],
+                    "rival": not e.primary,
+                }
                 for e in self.explanations
             ],
             "run": {
@@ -1006,6 +1010,11 @@ def design_run(
             + ", ".join(f"{c:.2f}" for *_, c in tried)
             + f"): the run is the one at {tried[n_best][0]:.3g}, the smallest motion of those "
             f"within {AS_LIKELY:g} of the likeliest"
+        )
+    if shortest and w_new < WINDOW_S - 1e-9:
+        notes.append(
+            f"the budget of {budget_s:g} s leaves {w_new:.3g} s measured, under Table 5.2's "
+            f"{WINDOW_S:g} s: nothing to shorten"
         )
     if shortened:
         notes.append(
